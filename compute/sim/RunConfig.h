@@ -1,0 +1,104 @@
+// The plain, validated description of one run. SI units everywhere. No proto, no YAML: the scene
+// loader (frontend) and later the worker's proto conversion fill it; validate() checks it in one place.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/Status.h"
+#include "compute/core/VectorMath.h"
+
+namespace pflow::compute {
+
+struct MaterialConfig {
+  std::string name;
+  double youngsModulus = 0;      // E [Pa]
+  double poissonRatio = 0;       // nu [-], in (-1, 0.5)
+  double density = 0;            // rho [kg/m^3]
+  double restitution = 0.5;      // e [-], in (0, 1]
+  double friction = 0.5;         // mu_s [-], >= 0
+  double rollingFriction = 0.0;  // mu_r [-], >= 0 (0 disables rolling resistance)
+};
+
+// Optional per-pair overrides (symmetric). Unset members use the pair's mixing rule.
+struct MaterialPairConfig {
+  int a = 0, b = 0;  // material indices
+  std::optional<double> restitution, friction, rollingFriction;
+};
+
+// Explicit initial particles (the front-end's generators produce these).
+struct ParticleInit {
+  std::vector<Vec3d> position;         // [m]
+  std::vector<Vec3d> velocity;         // [m/s]; empty = zero
+  std::vector<Vec3d> angularVelocity;  // [rad/s]; empty = zero
+  std::vector<double> radius;          // [m]
+  std::vector<std::int32_t> material;  // index into RunConfig::materials
+  std::size_t size() const { return position.size(); }
+};
+
+// An infinite plane; particles live on the side the normal points to.
+struct PlaneConfig {
+  std::string name;
+  Vec3d point{0, 0, 0};
+  Vec3d normal{0, 0, 1};
+  int material = 0;
+};
+
+// Prescribed rigid motion of a mesh, from startTime on: translation at `velocity` and rotation
+// about the axis through `axisPoint` (which moves with the translation) along `axis` at `angularSpeed`.
+struct MeshMotion {
+  Vec3d velocity{0, 0, 0};        // [m/s]
+  Vec3d axisPoint{0, 0, 0};       // [m]
+  Vec3d axis{0, 0, 1};            // unit vector
+  double angularSpeed = 0;        // [rad/s], right-handed about `axis`
+  double startTime = 0;           // [s]
+  bool moves() const { return velocity.x != 0 || velocity.y != 0 || velocity.z != 0 || angularSpeed != 0; }
+};
+
+// A triangle mesh wall: a body of infinite mass. Triangles are numbered in order; `surface` gives each
+// triangle the number of the surface it belongs to (results and forces refer to it).
+struct MeshConfig {
+  std::string name;
+  std::vector<Vec3d> vertices;                         // [m]
+  std::vector<std::array<std::uint32_t, 3>> triangles;  // vertex indices, counter-clockwise seen from the particle side
+  std::vector<std::int32_t> surface;                   // per triangle; empty = all 0
+  int material = 0;
+  MeshMotion motion;
+};
+
+struct Aabb {
+  Vec3d lo{0, 0, 0}, hi{0, 0, 0};
+};
+
+enum class Precision { kDouble, kFloat };
+
+struct SimulationSettings {
+  Vec3d gravity{0, 0, -9.81};        // [m/s^2]
+  double duration = 0;               // [s]
+  std::optional<double> dt;          // [s]; unset = auto: dtFraction * Rayleigh time
+  double dtFraction = 0.2;           // of the Rayleigh time, used when dt is unset
+  double skin = -1;                  // neighbour skin [m]; < 0 = 0.1 * largest diameter
+  double snapshotInterval = 0;       // [s] between snapshots; 0 = first and last only
+  std::optional<Aabb> domain;        // [m]; unset = derived from particles and walls
+  Precision precision = Precision::kDouble;
+  int historySlots = 8;              // initial tangential-history slots per particle (grown on demand)
+  int wallHistorySlots = 4;          // initial wall-contact slots per particle (grown on demand)
+  int threads = 0;                   // OpenMP threads; 0 = all
+  std::uint64_t seed = 1;            // for anything random (jitter)
+};
+
+struct RunConfig {
+  std::vector<MaterialConfig> materials;
+  std::vector<MaterialPairConfig> pairs;
+  ParticleInit particles;
+  std::vector<PlaneConfig> planes;
+  std::vector<MeshConfig> meshes;
+  SimulationSettings sim;
+
+  // Every problem at once, each naming the field (`particles.radius[12]`) and the bound it breaks.
+  ErrorList validate() const;
+};
+
+}  // namespace pflow::compute
