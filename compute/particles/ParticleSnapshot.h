@@ -18,6 +18,7 @@ struct SnapshotArray {
   std::string name;        // dataset name, e.g. "position"
   ScalarType type;         // element scalar type
   int components = 1;      // 3 for vectors
+  std::string unit;        // SI unit, e.g. "m", "m/s", "rad/s", "" for dimensionless
   std::vector<std::byte> data;  // n * components * scalarBytes(type), row-major (N x components)
   template <class T> const T* as() const { return reinterpret_cast<const T*>(data.data()); }
   template <class T> T* as() { return reinterpret_cast<T*>(data.data()); }
