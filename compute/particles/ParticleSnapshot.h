@@ -11,6 +11,14 @@
 namespace pflow::compute {
 
 enum class ScalarType : std::uint8_t { kF64, kF32, kI32, kU64, kU32, kI8 };
+constexpr std::size_t scalarBytesOf(ScalarType t) {
+  switch (t) {
+    case ScalarType::kF64: case ScalarType::kU64: return 8;
+    case ScalarType::kF32: case ScalarType::kI32: case ScalarType::kU32: return 4;
+    case ScalarType::kI8: return 1;
+  }
+  return 0;
+}
 std::size_t scalarBytes(ScalarType t);
 const char* scalarName(ScalarType t);  // "f64", "f32", ...
 

@@ -1,0 +1,136 @@
+// Contact physics, written once as stateless host+device functions over plain structs, split into
+// sub-models the way LAMMPS's granular model is (normal, damping, tangential, rolling).
+//
+// Conventions: n is the unit normal from particle i towards its partner j (for a wall, towards the
+// wall); overlap delta > 0 in contact; vRel = velocity of i's contact point minus j's; forces and
+// torques returned act on i. Velocity-dependent terms use the velocities they are given (the
+// half-step velocities in the velocity-Verlet loop, as LAMMPS and LIGGGHTS do).
+#pragma once
+#include <cmath>
+
+#include "compute/contact/ContactParams.h"
+#include "compute/core/VectorMath.h"
+
+namespace pflow::compute::contact {
+
+// Geometry and kinematics of one contact as seen from particle i.
+template <class T>
+struct ContactState {
+  Vec3<T> n;          // unit normal, i -> j
+  T overlap;          // delta > 0 [m]
+  Vec3<T> vRel;       // contact-point velocity of i minus that of j [m/s]
+  Vec3<T> omegaRel;   // omega_i - omega_j [rad/s]
+  T effRadius;        // R* [m]
+  T effMass;          // m* [kg]
+  T effInertia;       // 1 / (1/I_i + 1/I_j) [kg m^2], for the rolling-torque limiter
+  T leverArm;         // distance from i's centre to the contact point [m]
+};
+
+template <class T>
+struct ContactOutput {
+  Vec3<T> force;      // on i [N]
+  Vec3<T> torque;     // on i about its centre [N m]
+  Vec3<T> history;    // new tangential displacement xi [m]
+  T normalForce;      // |F_n| after clipping [N]
+  bool sliding;       // Coulomb cap active
+};
+
+namespace normal {
+// Hertz elastic force magnitude (4/3) E* sqrt(R*) delta^{3/2}.
+template <class T> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T hertzForce(T effYoung, T effRadius, T overlap) {
+  return T(4) / T(3) * effYoung * std::sqrt(effRadius * overlap) * overlap;
+}
+// Normal stiffness S_n = dF/d delta = 2 E* sqrt(R* delta).
+template <class T> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T hertzStiffness(T effYoung, T effRadius, T overlap) {
+  return T(2) * effYoung * std::sqrt(effRadius * overlap);
+}
+// Elastic energy stored in a Hertz contact, (8/15) E* sqrt(R*) delta^{5/2}.
+template <class T> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T hertzEnergy(T effYoung, T effRadius, T overlap) {
+  return T(8) / T(15) * effYoung * std::sqrt(effRadius) * overlap * overlap * std::sqrt(overlap);
+}
+}  // namespace normal
+
+namespace damping {
+// Viscoelastic dashpot -c sqrt(S m*) v for one direction's stiffness S; c from dampingCoeffForRestitution.
+template <class T> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T coefficient(T dampingCoeff, T stiffness, T effMass) {
+  return dampingCoeff * std::sqrt(stiffness * effMass);
+}
+}  // namespace damping
+
+namespace tangential {
+// Rotates the stored displacement into the tangent plane of the current normal, keeping its length.
+template <class T> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE Vec3<T> rotateHistory(Vec3<T> xi, Vec3<T> n) {
+  const T len2 = norm2(xi);
+  if (len2 == T(0)) return xi;
+  Vec3<T> p = xi - dot(xi, n) * n;
+  const T p2 = norm2(p);
+  if (p2 == T(0)) return zero3<T>();
+  return std::sqrt(len2 / p2) * p;
+}
+// Mindlin spring S_t = 8 G* sqrt(R* delta).
+template <class T> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T mindlinStiffness(T effShear, T effRadius, T overlap) {
+  return T(8) * effShear * std::sqrt(effRadius * overlap);
+}
+// Spring-dashpot with Coulomb cap. xi is already rotated and incremented by vt dt. Returns the
+// tangential force on i; when |F_t| > mu F_n the force is capped and xi reset so that the spring
+// alone carries the capped force.
+template <class T>
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE Vec3<T> mindlinForce(T stiffness, T dampCoeff, T friction, T normalForce,
+                                                        Vec3<T> vt, Vec3<T>& xi, bool& sliding) {
+  Vec3<T> ft = -(stiffness * xi) - dampCoeff * vt;
+  const T cap = friction * normalForce;
+  const T ft2 = norm2(ft);
+  sliding = ft2 > cap * cap;
+  if (sliding) {
+    ft = (ft2 > T(0) ? cap / std::sqrt(ft2) : T(0)) * ft;
+    xi = stiffness > T(0) ? (T(-1) / stiffness) * ft : zero3<T>();
+  }
+  return ft;
+}
+}  // namespace tangential
+
+namespace rolling {
+// Constant directional torque ("type A"): -mu_r F_n R* w/|w|, limited so that it cannot reverse the
+// relative spin within one step (|tau| <= I* |w| / dt), which removes the sign chatter at rest.
+template <class T>
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE Vec3<T> constantTorque(T rollingFriction, T normalForce, T effRadius,
+                                                          Vec3<T> omegaRel, T effInertia, T dt) {
+  const T w = norm(omegaRel);
+  if (rollingFriction <= T(0) || w == T(0)) return zero3<T>();
+  T mag = rollingFriction * normalForce * effRadius;
+  const T limit = effInertia * w / dt;
+  if (mag > limit) mag = limit;
+  return (-mag / w) * omegaRel;
+}
+}  // namespace rolling
+
+// Hertz-Mindlin with history: normal elastic + dashpot (clipped at zero), tangential Mindlin spring
+// with history and Coulomb cap, optional rolling resistance. `xiOld` is the stored displacement.
+template <class T>
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE ContactOutput<T> hertzMindlin(const ContactParams& p, const ContactState<T>& s,
+                                                                 Vec3<T> xiOld, T dt) {
+  ContactOutput<T> out;
+  const T E = T(p.effYoung), G = T(p.effShear), c = T(p.dampingCoeff);
+  // Normal: positive vn means approaching.
+  const T vn = dot(s.vRel, s.n);
+  const T sn = normal::hertzStiffness(E, s.effRadius, s.overlap);
+  T fn = normal::hertzForce(E, s.effRadius, s.overlap) + damping::coefficient(c, sn, s.effMass) * vn;
+  if (fn < T(0)) fn = T(0);
+  out.normalForce = fn;
+  Vec3<T> force = (-fn) * s.n;
+
+  // Tangential.
+  const Vec3<T> vt = s.vRel - vn * s.n;
+  Vec3<T> xi = tangential::rotateHistory(xiOld, s.n) + dt * vt;
+  const T st = tangential::mindlinStiffness(G, s.effRadius, s.overlap);
+  const Vec3<T> ft = tangential::mindlinForce(st, damping::coefficient(c, st, s.effMass), T(p.friction), fn, vt,
+                                              xi, out.sliding);
+  force += ft;
+  out.history = xi;
+  out.force = force;
+  out.torque = cross(s.leverArm * s.n, ft) +
+               rolling::constantTorque(T(p.rollingFriction), fn, s.effRadius, s.omegaRel, s.effInertia, dt);
+  return out;
+}
+
+}  // namespace pflow::compute::contact

@@ -1,0 +1,39 @@
+// Per material pair contact parameters, precomputed on the host into a plain struct that kernels read.
+#pragma once
+#include <vector>
+
+#include "common/Status.h"
+
+namespace pflow::compute {
+
+struct MaterialConfig;
+struct MaterialPairConfig;
+
+struct ContactParams {
+  double effYoung = 0;       // E*  [Pa]:   1/E* = (1-nu_i^2)/E_i + (1-nu_j^2)/E_j
+  double effShear = 0;       // G*  [Pa]:   1/G* = (2-nu_i)/G_i + (2-nu_j)/G_j
+  double dampingCoeff = 0;   // c [-]: F_d = -c sqrt(S m*) v, chosen so the Hertz contact restitutes e exactly
+  double restitution = 1;    // e [-], the requested value (kept for reports)
+  double friction = 0;       // mu_s [-]
+  double rollingFriction = 0;  // mu_r [-]
+};
+
+// Builds the nMaterials x nMaterials table (row-major, symmetric). Unset pair values are the
+// arithmetic means of the two materials' values; MaterialPairConfig entries override them.
+std::vector<ContactParams> buildContactTable(const std::vector<MaterialConfig>& materials,
+                                             const std::vector<MaterialPairConfig>& pairs);
+
+// The damping coefficient c for which a Hertz contact with damping force -c sqrt(S_n m*) v_n
+// (S_n = 2 E* sqrt(R* delta), total normal force clipped at zero) has restitution e. The map is
+// independent of E*, R*, m* and impact speed, so it is solved once per pair by integrating the
+// dimensionless equation of motion and bisecting on c. e = 1 gives 0.
+double dampingCoeffForRestitution(double e);
+
+// The restitution realised by damping coefficient c (the forward map of the above), for tests.
+double restitutionForDampingCoeff(double c);
+
+// The linear-spring mapping others use, c = -2 sqrt(5/6) ln e / sqrt(ln^2 e + pi^2): exact for a
+// linear spring, not for Hertz. Kept only so tests can show the difference.
+double linearSpringDampingCoeff(double e);
+
+}  // namespace pflow::compute

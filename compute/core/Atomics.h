@@ -1,0 +1,46 @@
+// Atomic helpers usable from kernels under every executor (CUDA atomics on the device,
+// GCC/Clang builtins on the host, which nvcc's host pass also accepts).
+#pragma once
+#include <cstdint>
+
+#include "compute/core/Types.h"
+
+namespace pflow {
+
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void atomicOrU32(std::uint32_t* addr, std::uint32_t v) {
+#if defined(__CUDA_ARCH__)
+  atomicOr(reinterpret_cast<unsigned int*>(addr), v);
+#else
+  __atomic_fetch_or(addr, v, __ATOMIC_RELAXED);
+#endif
+}
+
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void atomicMaxU32(std::uint32_t* addr, std::uint32_t v) {
+#if defined(__CUDA_ARCH__)
+  atomicMax(reinterpret_cast<unsigned int*>(addr), v);
+#else
+  std::uint32_t cur = __atomic_load_n(addr, __ATOMIC_RELAXED);
+  while (cur < v && !__atomic_compare_exchange_n(addr, &cur, v, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+  }
+#endif
+}
+
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void atomicMinU32(std::uint32_t* addr, std::uint32_t v) {
+#if defined(__CUDA_ARCH__)
+  atomicMin(reinterpret_cast<unsigned int*>(addr), v);
+#else
+  std::uint32_t cur = __atomic_load_n(addr, __ATOMIC_RELAXED);
+  while (cur > v && !__atomic_compare_exchange_n(addr, &cur, v, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+  }
+#endif
+}
+
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE std::uint32_t atomicAddU32(std::uint32_t* addr, std::uint32_t v) {
+#if defined(__CUDA_ARCH__)
+  return atomicAdd(reinterpret_cast<unsigned int*>(addr), v);
+#else
+  return __atomic_fetch_add(addr, v, __ATOMIC_RELAXED);
+#endif
+}
+
+}  // namespace pflow

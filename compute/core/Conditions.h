@@ -1,0 +1,32 @@
+// Device-side error and capacity flags, written by kernels with atomics and read by the host once
+// per phase (HOOMD d_conditions). Kernels never print and never drop data silently.
+#pragma once
+#include <cstdint>
+
+#include "compute/core/Types.h"
+
+namespace pflow::compute {
+
+enum ConditionBits : std::uint32_t {
+  kNeighborOverflow = 1u << 0,      // a particle has more candidates than the neighbour-list stride
+  kHistoryOverflow = 1u << 1,       // a particle has more contacts than history slots
+  kWallHistoryOverflow = 1u << 2,   // a particle has more wall contacts than wall slots
+  kWallCandidateOverflow = 1u << 3, // a particle has more candidate triangles than the stride
+  kNonFinite = 1u << 4,             // a position, velocity, spin, force or torque is NaN or infinite
+  kTooManyWallContacts = 1u << 5,   // more simultaneous triangle contacts than kMaxWallContacts
+};
+
+// Which quantity went non-finite (lowest set bit wins in the report).
+enum NonFiniteQuantity : std::uint32_t { kQPosition = 1, kQVelocity = 2, kQAngularVelocity = 4, kQForce = 8, kQTorque = 16 };
+
+struct Conditions {
+  std::uint32_t flags = 0;
+  std::uint32_t neededNeighbors = 0;     // largest candidate count seen
+  std::uint32_t neededHistory = 0;       // largest contact count seen
+  std::uint32_t neededWallHistory = 0;   // largest wall-contact count seen
+  std::uint32_t neededWallCandidates = 0;
+  std::uint32_t badParticle = kNoIndex;  // lowest local index with a non-finite value
+  std::uint32_t badQuantity = 0;         // NonFiniteQuantity bits of that particle
+};
+
+}  // namespace pflow::compute

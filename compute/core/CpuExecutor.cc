@@ -1,0 +1,38 @@
+#include "compute/core/CpuExecutor.h"
+
+#include <omp.h>
+
+#include <algorithm>
+
+#include <string>
+#include <vector>
+
+namespace pflow::compute {
+
+CpuExecutor::CpuExecutor(int threads) : m_threads(threads > 0 ? threads : omp_get_max_threads()) {}
+
+std::string CpuExecutor::description() const {
+  return "OpenMP on " + std::to_string(m_threads) + " thread(s)";
+}
+
+void CpuExecutor::sortByKey(const std::uint32_t* keys, Index n, std::uint32_t numKeys, Index* perm,
+                            Index* keyStart) const {
+  // Histogram, scan, scatter. Sequential scatter keeps the order stable and the run deterministic;
+  // sorting happens only on rebuild steps.
+  std::fill(keyStart, keyStart + numKeys + 1, Index(0));
+  for (Index i = 0; i < n; ++i) ++keyStart[keys[i] + 1];
+  for (std::uint32_t c = 0; c < numKeys; ++c) keyStart[c + 1] += keyStart[c];
+  std::vector<Index> cursor(keyStart, keyStart + numKeys);
+  for (Index i = 0; i < n; ++i) perm[cursor[keys[i]]++] = i;
+}
+
+std::uint64_t CpuExecutor::exclusiveScan(const std::uint32_t* in, std::uint32_t* out, Index n) const {
+  std::uint64_t total = 0;
+  for (Index i = 0; i < n; ++i) {
+    out[i] = static_cast<std::uint32_t>(total);
+    total += in[i];
+  }
+  return total;
+}
+
+}  // namespace pflow::compute

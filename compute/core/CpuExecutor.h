@@ -1,0 +1,65 @@
+// The OpenMP executor: runs the same kernel functors as the CUDA executor, one iteration per
+// particle, on every core. Kernels are `PFLOW_HOSTDEVICE void operator()(Index i) const`.
+#pragma once
+#include <cstdint>
+#include <string>
+
+#include "compute/core/Memory.h"
+#include "compute/core/Types.h"
+
+namespace pflow::compute {
+
+class CpuExecutor {
+ public:
+  static constexpr const char* kName = "cpu";
+  explicit CpuExecutor(int threads = 0);
+  // Below this many iterations a loop runs on the calling thread: waking a team costs more.
+  static constexpr Index kMinParallel = 512;
+
+  MemorySpace& memory() { return m_memory; }
+  int threads() const { return m_threads; }
+  std::string description() const;
+
+  // f(i) for i in [0, n).
+  template <class F>
+  void forEach(Index n, const F& f) const {
+#pragma omp parallel for schedule(static) num_threads(m_threads) if (n >= kMinParallel)
+    for (std::int64_t i = 0; i < static_cast<std::int64_t>(n); ++i) f(static_cast<Index>(i));
+  }
+
+  // max over i of f(i) (f returns double); 0 for n == 0.
+  template <class F>
+  double maxOf(Index n, const F& f) const {
+    double result = 0;
+#pragma omp parallel for schedule(static) num_threads(m_threads) if (n >= kMinParallel) reduction(max : result)
+    for (std::int64_t i = 0; i < static_cast<std::int64_t>(n); ++i) {
+      const double v = f(static_cast<Index>(i));
+      if (v > result) result = v;
+    }
+    return result;
+  }
+
+  // sum over i of f(i) (f returns double).
+  template <class F>
+  double sumOf(Index n, const F& f) const {
+    double result = 0;
+#pragma omp parallel for schedule(static) num_threads(m_threads) if (n >= kMinParallel) reduction(+ : result)
+    for (std::int64_t i = 0; i < static_cast<std::int64_t>(n); ++i) result += f(static_cast<Index>(i));
+    return result;
+  }
+
+  // Stable counting sort of [0, n) by key < numKeys: perm[k] = old index of the k-th sorted item,
+  // keyStart[c] = first sorted position with key c (numKeys + 1 entries).
+  void sortByKey(const std::uint32_t* keys, Index n, std::uint32_t numKeys, Index* perm, Index* keyStart) const;
+
+  // out[i] = sum of in[0..i), returns the total.
+  std::uint64_t exclusiveScan(const std::uint32_t* in, std::uint32_t* out, Index n) const;
+
+  void synchronize() const {}
+
+ private:
+  HostMemory m_memory;
+  int m_threads;
+};
+
+}  // namespace pflow::compute

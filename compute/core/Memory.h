@@ -1,0 +1,94 @@
+// Explicit memory of one executor's device. Buffers are RAII, sized at run time, with byte accounting.
+// No implicit host mirror: host copies are explicit (ParticleSnapshot).
+#pragma once
+#include <cstddef>
+#include <cstring>
+#include <utility>
+
+namespace pflow::compute {
+
+// Where a Buffer lives. The CPU executor's is host memory; the CUDA executor's is cudaMalloc'd.
+class MemorySpace {
+ public:
+  virtual ~MemorySpace() = default;
+  virtual void* allocate(std::size_t bytes) = 0;
+  virtual void deallocate(void* p) = 0;
+  virtual void copyToHost(void* hostDst, const void* src, std::size_t bytes) = 0;
+  virtual void copyFromHost(void* dst, const void* hostSrc, std::size_t bytes) = 0;
+  virtual void copyWithin(void* dst, const void* src, std::size_t bytes) = 0;
+  virtual void fillBytes(void* dst, unsigned char value, std::size_t bytes) = 0;
+  std::size_t bytesInUse() const { return m_bytesInUse; }
+  std::size_t peakBytes() const { return m_peakBytes; }
+
+ protected:
+  void account(std::ptrdiff_t delta) {
+    m_bytesInUse = static_cast<std::size_t>(static_cast<std::ptrdiff_t>(m_bytesInUse) + delta);
+    if (m_bytesInUse > m_peakBytes) m_peakBytes = m_bytesInUse;
+  }
+
+ private:
+  std::size_t m_bytesInUse = 0;
+  std::size_t m_peakBytes = 0;
+};
+
+// Host memory, 64-byte aligned.
+class HostMemory final : public MemorySpace {
+ public:
+  void* allocate(std::size_t bytes) override;
+  void deallocate(void* p) override;
+  void copyToHost(void* d, const void* s, std::size_t b) override { if (b) std::memcpy(d, s, b); }
+  void copyFromHost(void* d, const void* s, std::size_t b) override { if (b) std::memcpy(d, s, b); }
+  void copyWithin(void* d, const void* s, std::size_t b) override { if (b) std::memcpy(d, s, b); }
+  void fillBytes(void* d, unsigned char v, std::size_t b) override { if (b) std::memset(d, v, b); }
+};
+
+// An untyped, owning buffer in one MemorySpace.
+class Buffer {
+ public:
+  Buffer() = default;
+  Buffer(MemorySpace& space, std::size_t bytes) : m_space(&space) { resize(bytes); }
+  Buffer(const Buffer&) = delete;
+  Buffer& operator=(const Buffer&) = delete;
+  Buffer(Buffer&& o) noexcept { swap(o); }
+  Buffer& operator=(Buffer&& o) noexcept { swap(o); return *this; }
+  ~Buffer() { release(); }
+
+  void bind(MemorySpace& space) { m_space = &space; }
+  // Reallocates (contents are not kept) when the size changes.
+  void resize(std::size_t bytes) {
+    if (bytes == m_bytes) return;
+    release();
+    if (bytes) m_ptr = m_space->allocate(bytes);
+    m_bytes = bytes;
+  }
+  // Grows to at least `bytes`, keeping the first min(old, new) bytes.
+  void growKeep(std::size_t bytes) {
+    if (bytes <= m_bytes) return;
+    Buffer bigger(*m_space, bytes);
+    if (m_bytes) m_space->copyWithin(bigger.m_ptr, m_ptr, m_bytes);
+    swap(bigger);
+  }
+  void swap(Buffer& o) noexcept {
+    std::swap(m_space, o.m_space);
+    std::swap(m_ptr, o.m_ptr);
+    std::swap(m_bytes, o.m_bytes);
+  }
+  void* data() { return m_ptr; }
+  const void* data() const { return m_ptr; }
+  template <class T> T* as() { return static_cast<T*>(m_ptr); }
+  template <class T> const T* as() const { return static_cast<const T*>(m_ptr); }
+  std::size_t bytes() const { return m_bytes; }
+  MemorySpace* space() const { return m_space; }
+
+ private:
+  void release() {
+    if (m_ptr) m_space->deallocate(m_ptr);
+    m_ptr = nullptr;
+    m_bytes = 0;
+  }
+  MemorySpace* m_space = nullptr;
+  void* m_ptr = nullptr;
+  std::size_t m_bytes = 0;
+};
+
+}  // namespace pflow::compute

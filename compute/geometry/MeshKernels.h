@@ -1,0 +1,145 @@
+// Triangle walls: prescribed rigid motion, binning into the particle cell grid, and per-particle
+// candidate triangles (within r + skin at rebuild time).
+#pragma once
+#include <cmath>
+#include <cstdint>
+
+#include "compute/core/Atomics.h"
+#include "compute/core/Conditions.h"
+#include "compute/geometry/TriangleGeometry.h"
+#include "compute/neighbor/CellGrid.h"
+
+namespace pflow::compute {
+
+// Device copy of a mesh's prescribed motion (see MeshMotion in RunConfig.h).
+struct MeshMotionParams {
+  Vec3d velocity;
+  Vec3d axisPoint;  // at startTime
+  Vec3d axis;       // unit
+  double angularSpeed;
+  double startTime;
+
+  PFLOW_HOSTDEVICE double elapsed(double t) const { return t > startTime ? t - startTime : 0.0; }
+  // Position at time t of a point that was at x0 before the motion started.
+  PFLOW_HOSTDEVICE Vec3d transform(Vec3d x0, double t) const {
+    const double tau = elapsed(t);
+    const Vec3d r = angularSpeed != 0.0 ? rotateAbout(x0 - axisPoint, axis, angularSpeed * tau) : x0 - axisPoint;
+    return axisPoint + tau * velocity + r;
+  }
+  // Velocity at time t of the mesh point currently at x.
+  PFLOW_HOSTDEVICE Vec3d velocityAt(Vec3d x, double t) const {
+    if (t <= startTime) return zero3<double>();
+    const Vec3d c = axisPoint + elapsed(t) * velocity;
+    return velocity + cross(angularSpeed * axis, x - c);
+  }
+};
+
+namespace kernels {
+
+// Moves triangle vertices (3 per triangle, triangle soup) to time t; returns the squared
+// displacement since the last rebuild.
+struct MoveTriangles {
+  const Vec3d* refVerts;      // at t <= startTime
+  Vec3d* verts;               // current
+  const Vec3d* rebuildVerts;  // at the last rebuild
+  const std::int32_t* triMesh;
+  const MeshMotionParams* motion;
+  double time;
+  PFLOW_HOSTDEVICE double operator()(Index t) const {
+    const MeshMotionParams& m = motion[triMesh[t]];
+    double d2 = 0;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3d v = m.transform(refVerts[3 * t + k], time);
+      verts[3 * t + k] = v;
+      const double dk = norm2(v - rebuildVerts[3 * t + k]);
+      d2 = dk > d2 ? dk : d2;
+    }
+    return d2;
+  }
+};
+
+// Cell range of a triangle's bounding box inflated by `margin`.
+PFLOW_HOSTDEVICE inline void triangleCellRange(const CellGrid& g, const Vec3d* v, double margin, int lo[3], int hi[3]) {
+  Vec3d mn = v[0], mx = v[0];
+  for (int k = 1; k < 3; ++k) {
+    mn.x = std::fmin(mn.x, v[k].x); mn.y = std::fmin(mn.y, v[k].y); mn.z = std::fmin(mn.z, v[k].z);
+    mx.x = std::fmax(mx.x, v[k].x); mx.y = std::fmax(mx.y, v[k].y); mx.z = std::fmax(mx.z, v[k].z);
+  }
+  g.coords({mn.x - margin, mn.y - margin, mn.z - margin}, lo[0], lo[1], lo[2]);
+  g.coords({mx.x + margin, mx.y + margin, mx.z + margin}, hi[0], hi[1], hi[2]);
+}
+
+// Pass 1: count triangles per cell. Pass 2 (fill = true): write them at binStart[c] + cursor[c].
+struct BinTriangles {
+  CellGrid grid;
+  const Vec3d* verts;
+  double margin;
+  std::uint32_t* counts;     // per cell; pass 2: running cursor, zeroed before
+  const Index* binStart;     // pass 2 only
+  Index* binItems;           // pass 2 only
+  bool fill;
+  PFLOW_HOSTDEVICE void operator()(Index t) const {
+    int lo[3], hi[3];
+    triangleCellRange(grid, verts + 3 * t, margin, lo, hi);
+    for (int z = lo[2]; z <= hi[2]; ++z)
+      for (int y = lo[1]; y <= hi[1]; ++y)
+        for (int x = lo[0]; x <= hi[0]; ++x) {
+          const std::uint32_t c = grid.index(x, y, z);
+          const std::uint32_t at = atomicAddU32(&counts[c], 1u);
+          if (fill) binItems[binStart[c] + at] = t;
+        }
+  }
+};
+
+// Sorts each cell's triangle list so the result does not depend on thread timing.
+struct SortBins {
+  const Index* binStart;
+  Index* binItems;
+  PFLOW_HOSTDEVICE void operator()(Index c) const {
+    for (Index a = binStart[c] + 1; a < binStart[c + 1]; ++a) {
+      const Index v = binItems[a];
+      Index b = a;
+      while (b > binStart[c] && binItems[b - 1] > v) {
+        binItems[b] = binItems[b - 1];
+        --b;
+      }
+      binItems[b] = v;
+    }
+  }
+};
+
+// Triangles within r_i + skin of particle i, from its cell's bin.
+struct WallCandidates {
+  CellGrid grid;
+  const Index* binStart;
+  const Index* binItems;
+  const Vec3d* verts;
+  const Vec3d* pos;
+  const double* radius;
+  double skin;
+  Index capacity;
+  Index* cand;               // [i * capacity + e]
+  std::uint32_t* candCount;  // [i]
+  Conditions* cond;
+  PFLOW_HOSTDEVICE void operator()(Index i) const {
+    const Vec3d x = pos[i];
+    const double cut = radius[i] + skin;
+    const std::uint32_t c = grid.cellOf(x);
+    std::uint32_t count = 0;
+    for (Index k = binStart[c]; k < binStart[c + 1]; ++k) {
+      const Index t = binItems[k];
+      const auto cp = geometry::closestPointOnTriangle(x, verts[3 * t], verts[3 * t + 1], verts[3 * t + 2]);
+      if (norm2(x - cp.point) >= cut * cut) continue;
+      if (count < capacity) cand[std::size_t(i) * capacity + count] = t;
+      ++count;
+    }
+    candCount[i] = count;
+    if (count > capacity) {
+      atomicOrU32(&cond->flags, kWallCandidateOverflow);
+      atomicMaxU32(&cond->neededWallCandidates, count);
+    }
+  }
+};
+
+}  // namespace kernels
+}  // namespace pflow::compute

@@ -1,0 +1,67 @@
+// Velocity Verlet for translation and rotation of spheres (moment of inertia 2/5 m R^2):
+//   first half:  v += (F/m + g) dt/2,  x += v dt,  w += T/I dt/2
+//   (forces at the new positions with the half-step velocities)
+//   second half: v += (F/m + g) dt/2,  w += T/I dt/2
+#pragma once
+#include <cmath>
+
+#include "compute/core/Atomics.h"
+#include "compute/core/Conditions.h"
+#include "compute/core/VectorMath.h"
+
+namespace pflow::compute::kernels {
+
+struct IntegrateArgs {
+  Vec3d* pos;
+  Vec3d* vel;
+  Vec3d* omega;
+  const Vec3d* force;
+  const Vec3d* torque;
+  const double* radius;
+  const double* mass;
+  const Vec3d* refPos;  // positions at the last neighbour rebuild
+  Vec3d gravity;
+  double dt;
+  Conditions* cond;
+};
+
+// Returns the squared displacement since the last rebuild (for the skin criterion).
+struct IntegrateFirstHalf {
+  IntegrateArgs a;
+  PFLOW_HOSTDEVICE double operator()(Index i) const {
+    const double h = 0.5 * a.dt;
+    const double invM = 1.0 / a.mass[i];
+    const double invI = invM / (0.4 * a.radius[i] * a.radius[i]);
+    Vec3d v = a.vel[i] + h * (invM * a.force[i] + a.gravity);
+    const Vec3d x = a.pos[i] + a.dt * v;
+    a.vel[i] = v;
+    a.pos[i] = x;
+    a.omega[i] = a.omega[i] + (h * invI) * a.torque[i];
+    return norm2(x - a.refPos[i]);
+  }
+};
+
+struct IntegrateSecondHalf {
+  IntegrateArgs a;
+  PFLOW_HOSTDEVICE void operator()(Index i) const {
+    const double h = 0.5 * a.dt;
+    const double invM = 1.0 / a.mass[i];
+    const double invI = invM / (0.4 * a.radius[i] * a.radius[i]);
+    const Vec3d v = a.vel[i] + h * (invM * a.force[i] + a.gravity);
+    const Vec3d w = a.omega[i] + (h * invI) * a.torque[i];
+    a.vel[i] = v;
+    a.omega[i] = w;
+    std::uint32_t bad = 0;
+    if (!isFinite(a.pos[i])) bad |= kQPosition;
+    if (!isFinite(v)) bad |= kQVelocity;
+    if (!isFinite(w)) bad |= kQAngularVelocity;
+    if (!isFinite(a.force[i])) bad |= kQForce;
+    if (!isFinite(a.torque[i])) bad |= kQTorque;
+    if (bad) {
+      atomicOrU32(&a.cond->flags, kNonFinite);
+      atomicMinU32(&a.cond->badParticle, i);
+    }
+  }
+};
+
+}  // namespace pflow::compute::kernels

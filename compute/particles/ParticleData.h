@@ -1,0 +1,66 @@
+// Particle state as structure-of-arrays in the executor's memory, one Buffer per entry of the field
+// table. Slot fields (contact history) hold `slots` values per particle.
+#pragma once
+#include <array>
+#include <cstdint>
+
+#include "compute/core/Memory.h"
+#include "compute/particles/ParticleFields.h"
+
+namespace pflow::compute {
+
+class ParticleData {
+ public:
+  explicit ParticleData(MemorySpace& space) : m_space(&space) {
+    for (auto& b : m_fields) b.bind(space);
+  }
+
+  Index size() const { return m_n; }
+  int contactSlots() const { return m_contactSlots; }
+  int wallSlots() const { return m_wallSlots; }
+
+  // Allocates every field for n particles (contents undefined).
+  void allocate(Index n, int contactSlots, int wallSlots) {
+    m_n = n;
+    m_contactSlots = contactSlots;
+    m_wallSlots = wallSlots;
+    for (const auto& f : kFieldTable) m_fields[int(f.id)].resize(fieldBytes(f, n));
+  }
+
+  std::size_t valuesPerParticle(const FieldInfo& f) const {
+    switch (f.multiplicity) {
+      case Multiplicity::kOne: return 1;
+      case Multiplicity::kContactSlots: return std::size_t(m_contactSlots);
+      case Multiplicity::kWallSlots: return std::size_t(m_wallSlots);
+    }
+    return 1;
+  }
+  std::size_t strideBytes(const FieldInfo& f) const { return f.elementBytes * valuesPerParticle(f); }
+  std::size_t fieldBytes(const FieldInfo& f, Index n) const { return strideBytes(f) * n; }
+
+  template <Field F> typename FieldType<F>::type* ptr() { return m_fields[int(F)].as<typename FieldType<F>::type>(); }
+  template <Field F> const typename FieldType<F>::type* ptr() const {
+    return m_fields[int(F)].as<typename FieldType<F>::type>();
+  }
+  Buffer& buffer(Field f) { return m_fields[int(f)]; }
+  const Buffer& buffer(Field f) const { return m_fields[int(f)]; }
+
+  // Changes the number of slots of one slot kind, keeping every particle's existing slots and
+  // marking the new ones empty (partner / key = kNoGid, displacement 0).
+  void resizeSlots(Multiplicity kind, int newSlots);
+
+  std::size_t bytesPerParticle() const {
+    std::size_t b = 0;
+    for (const auto& f : kFieldTable) b += strideBytes(f);
+    return b;
+  }
+
+ private:
+  MemorySpace* m_space;
+  Index m_n = 0;
+  int m_contactSlots = 0;
+  int m_wallSlots = 0;
+  std::array<Buffer, kNumFields> m_fields;
+};
+
+}  // namespace pflow::compute

@@ -1,0 +1,78 @@
+// THE list of per-particle fields. Reorder, snapshots, and (later) migration and halo exchange
+// iterate over this table, so adding a field is one line here.
+//
+// Columns: enum name, output name, element type, multiplicity (one value, one per contact slot, or
+// one per wall slot), SI unit, flags.
+#pragma once
+#include <cstdint>
+
+#include "compute/core/VectorMath.h"
+#include "compute/particles/ParticleSnapshot.h"
+
+namespace pflow::compute {
+
+enum FieldFlags : std::uint32_t {
+  kSnapshot = 1u << 0,  // written to snapshot files
+  kMigrate = 1u << 1,   // travels with a particle that changes rank
+  kGhost = 1u << 2,     // sent to neighbouring ranks' halos every step
+};
+
+enum class Multiplicity : std::uint8_t { kOne, kContactSlots, kWallSlots };
+
+// clang-format off
+#define PFLOW_PARTICLE_FIELDS(X)                                                                                       \
+  X(Position,        "position",           Vec3d,         kOne,          "m",     kSnapshot | kMigrate | kGhost)        \
+  X(Velocity,        "velocity",           Vec3d,         kOne,          "m/s",   kSnapshot | kMigrate | kGhost)        \
+  X(AngularVelocity, "angular_velocity",   Vec3d,         kOne,          "rad/s", kSnapshot | kMigrate | kGhost)        \
+  X(Force,           "force",              Vec3d,         kOne,          "N",     kSnapshot)                            \
+  X(Torque,          "torque",             Vec3d,         kOne,          "N m",   0)                                    \
+  X(Radius,          "radius",             double,        kOne,          "m",     kSnapshot | kMigrate | kGhost)        \
+  X(Mass,            "mass",               double,        kOne,          "kg",    kMigrate | kGhost)                    \
+  X(Material,        "material",           std::int32_t,  kOne,          "",      kSnapshot | kMigrate | kGhost)        \
+  X(Gid,             "id",                 Gid,           kOne,          "",      kSnapshot | kMigrate | kGhost)        \
+  X(HistoryPartner,  "history_partner",    Gid,           kContactSlots, "",      kMigrate)                             \
+  X(HistoryDisp,     "history_disp",       Vec3d,         kContactSlots, "m",     kMigrate)                             \
+  X(WallKey,         "wall_key",           std::uint64_t, kWallSlots,    "",      kMigrate)                             \
+  X(WallDisp,        "wall_disp",          Vec3d,         kWallSlots,    "m",     kMigrate)
+// clang-format on
+
+enum class Field : std::uint8_t {
+#define PFLOW_X(id, name, type, mult, unit, flags) id,
+  PFLOW_PARTICLE_FIELDS(PFLOW_X)
+#undef PFLOW_X
+      kCount
+};
+inline constexpr int kNumFields = static_cast<int>(Field::kCount);
+
+template <Field F> struct FieldType;
+#define PFLOW_X(id, name, type_, mult, unit, flags) \
+  template <> struct FieldType<Field::id> { using type = type_; };
+PFLOW_PARTICLE_FIELDS(PFLOW_X)
+#undef PFLOW_X
+
+template <class T> constexpr ScalarType scalarTypeOf();
+template <> constexpr ScalarType scalarTypeOf<double>() { return ScalarType::kF64; }
+template <> constexpr ScalarType scalarTypeOf<Vec3d>() { return ScalarType::kF64; }
+template <> constexpr ScalarType scalarTypeOf<float>() { return ScalarType::kF32; }
+template <> constexpr ScalarType scalarTypeOf<std::int32_t>() { return ScalarType::kI32; }
+template <> constexpr ScalarType scalarTypeOf<std::uint64_t>() { return ScalarType::kU64; }
+
+struct FieldInfo {
+  Field id;
+  const char* name;
+  std::size_t elementBytes;  // one value (times the slot count for slot fields)
+  ScalarType scalar;
+  int components;
+  Multiplicity multiplicity;
+  const char* unit;
+  std::uint32_t flags;
+};
+
+inline constexpr FieldInfo kFieldTable[kNumFields] = {
+#define PFLOW_X(id, name, type, mult, unit, flags) \
+  {Field::id, name, sizeof(type), scalarTypeOf<type>(), int(sizeof(type) / scalarBytesOf(scalarTypeOf<type>())), Multiplicity::mult, unit, flags},
+    PFLOW_PARTICLE_FIELDS(PFLOW_X)
+#undef PFLOW_X
+};
+
+}  // namespace pflow::compute

@@ -1,0 +1,77 @@
+// The device side of a simulation: particle arrays, cell list, contact lists, walls, and one method
+// per phase of the step. Simulation (host orchestration) drives it; an executor (OpenMP now, CUDA
+// next) runs it. Nothing here includes an executor-specific header.
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/Status.h"
+#include "compute/contact/ContactParams.h"
+#include "compute/contact/ForceKernel.h"
+#include "compute/neighbor/CellGrid.h"
+#include "compute/particles/ParticleSnapshot.h"
+
+namespace pflow::compute {
+
+// Everything an engine needs, prepared on the host from a validated RunConfig.
+struct EngineSetup {
+  // particles, in input order; gid = position in these arrays
+  std::vector<Vec3d> position, velocity, angularVelocity;
+  std::vector<double> radius, mass;
+  std::vector<std::int32_t> material;
+  // walls
+  std::vector<PlaneParams> planes;
+  std::vector<std::string> planeNames;
+  std::vector<Vec3d> triVerts;  // 3 per triangle, at t <= the motion's start
+  std::vector<std::int32_t> triMesh, triMaterial, triSurface;
+  std::vector<MeshMotionParams> meshMotion;  // per mesh
+  std::vector<std::string> meshNames;
+  // physics
+  std::vector<ContactParams> contactTable;  // numMaterials^2
+  int numMaterials = 0;
+  Vec3d gravity{0, 0, 0};
+  // neighbour search
+  CellGrid grid;
+  double skin = 0;
+  double maxRadius = 0;
+  int historySlots = 8;
+  int wallHistorySlots = 4;
+  int threads = 0;
+};
+
+struct ContactStats {
+  std::size_t particleContacts = 0;  // pairs in contact (each counted once)
+  std::size_t wallContacts = 0;
+  double coordinationNumber = 0;     // 2 * pairs / N
+  double maxOverlapRatio = 0;        // max over contacts of overlap / smaller radius (walls: / radius)
+  double kineticEnergy = 0;          // translational + rotational [J]
+  double maxSpeed = 0;               // [m/s]
+};
+
+class Engine {
+ public:
+  virtual ~Engine() = default;
+  virtual std::string executorDescription() const = 0;
+  virtual std::size_t size() const = 0;
+
+  // Phases, in step order. The first two return the largest squared displacement since the last
+  // rebuild (particles and mesh vertices), for the skin criterion.
+  virtual double integrateFirstHalf(double dt) = 0;
+  virtual double moveMeshes(double time) = 0;
+  virtual void sortByCell() = 0;
+  virtual Status buildContacts() = 0;
+  virtual Status computeForces(double dt, double time) = 0;
+  virtual Status integrateSecondHalf(double dt) = 0;
+
+  // Explicit host copies for output and diagnostics.
+  virtual ParticleSnapshot snapshot(std::int64_t step, double time) const = 0;
+  virtual GeometrySnapshot geometry() const = 0;
+  virtual ContactStats contactStats() const = 0;
+  virtual std::size_t deviceBytes() const = 0;
+  virtual int historySlots() const = 0;
+};
+
+std::unique_ptr<Engine> makeCpuEngine(EngineSetup setup);
+
+}  // namespace pflow::compute

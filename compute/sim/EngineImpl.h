@@ -1,0 +1,404 @@
+// Engine over any executor: the phases as launches of the kernel functors. Instantiated for the
+// OpenMP executor in CpuEngine.cc (and for CUDA in CudaEngine.cu when that executor lands).
+#pragma once
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "compute/contact/ForceKernel.h"
+#include "compute/geometry/MeshKernels.h"
+#include "compute/integrate/VelocityVerlet.h"
+#include "compute/neighbor/NeighborKernels.h"
+#include "compute/particles/ParticleData.h"
+#include "compute/sim/Engine.h"
+
+namespace pflow::compute {
+
+namespace kernels {
+template <class T>
+struct Fill {
+  T* p;
+  T v;
+  PFLOW_HOSTDEVICE void operator()(Index i) const { p[i] = v; }
+};
+}  // namespace kernels
+
+template <class Exec>
+class EngineImpl final : public Engine {
+ public:
+  explicit EngineImpl(EngineSetup s)
+      : m_exec(s.threads), m_mem(m_exec.memory()), m_particles(m_mem), m_setup(std::move(s)) {
+    init();
+  }
+
+  std::string executorDescription() const override { return m_exec.description(); }
+  std::size_t size() const override { return m_n; }
+  int historySlots() const override { return m_particles.contactSlots(); }
+  std::size_t deviceBytes() const override { return m_mem.bytesInUse(); }
+
+  double integrateFirstHalf(double dt) override {
+    return m_exec.maxOf(m_n, kernels::IntegrateFirstHalf{integrateArgs(dt)});
+  }
+
+  double moveMeshes(double time) override {
+    if (m_numTri == 0 || !m_anyMeshMoves) return 0.0;
+    return m_exec.maxOf(m_numTri, kernels::MoveTriangles{m_triRef.as<Vec3d>(), m_triVerts.as<Vec3d>(),
+                                                         m_triRebuild.as<Vec3d>(), m_triMesh.as<std::int32_t>(),
+                                                         m_meshMotion.as<MeshMotionParams>(), time});
+  }
+
+  void sortByCell() override {
+    const CellGrid& g = m_setup.grid;
+    m_exec.forEach(m_n, kernels::CellKey{g, m_particles.ptr<Field::Position>(), m_cellKey.as<std::uint32_t>()});
+    m_exec.sortByKey(m_cellKey.as<std::uint32_t>(), m_n, g.numCells(), m_perm.as<Index>(), m_cellStart.as<Index>());
+    // Reorder every field of the table by the permutation.
+    for (const auto& f : kFieldTable) {
+      Buffer& src = m_particles.buffer(f.id);
+      m_scratch.resize(src.bytes());
+      m_exec.forEach(m_n, kernels::GatherBytes{src.template as<unsigned char>(), m_scratch.as<unsigned char>(),
+                                               m_perm.as<Index>(), m_particles.strideBytes(f)});
+      src.swap(m_scratch);
+    }
+  }
+
+  Status buildContacts() override {
+    // Positions and vertices now are the reference for the skin criterion.
+    m_exec.forEach(m_n, kernels::CopyPositions{m_particles.ptr<Field::Position>(), m_refPos.as<Vec3d>()});
+    if (m_numTri) {
+      m_mem.copyWithin(m_triRebuild.data(), m_triVerts.data(), m_triVerts.bytes());
+      binTriangles();
+    }
+    for (;;) {
+      resetConditions();
+      m_exec.forEach(m_n, kernels::BuildNeighbors{m_setup.grid, m_cellStart.as<Index>(),
+                                                  m_particles.ptr<Field::Position>(), m_particles.ptr<Field::Radius>(),
+                                                  m_particles.ptr<Field::Gid>(),
+                                                  m_particles.ptr<Field::HistoryPartner>(),
+                                                  m_particles.contactSlots(), m_setup.skin, m_nbrCap,
+                                                  m_nbr.as<Index>(), m_nbrSlot.as<std::int8_t>(),
+                                                  m_nbrCount.as<std::uint32_t>(), m_cond.as<Conditions>()});
+      if (m_numTri)
+        m_exec.forEach(m_n, kernels::WallCandidates{m_setup.grid, m_binStart.as<Index>(), m_binItems.as<Index>(),
+                                                    m_triVerts.as<Vec3d>(), m_particles.ptr<Field::Position>(),
+                                                    m_particles.ptr<Field::Radius>(), m_setup.skin, m_wallCap,
+                                                    m_wallCand.as<Index>(), m_wallCandCount.as<std::uint32_t>(),
+                                                    m_cond.as<Conditions>()});
+      const Conditions c = readConditions();
+      if (!(c.flags & (kNeighborOverflow | kWallCandidateOverflow))) break;
+      if (c.flags & kNeighborOverflow) {
+        m_nbrCap = std::max<Index>(c.neededNeighbors + c.neededNeighbors / 4, m_nbrCap + 4);
+        allocNeighbors();
+      }
+      if (c.flags & kWallCandidateOverflow) {
+        m_wallCap = std::max<Index>(c.neededWallCandidates + c.neededWallCandidates / 4, m_wallCap + 4);
+        allocWallCandidates();
+      }
+    }
+    ++m_rebuilds;
+    return Status::ok();
+  }
+
+  Status computeForces(double dt, double time) override {
+    for (;;) {
+      resetConditions();
+      m_exec.forEach(m_n, kernels::ComputeForces{forceArgs(dt, time)});
+      const Conditions c = readConditions();
+      if (c.flags & kTooManyWallContacts)
+        return Status(StatusCode::kResourceExhausted,
+                      "a particle touches more than " + std::to_string(kMaxWallContacts) +
+                          " wall faces at once; the mesh is finer than the particles, coarsen it");
+      if (!(c.flags & (kHistoryOverflow | kWallHistoryOverflow))) break;
+      // Grow the slots and redo the pass: the current history is untouched (double buffer).
+      if (c.flags & kHistoryOverflow) {
+        const int grown = std::max<int>(m_particles.contactSlots() + 4, int(c.neededHistory) + 2);
+        if (grown > 127)
+          return Status(StatusCode::kResourceExhausted,
+                        "a particle has " + std::to_string(c.neededHistory) + " simultaneous contacts, above the 127-slot limit");
+        growSlots(Multiplicity::kContactSlots, grown);
+      }
+      if (c.flags & kWallHistoryOverflow)
+        growSlots(Multiplicity::kWallSlots, std::max<int>(m_particles.wallSlots() + 2, int(c.neededWallHistory) + 1));
+    }
+    m_particles.buffer(Field::HistoryPartner).swap(m_histPartnerNext);
+    m_particles.buffer(Field::HistoryDisp).swap(m_histDispNext);
+    m_particles.buffer(Field::WallKey).swap(m_wallKeyNext);
+    m_particles.buffer(Field::WallDisp).swap(m_wallDispNext);
+    return Status::ok();
+  }
+
+  Status integrateSecondHalf(double dt) override {
+    resetConditions();
+    m_exec.forEach(m_n, kernels::IntegrateSecondHalf{integrateArgs(dt)});
+    const Conditions c = readConditions();
+    if (c.flags & kNonFinite) return nonFiniteError(c.badParticle);
+    return Status::ok();
+  }
+
+  ParticleSnapshot snapshot(std::int64_t step, double time) const override {
+    ParticleSnapshot s;
+    s.step = step;
+    s.time = time;
+    s.n = m_n;
+    for (const auto& f : kFieldTable) {
+      if (!(f.flags & kSnapshot)) continue;
+      SnapshotArray a{f.name, f.scalar, f.components, f.unit, {}};
+      a.data.resize(m_particles.fieldBytes(f, m_n));
+      m_mem.copyToHost(a.data.data(), m_particles.buffer(f.id).data(), a.data.size());
+      s.arrays.push_back(std::move(a));
+    }
+    return s;
+  }
+
+  GeometrySnapshot geometry() const override {
+    GeometrySnapshot g;
+    g.vertices.resize(3 * std::size_t(m_numTri));
+    m_mem.copyToHost(g.vertices.data(), m_triVerts.data(), g.vertices.size() * sizeof(Vec3d));
+    for (Index t = 0; t < 3 * m_numTri; ++t) g.triangles.push_back(t);
+    g.triangleMesh = m_setup.triMesh;
+    g.triangleSurface = m_setup.triSurface;
+    g.triangleMaterial = m_setup.triMaterial;
+    g.meshNames = m_setup.meshNames;
+    for (const auto& p : m_setup.planes) {
+      g.planePoints.push_back(p.point);
+      g.planeNormals.push_back(p.normal);
+      g.planeMaterial.push_back(p.material);
+    }
+    g.planeNames = m_setup.planeNames;
+    return g;
+  }
+
+  ContactStats contactStats() const override;
+
+  std::size_t rebuilds() const { return m_rebuilds; }
+
+ private:
+  void init();
+  void allocNeighbors() {
+    m_nbr.resize(std::size_t(m_n) * m_nbrCap * sizeof(Index));
+    m_nbrSlot.resize(std::size_t(m_n) * m_nbrCap * sizeof(std::int8_t));
+  }
+  void allocWallCandidates() { m_wallCand.resize(std::size_t(m_n) * m_wallCap * sizeof(Index)); }
+  void allocNextHistory() {
+    for (auto [next, f] : {std::pair{&m_histPartnerNext, Field::HistoryPartner}, std::pair{&m_histDispNext, Field::HistoryDisp},
+                           std::pair{&m_wallKeyNext, Field::WallKey}, std::pair{&m_wallDispNext, Field::WallDisp}})
+      next->resize(m_particles.buffer(f).bytes());
+  }
+  void growSlots(Multiplicity kind, int slots) {
+    m_particles.resizeSlots(kind, slots);
+    allocNextHistory();
+    // Cached slot indices of the neighbour list stay valid: existing slots keep their positions.
+  }
+  void binTriangles();
+  void resetConditions() {
+    Conditions c;
+    m_mem.copyFromHost(m_cond.data(), &c, sizeof c);
+  }
+  Conditions readConditions() const {
+    Conditions c;
+    m_mem.copyToHost(&c, m_cond.data(), sizeof c);
+    return c;
+  }
+  Status nonFiniteError(Index i) const;
+
+  kernels::IntegrateArgs integrateArgs(double dt) {
+    return {m_particles.ptr<Field::Position>(), m_particles.ptr<Field::Velocity>(),
+            m_particles.ptr<Field::AngularVelocity>(), m_particles.ptr<Field::Force>(),
+            m_particles.ptr<Field::Torque>(), m_particles.ptr<Field::Radius>(), m_particles.ptr<Field::Mass>(),
+            m_refPos.as<Vec3d>(), m_setup.gravity, dt, m_cond.as<Conditions>()};
+  }
+  kernels::ForceArgs forceArgs(double dt, double time) {
+    kernels::ForceArgs a{};
+    a.pos = m_particles.ptr<Field::Position>();
+    a.vel = m_particles.ptr<Field::Velocity>();
+    a.omega = m_particles.ptr<Field::AngularVelocity>();
+    a.radius = m_particles.ptr<Field::Radius>();
+    a.mass = m_particles.ptr<Field::Mass>();
+    a.material = m_particles.ptr<Field::Material>();
+    a.gid = m_particles.ptr<Field::Gid>();
+    a.force = m_particles.ptr<Field::Force>();
+    a.torque = m_particles.ptr<Field::Torque>();
+    a.nbr = m_nbr.as<Index>();
+    a.nbrSlot = m_nbrSlot.as<std::int8_t>();
+    a.nbrCount = m_nbrCount.as<std::uint32_t>();
+    a.nbrCapacity = m_nbrCap;
+    a.slots = m_particles.contactSlots();
+    a.histPartner = m_particles.ptr<Field::HistoryPartner>();
+    a.histDisp = m_particles.ptr<Field::HistoryDisp>();
+    a.histPartnerNext = m_histPartnerNext.as<Gid>();
+    a.histDispNext = m_histDispNext.as<Vec3d>();
+    a.planes = m_planes.as<PlaneParams>();
+    a.numPlanes = int(m_setup.planes.size());
+    a.triVerts = m_triVerts.as<Vec3d>();
+    a.triMesh = m_triMesh.as<std::int32_t>();
+    a.triMaterial = m_triMaterial.as<std::int32_t>();
+    a.meshMotion = m_meshMotion.as<MeshMotionParams>();
+    a.wallCand = m_wallCand.as<Index>();
+    a.wallCandCount = m_wallCandCount.as<std::uint32_t>();
+    a.wallCandCapacity = m_numTri ? m_wallCap : 0;
+    a.wallSlots = m_particles.wallSlots();
+    a.wallKey = m_particles.ptr<Field::WallKey>();
+    a.wallDisp = m_particles.ptr<Field::WallDisp>();
+    a.wallKeyNext = m_wallKeyNext.as<std::uint64_t>();
+    a.wallDispNext = m_wallDispNext.as<Vec3d>();
+    a.params = m_params.as<ContactParams>();
+    a.numMaterials = m_setup.numMaterials;
+    a.dt = dt;
+    a.time = time;
+    a.cond = m_cond.as<Conditions>();
+    return a;
+  }
+
+  template <class T>
+  void upload(Buffer& b, const std::vector<T>& v) {
+    b.resize(std::max<std::size_t>(1, v.size()) * sizeof(T));
+    m_mem.copyFromHost(b.data(), v.data(), v.size() * sizeof(T));
+  }
+
+  Exec m_exec;
+  MemorySpace& m_mem;
+  ParticleData m_particles;
+  EngineSetup m_setup;
+  Index m_n = 0;
+  Index m_numTri = 0;
+  bool m_anyMeshMoves = false;
+  Index m_nbrCap = 16;
+  Index m_wallCap = 4;
+  std::size_t m_rebuilds = 0;
+  Buffer m_refPos{m_mem, 0}, m_cellKey{m_mem, 0}, m_perm{m_mem, 0}, m_cellStart{m_mem, 0}, m_scratch{m_mem, 0};
+  Buffer m_nbr{m_mem, 0}, m_nbrSlot{m_mem, 0}, m_nbrCount{m_mem, 0};
+  Buffer m_histPartnerNext{m_mem, 0}, m_histDispNext{m_mem, 0}, m_wallKeyNext{m_mem, 0}, m_wallDispNext{m_mem, 0};
+  Buffer m_planes{m_mem, 0}, m_triRef{m_mem, 0}, m_triVerts{m_mem, 0}, m_triRebuild{m_mem, 0};
+  Buffer m_triMesh{m_mem, 0}, m_triMaterial{m_mem, 0}, m_meshMotion{m_mem, 0};
+  Buffer m_binStart{m_mem, 0}, m_binItems{m_mem, 0}, m_binCount{m_mem, 0};
+  Buffer m_wallCand{m_mem, 0}, m_wallCandCount{m_mem, 0};
+  Buffer m_params{m_mem, 0}, m_cond{m_mem, sizeof(Conditions)};
+};
+
+template <class Exec>
+void EngineImpl<Exec>::init() {
+  const EngineSetup& s = m_setup;
+  m_n = Index(s.position.size());
+  m_numTri = Index(s.triMesh.size());
+  m_particles.allocate(m_n, s.historySlots, s.wallHistorySlots);
+  std::vector<Vec3d> zeros(m_n, Vec3d{0, 0, 0});
+  std::vector<Gid> gids(m_n);
+  for (Index i = 0; i < m_n; ++i) gids[i] = i;
+  auto put = [&](Field f, const void* src) {
+    m_mem.copyFromHost(m_particles.buffer(f).data(), src, m_particles.buffer(f).bytes());
+  };
+  put(Field::Position, s.position.data());
+  put(Field::Velocity, s.velocity.empty() ? zeros.data() : s.velocity.data());
+  put(Field::AngularVelocity, s.angularVelocity.empty() ? zeros.data() : s.angularVelocity.data());
+  put(Field::Force, zeros.data());
+  put(Field::Torque, zeros.data());
+  put(Field::Radius, s.radius.data());
+  put(Field::Mass, s.mass.data());
+  put(Field::Material, s.material.data());
+  put(Field::Gid, gids.data());
+  for (Field f : {Field::HistoryPartner, Field::WallKey})
+    m_mem.fillBytes(m_particles.buffer(f).data(), 0xFF, m_particles.buffer(f).bytes());
+  for (Field f : {Field::HistoryDisp, Field::WallDisp})
+    m_mem.fillBytes(m_particles.buffer(f).data(), 0, m_particles.buffer(f).bytes());
+  allocNextHistory();
+
+  m_refPos.resize(std::size_t(m_n) * sizeof(Vec3d));
+  m_cellKey.resize(std::size_t(m_n) * sizeof(std::uint32_t));
+  m_perm.resize(std::size_t(m_n) * sizeof(Index));
+  m_cellStart.resize((std::size_t(s.grid.numCells()) + 1) * sizeof(Index));
+  m_nbrCount.resize(std::size_t(m_n) * sizeof(std::uint32_t));
+  allocNeighbors();
+
+  upload(m_planes, s.planes);
+  upload(m_params, s.contactTable);
+  upload(m_triRef, s.triVerts);
+  upload(m_triVerts, s.triVerts);
+  upload(m_triRebuild, s.triVerts);
+  upload(m_triMesh, s.triMesh);
+  upload(m_triMaterial, s.triMaterial);
+  upload(m_meshMotion, s.meshMotion);
+  for (const auto& m : s.meshMotion) m_anyMeshMoves |= (m.angularSpeed != 0 || norm2(m.velocity) != 0);
+  m_binStart.resize((std::size_t(s.grid.numCells()) + 1) * sizeof(Index));
+  m_binCount.resize(std::size_t(s.grid.numCells()) * sizeof(std::uint32_t));
+  m_wallCandCount.resize(std::max<std::size_t>(1, m_n) * sizeof(std::uint32_t));
+  m_mem.fillBytes(m_wallCandCount.data(), 0, m_wallCandCount.bytes());
+  if (m_numTri) allocWallCandidates();
+}
+
+template <class Exec>
+void EngineImpl<Exec>::binTriangles() {
+  const CellGrid& g = m_setup.grid;
+  const double margin = m_setup.maxRadius + m_setup.skin;
+  const std::uint32_t nc = g.numCells();
+  m_mem.fillBytes(m_binCount.data(), 0, m_binCount.bytes());
+  m_exec.forEach(m_numTri, kernels::BinTriangles{g, m_triVerts.as<Vec3d>(), margin, m_binCount.as<std::uint32_t>(),
+                                                 nullptr, nullptr, false});
+  const std::uint64_t total = m_exec.exclusiveScan(m_binCount.as<std::uint32_t>(), m_binStart.as<Index>(), nc);
+  const Index end = Index(total);
+  m_mem.copyFromHost(m_binStart.as<Index>() + nc, &end, sizeof end);
+  m_binItems.resize(std::max<std::uint64_t>(1, total) * sizeof(Index));
+  m_mem.fillBytes(m_binCount.data(), 0, m_binCount.bytes());
+  m_exec.forEach(m_numTri, kernels::BinTriangles{g, m_triVerts.as<Vec3d>(), margin, m_binCount.as<std::uint32_t>(),
+                                                 m_binStart.as<Index>(), m_binItems.as<Index>(), true});
+  m_exec.forEach(nc, kernels::SortBins{m_binStart.as<Index>(), m_binItems.as<Index>()});
+}
+
+template <class Exec>
+Status EngineImpl<Exec>::nonFiniteError(Index i) const {
+  const ParticleSnapshot s = snapshot(0, 0);
+  auto vec = [&](const char* name) {
+    const Vec3d v = s.find(name)->template as<Vec3d>()[i];
+    return std::string(name) + " (" + std::to_string(v.x) + ", " + std::to_string(v.y) + ", " + std::to_string(v.z) + ")";
+  };
+  Vec3d f, t;
+  m_mem.copyToHost(&f, m_particles.ptr<Field::Force>() + i, sizeof f);
+  m_mem.copyToHost(&t, m_particles.ptr<Field::Torque>() + i, sizeof t);
+  const Gid gid = s.find("id")->template as<Gid>()[i];
+  std::string what;
+  for (const char* name : {"position", "velocity", "angular_velocity"})
+    if (!isFinite(s.find(name)->template as<Vec3d>()[i])) what += (what.empty() ? "" : ", ") + vec(name);
+  if (!isFinite(f)) what += std::string(what.empty() ? "" : ", ") + "force";
+  if (!isFinite(t)) what += std::string(what.empty() ? "" : ", ") + "torque";
+  return numericalError("particle " + std::to_string(gid) + " has a non-finite " + what);
+}
+
+template <class Exec>
+ContactStats EngineImpl<Exec>::contactStats() const {
+  // Diagnostics only (not on the step path): computed from host copies.
+  const Index n = m_n;
+  std::vector<Vec3d> pos(n), vel(n), om(n);
+  std::vector<double> rad(n), mass(n);
+  std::vector<Index> nbr(std::size_t(n) * m_nbrCap);
+  std::vector<std::uint32_t> cnt(n);
+  m_mem.copyToHost(pos.data(), m_particles.ptr<Field::Position>(), n * sizeof(Vec3d));
+  m_mem.copyToHost(vel.data(), m_particles.ptr<Field::Velocity>(), n * sizeof(Vec3d));
+  m_mem.copyToHost(om.data(), m_particles.ptr<Field::AngularVelocity>(), n * sizeof(Vec3d));
+  m_mem.copyToHost(rad.data(), m_particles.ptr<Field::Radius>(), n * sizeof(double));
+  m_mem.copyToHost(mass.data(), m_particles.ptr<Field::Mass>(), n * sizeof(double));
+  m_mem.copyToHost(nbr.data(), m_nbr.data(), nbr.size() * sizeof(Index));
+  m_mem.copyToHost(cnt.data(), m_nbrCount.data(), n * sizeof(std::uint32_t));
+  ContactStats st;
+  for (Index i = 0; i < n; ++i) {
+    st.kineticEnergy += 0.5 * mass[i] * norm2(vel[i]) + 0.5 * 0.4 * mass[i] * rad[i] * rad[i] * norm2(om[i]);
+    st.maxSpeed = std::max(st.maxSpeed, norm(vel[i]));
+    for (std::uint32_t e = 0; e < std::min<std::uint32_t>(cnt[i], m_nbrCap); ++e) {
+      const Index j = nbr[std::size_t(i) * m_nbrCap + e];
+      if (j < i) continue;
+      const double ov = rad[i] + rad[j] - norm(pos[j] - pos[i]);
+      if (ov <= 0) continue;
+      ++st.particleContacts;
+      st.maxOverlapRatio = std::max(st.maxOverlapRatio, ov / std::min(rad[i], rad[j]));
+    }
+    for (const auto& p : m_setup.planes) {
+      const double ov = rad[i] - dot(pos[i] - p.point, p.normal);
+      if (ov <= 0) continue;
+      ++st.wallContacts;
+      st.maxOverlapRatio = std::max(st.maxOverlapRatio, ov / rad[i]);
+    }
+  }
+  st.coordinationNumber = n ? 2.0 * double(st.particleContacts) / n : 0.0;
+  return st;
+}
+
+}  // namespace pflow::compute

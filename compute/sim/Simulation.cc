@@ -1,0 +1,180 @@
+#include "compute/sim/Simulation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace pflow::compute {
+
+#define PFLOW_RETURN_IF_ERROR(expr)         \
+  do {                                      \
+    ::pflow::Status _st = (expr);           \
+    if (!_st.isOk()) return withStep(_st);  \
+  } while (0)
+
+// ---------------------------------------------------------------------------------------------
+// The step loop. One velocity-Verlet step, top to bottom, a timer per phase.
+Status Simulation::step() {
+  const double dt = m_timeStep.dt, tNext = double(m_step + 1) * dt;
+  double moved, meshMoved;
+  { auto t = m_timers.time(Phase::kIntegrate1); moved = std::sqrt(m_engine->integrateFirstHalf(dt)); }
+  { auto t = m_timers.time(Phase::kMeshes);     meshMoved = std::sqrt(m_engine->moveMeshes(tNext)); }
+  if (2 * moved > m_setup.skin || moved + meshMoved > m_setup.skin) PFLOW_RETURN_IF_ERROR(rebuild());
+  { auto t = m_timers.time(Phase::kForces);     PFLOW_RETURN_IF_ERROR(m_engine->computeForces(dt, tNext)); }
+  { auto t = m_timers.time(Phase::kIntegrate2); PFLOW_RETURN_IF_ERROR(m_engine->integrateSecondHalf(dt)); }
+  ++m_step;
+  m_time = tNext;
+  return Status::ok();
+}
+
+// Neighbour rebuild: sort particles by cell (reordering every field), then candidate lists.
+Status Simulation::rebuild() {
+  { auto t = m_timers.time(Phase::kSort);     m_engine->sortByCell(); }
+  { auto t = m_timers.time(Phase::kContacts); PFLOW_RETURN_IF_ERROR(m_engine->buildContacts()); }
+  ++m_rebuilds;
+  return Status::ok();
+}
+// ---------------------------------------------------------------------------------------------
+
+Status Simulation::withStep(Status s) const {
+  if (s.isOk()) return s;
+  return Status(s.code(), s.message() + " at step " + std::to_string(m_step + 1) + " (t = " +
+                              std::to_string(double(m_step + 1) * m_timeStep.dt) + " s)");
+}
+
+Status Simulation::initialise() {
+  PFLOW_RETURN_IF_ERROR(rebuild());
+  PFLOW_RETURN_IF_ERROR(m_engine->computeForces(0.0, 0.0));
+  return Status::ok();
+}
+
+Status Simulation::runSteps(std::int64_t steps) {
+  for (std::int64_t k = 0; k < steps; ++k)
+    if (Status s = step(); !s.isOk()) return s;
+  return Status::ok();
+}
+
+Status Simulation::runUntil(double time, const std::function<Status(const Simulation&)>& observer) {
+  const double dt = m_timeStep.dt;
+  const auto last = std::int64_t(std::llround(time / dt));
+  while (m_step < last) {
+    if (Status s = step(); !s.isOk()) return s;
+    if (observer)
+      if (Status s = observer(*this); !s.isOk()) return s;
+  }
+  return Status::ok();
+}
+
+Simulation::Simulation(RunConfig config, EngineSetup setup, TimeStepInfo ts, std::unique_ptr<Engine> engine)
+    : m_config(std::move(config)), m_setup(std::move(setup)), m_timeStep(std::move(ts)), m_engine(std::move(engine)) {}
+
+Result<std::unique_ptr<Simulation>> Simulation::create(const RunConfig& config, const SimulationOptions& options) {
+  if (ErrorList errors = config.validate(); !errors.empty()) return errors.toStatus("invalid run configuration");
+  if (config.sim.precision != Precision::kDouble)
+    return invalidArgument("simulation.precision: 'float' needs the CUDA executor, which is not built into this pflow yet");
+  if (options.executor != ExecutorKind::kCpu)
+    return invalidArgument("--executor cuda: this pflow has no CUDA executor yet; use --executor cpu");
+  auto ts = chooseTimeStep(config);
+  if (!ts) return ts.status();
+  auto setup = prepareEngineSetup(config);
+  if (!setup) return setup.status();
+  EngineSetup hostCopy = setup.value();
+  auto engine = makeCpuEngine(std::move(setup).value());
+  std::unique_ptr<Simulation> sim(new Simulation(config, std::move(hostCopy), ts.value(), std::move(engine)));
+  if (Status s = sim->initialise(); !s.isOk()) return s;
+  return sim;
+}
+
+Result<EngineSetup> prepareEngineSetup(const RunConfig& c) {
+  EngineSetup s;
+  const auto& p = c.particles;
+  const std::size_t n = p.size();
+  s.position = p.position;
+  s.velocity = p.velocity.empty() ? std::vector<Vec3d>(n, Vec3d{0, 0, 0}) : p.velocity;
+  s.angularVelocity = p.angularVelocity.empty() ? std::vector<Vec3d>(n, Vec3d{0, 0, 0}) : p.angularVelocity;
+  s.radius = p.radius;
+  s.material = p.material;
+  s.mass.resize(n);
+  double maxR = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double r = p.radius[i];
+    s.mass[i] = c.materials[std::size_t(p.material[i])].density * 4.0 / 3.0 * std::numbers::pi * r * r * r;
+    maxR = std::max(maxR, r);
+  }
+  s.maxRadius = maxR;
+  s.numMaterials = int(c.materials.size());
+  s.contactTable = buildContactTable(c.materials, c.pairs);
+  s.gravity = c.sim.gravity;
+  s.historySlots = c.sim.historySlots;
+  s.wallHistorySlots = c.sim.wallHistorySlots;
+  s.threads = c.sim.threads;
+
+  for (const auto& pl : c.planes) {
+    s.planes.push_back({pl.point, (1.0 / norm(pl.normal)) * pl.normal, pl.material});
+    s.planeNames.push_back(pl.name);
+  }
+  for (std::size_t m = 0; m < c.meshes.size(); ++m) {
+    const auto& mc = c.meshes[m];
+    for (std::size_t t = 0; t < mc.triangles.size(); ++t) {
+      for (int k = 0; k < 3; ++k) s.triVerts.push_back(mc.vertices[mc.triangles[t][k]]);
+      s.triMesh.push_back(std::int32_t(m));
+      s.triMaterial.push_back(mc.material);
+      s.triSurface.push_back(mc.surface.empty() ? 0 : mc.surface[t]);
+    }
+    const auto& mo = mc.motion;
+    const double axisLen = norm(mo.axis);
+    s.meshMotion.push_back({mo.velocity, mo.axisPoint, axisLen > 0 ? (1.0 / axisLen) * mo.axis : Vec3d{0, 0, 1},
+                            mo.angularSpeed, mo.startTime});
+    s.meshNames.push_back(mc.name);
+  }
+
+  s.skin = c.sim.skin > 0 ? c.sim.skin : 0.1 * 2.0 * maxR;
+  if (!(s.skin > 0)) s.skin = 1e-3;  // no particles: any positive value works
+
+  // Domain: given, or the box around particles and mesh vertices with a margin.
+  Aabb box;
+  if (c.sim.domain) {
+    box = *c.sim.domain;
+  } else {
+    Vec3d lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+    auto grow = [&](Vec3d v, double r) {
+      lo = {std::min(lo.x, v.x - r), std::min(lo.y, v.y - r), std::min(lo.z, v.z - r)};
+      hi = {std::max(hi.x, v.x + r), std::max(hi.y, v.y + r), std::max(hi.z, v.z + r)};
+    };
+    for (std::size_t i = 0; i < n; ++i) grow(p.position[i], p.radius[i]);
+    for (const auto& v : s.triVerts) grow(v, 0);
+    if (lo.x > hi.x) lo = hi = Vec3d{0, 0, 0};
+    const double extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+    const double margin = 0.05 * extent + 2 * (2 * maxR + s.skin);
+    box = {lo - Vec3d{margin, margin, margin}, hi + Vec3d{margin, margin, margin}};
+  }
+  // Cells at least one largest diameter plus skin wide; coarser if the grid would be huge.
+  const Vec3d ext = box.hi - box.lo;
+  double cell = std::max(2 * maxR + s.skin, 1e-12);
+  const double maxCells = std::max(4096.0, 4.0 * double(n) + double(s.triMesh.size()));
+  const double volume = std::max(ext.x, cell) * std::max(ext.y, cell) * std::max(ext.z, cell);
+  if (volume / (cell * cell * cell) > maxCells) cell = std::cbrt(volume / maxCells);
+  s.grid.lo = box.lo;
+  s.grid.cellSize = cell;
+  s.grid.invCellSize = 1.0 / cell;
+  s.grid.nx = std::max(1, int(ext.x / cell));
+  s.grid.ny = std::max(1, int(ext.y / cell));
+  s.grid.nz = std::max(1, int(ext.z / cell));
+  // A dimension rounded down makes its cells slightly larger than `cell`: still >= the minimum.
+  s.grid.cellSize = std::max({ext.x / s.grid.nx, ext.y / s.grid.ny, ext.z / s.grid.nz, cell});
+  s.grid.invCellSize = 1.0 / s.grid.cellSize;
+  return s;
+}
+
+std::string PhaseTimers::report() const {
+  std::string out = "PERFORMANCE";
+  const double tot = total();
+  for (int p = 0; p < int(Phase::kCount); ++p) {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, " %s %.3f s (%.1f%%)", kPhaseNames[p], m_seconds[p], tot > 0 ? 100 * m_seconds[p] / tot : 0.0);
+    out += buf;
+  }
+  return out;
+}
+
+}  // namespace pflow::compute

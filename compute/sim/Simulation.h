@@ -1,0 +1,73 @@
+// A DEM run: validated configuration in, steps out. Owns the host side (time, step count, time step
+// choice, timers) and drives an Engine through the phases of the step loop.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "common/Status.h"
+#include "compute/sim/Engine.h"
+#include "compute/sim/PhaseTimers.h"
+#include "compute/sim/RunConfig.h"
+#include "compute/sim/TimeStep.h"
+
+namespace pflow::compute {
+
+enum class ExecutorKind { kCpu, kCuda };
+
+struct SimulationOptions {
+  ExecutorKind executor = ExecutorKind::kCpu;
+};
+
+class Simulation {
+ public:
+  // Validates the configuration (every error at once) and sets up the engine with forces at t = 0.
+  static Result<std::unique_ptr<Simulation>> create(const RunConfig& config, const SimulationOptions& options = {});
+
+  // One velocity-Verlet step.
+  Status step();
+  // Steps until `time` (the last step may not overshoot by more than dt/2); after each step calls
+  // `observer`, which may stop the run by returning a non-OK status.
+  Status runUntil(double time, const std::function<Status(const Simulation&)>& observer = {});
+  Status runSteps(std::int64_t steps);
+
+  std::int64_t stepCount() const { return m_step; }
+  double time() const { return m_time; }
+  double dt() const { return m_timeStep.dt; }
+  const TimeStepInfo& timeStep() const { return m_timeStep; }
+  const RunConfig& config() const { return m_config; }
+  const CellGrid& grid() const { return m_setup.grid; }
+  double skin() const { return m_setup.skin; }
+  std::size_t numParticles() const { return m_engine->size(); }
+  std::int64_t rebuilds() const { return m_rebuilds; }
+
+  ParticleSnapshot snapshot() const { return m_engine->snapshot(m_step, m_time); }
+  GeometrySnapshot geometry() const { return m_engine->geometry(); }
+  ContactStats contactStats() const { return m_engine->contactStats(); }
+  const PhaseTimers& timers() const { return m_timers; }
+  PhaseTimers& timers() { return m_timers; }
+  std::string executorDescription() const { return m_engine->executorDescription(); }
+  std::size_t deviceBytes() const { return m_engine->deviceBytes(); }
+  Engine& engine() { return *m_engine; }
+
+ private:
+  Simulation(RunConfig config, EngineSetup setup, TimeStepInfo ts, std::unique_ptr<Engine> engine);
+  Status initialise();
+  Status rebuild();
+  Status withStep(Status s) const;
+
+  RunConfig m_config;
+  EngineSetup m_setup;  // host copy of the static setup (grid, skin, walls)
+  TimeStepInfo m_timeStep;
+  std::unique_ptr<Engine> m_engine;
+  PhaseTimers m_timers;
+  std::int64_t m_step = 0;
+  double m_time = 0;
+  std::int64_t m_rebuilds = 0;
+};
+
+// Host preparation, exposed for tests and benchmarks: masses, contact table, walls, domain and grid.
+Result<EngineSetup> prepareEngineSetup(const RunConfig& config);
+
+}  // namespace pflow::compute
