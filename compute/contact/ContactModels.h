@@ -64,7 +64,8 @@ template <class T> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE Vec3<T> rotateHistory(Vec3
   if (len2 == T(0)) return xi;
   Vec3<T> p = xi - dot(xi, n) * n;
   const T p2 = norm2(p);
-  if (p2 == T(0)) return zero3<T>();
+  // Nearly parallel to the normal: the direction is round-off, so forget it rather than amplify it.
+  if (p2 <= T(1e-12) * len2) return zero3<T>();
   return std::sqrt(len2 / p2) * p;
 }
 // Mindlin spring S_t = 8 G* sqrt(R* delta).

@@ -47,6 +47,7 @@ struct ContactStats {
   double maxOverlapRatio = 0;        // max over contacts of overlap / smaller radius (walls: / radius)
   double kineticEnergy = 0;          // translational + rotational [J]
   double maxSpeed = 0;               // [m/s]
+  std::size_t historyEntries = 0;    // occupied tangential-history slots (particle and wall)
 };
 
 class Engine {

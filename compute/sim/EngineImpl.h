@@ -398,6 +398,11 @@ ContactStats EngineImpl<Exec>::contactStats() const {
     }
   }
   st.coordinationNumber = n ? 2.0 * double(st.particleContacts) / n : 0.0;
+  for (Field f : {Field::HistoryPartner, Field::WallKey}) {
+    std::vector<Gid> keys(m_particles.buffer(f).bytes() / sizeof(Gid));
+    m_mem.copyToHost(keys.data(), m_particles.buffer(f).data(), keys.size() * sizeof(Gid));
+    for (Gid k : keys) st.historyEntries += k != kNoGid;
+  }
   return st;
 }
 

@@ -1,0 +1,137 @@
+// Unit tests of the contact sub-models: signs, symmetry, the Coulomb cap, history rotation, the
+// restitution map, rolling resistance.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "compute/contact/ContactModels.h"
+
+namespace pflow::compute::contact {
+namespace {
+
+ContactParams params(double mu = 0.5, double e = 0.5, double muR = 0.0) {
+  ContactParams p;
+  p.effYoung = 5e9;
+  p.effShear = 2e9;
+  p.restitution = e;
+  p.dampingCoeff = dampingCoeffForRestitution(e);
+  p.friction = mu;
+  p.rollingFriction = muR;
+  return p;
+}
+
+ContactState<double> state(Vec3d n, double overlap, Vec3d vRel, Vec3d wRel = {0, 0, 0}) {
+  return {n, overlap, vRel, wRel, 5e-3, 1e-3, 1e-8, 1e-2};
+}
+
+TEST(NormalModel, HertzForceAndStiffness) {
+  const double E = 1e9, R = 1e-2, d = 1e-5;
+  EXPECT_DOUBLE_EQ(normal::hertzForce(E, R, d), 4.0 / 3.0 * E * std::sqrt(R) * std::pow(d, 1.5));
+  // Stiffness is the derivative of the force.
+  const double h = 1e-10;
+  const double fd = (normal::hertzForce(E, R, d + h) - normal::hertzForce(E, R, d - h)) / (2 * h);
+  EXPECT_NEAR(normal::hertzStiffness(E, R, d), fd, 1e-6 * fd);
+  // Energy is the integral of the force.
+  const double fe = (normal::hertzEnergy(E, R, d + h) - normal::hertzEnergy(E, R, d - h)) / (2 * h);
+  EXPECT_NEAR(normal::hertzForce(E, R, d), fe, 1e-6 * fe);
+}
+
+TEST(HertzMindlin, NormalForceIsRepulsive) {
+  const auto out = hertzMindlin(params(), state({1, 0, 0}, 1e-5, {0, 0, 0}), Vec3d{0, 0, 0}, 1e-7);
+  EXPECT_LT(out.force.x, 0);  // pushes i away from j
+  EXPECT_DOUBLE_EQ(out.force.y, 0);
+  EXPECT_GT(out.normalForce, 0);
+}
+
+TEST(HertzMindlin, DampingOpposesApproachAndNeverAttracts) {
+  const auto p = params(0.5, 0.3);
+  const auto approach = hertzMindlin(p, state({1, 0, 0}, 1e-5, {1, 0, 0}), Vec3d{0, 0, 0}, 1e-7);
+  const auto rest = hertzMindlin(p, state({1, 0, 0}, 1e-5, {0, 0, 0}), Vec3d{0, 0, 0}, 1e-7);
+  EXPECT_LT(approach.force.x, rest.force.x);  // stronger repulsion while approaching
+  // Separating fast at a tiny overlap: the dashpot would pull; the clip keeps F_n >= 0.
+  const auto sep = hertzMindlin(p, state({1, 0, 0}, 1e-9, {-10, 0, 0}), Vec3d{0, 0, 0}, 1e-7);
+  EXPECT_EQ(sep.normalForce, 0.0);
+  EXPECT_LE(sep.force.x, 0.0);
+}
+
+TEST(HertzMindlin, PairForcesAreEqualAndOpposite) {
+  const auto p = params(0.4, 0.6, 0.1);
+  const Vec3d n{0.6, 0.8, 0}, v{0.3, -0.2, 0.5}, w{1, 2, 3};
+  const auto fi = hertzMindlin(p, state(n, 2e-5, v, w), Vec3d{0, 0, 0}, 1e-7);
+  const auto fj = hertzMindlin(p, state(-n, 2e-5, -v, -w), Vec3d{0, 0, 0}, 1e-7);
+  EXPECT_NEAR(fi.force.x, -fj.force.x, 1e-12 * norm(fi.force));
+  EXPECT_NEAR(fi.force.y, -fj.force.y, 1e-12 * norm(fi.force));
+  EXPECT_NEAR(fi.force.z, -fj.force.z, 1e-12 * norm(fi.force));
+  EXPECT_NEAR(fi.history.x, -fj.history.x, 1e-20);
+}
+
+TEST(HertzMindlin, TangentialForceOpposesSlipAndIsCappedByCoulomb) {
+  const double mu = 0.3;
+  const auto p = params(mu, 1.0);
+  // Small slip: spring force below the cap, opposite to the displacement.
+  const auto small = hertzMindlin(p, state({0, 0, 1}, 1e-5, {1e-3, 0, 0}), Vec3d{1e-9, 0, 0}, 1e-7);
+  EXPECT_FALSE(small.sliding);
+  EXPECT_LT(small.force.x, 0);
+  // Large displacement: |F_t| = mu F_n exactly, and the spring alone carries it.
+  const auto big = hertzMindlin(p, state({0, 0, 1}, 1e-5, {0, 0, 0}), Vec3d{1e-3, 2e-3, 0}, 1e-7);
+  EXPECT_TRUE(big.sliding);
+  const Vec3d ft{big.force.x, big.force.y, 0};
+  EXPECT_NEAR(norm(ft), mu * big.normalForce, 1e-12 * big.normalForce);
+  const double st = tangential::mindlinStiffness(p.effShear, 5e-3, 1e-5);
+  EXPECT_NEAR(-st * big.history.x, ft.x, 1e-12 * norm(ft));
+  EXPECT_NEAR(-st * big.history.y, ft.y, 1e-12 * norm(ft));
+  // Direction kept: opposite to the stored displacement.
+  EXPECT_NEAR(ft.y / ft.x, 2.0, 1e-12);
+}
+
+TEST(HertzMindlin, TorqueIsLeverArmCrossTangentialForce) {
+  const auto p = params(0.5, 1.0);
+  // i above j's contact (n = -z, contact point below i), sliding +x: friction -x, spin about +y.
+  const auto out = hertzMindlin(p, state({0, 0, -1}, 1e-5, {0.01, 0, 0}), Vec3d{0, 0, 0}, 1e-6);
+  EXPECT_LT(out.force.x, 0);
+  EXPECT_GT(out.torque.y, 0);
+  EXPECT_NEAR(out.torque.y, 1e-2 * -out.force.x, 1e-12);
+}
+
+TEST(TangentialHistory, RotationKeepsMagnitudeAndIsTangent) {
+  const Vec3d xi{1e-6, 2e-6, 0.5e-6};
+  const Vec3d n = (1.0 / std::sqrt(3.0)) * Vec3d{1, 1, 1};
+  const Vec3d r = tangential::rotateHistory(xi, n);
+  EXPECT_NEAR(norm(r), norm(xi), 1e-18);
+  EXPECT_NEAR(dot(r, n), 0.0, 1e-18);
+  // Already tangent: unchanged. Parallel to n: forgotten.
+  const Vec3d t{1e-6, -1e-6, 0};
+  EXPECT_EQ(tangential::rotateHistory(t, n).x, t.x);
+  EXPECT_EQ(norm(tangential::rotateHistory(2e-6 * n, n)), 0.0);
+}
+
+TEST(RollingResistance, OpposesRelativeSpinAndIsLimited) {
+  const Vec3d w{0, 5, 0};
+  const Vec3d t = rolling::constantTorque(0.1, 2.0, 1e-2, w, 1e-3, 1e-6);
+  EXPECT_NEAR(t.y, -0.1 * 2.0 * 1e-2, 1e-15);
+  // Near rest the torque cannot reverse the spin within a step: |tau| <= I* |w| / dt.
+  const Vec3d slow{0, 1e-9, 0};
+  const Vec3d ts = rolling::constantTorque(0.1, 2.0, 1e-2, slow, 1e-8, 1e-6);
+  EXPECT_NEAR(std::fabs(ts.y), 1e-8 * 1e-9 / 1e-6, 1e-20);
+  EXPECT_EQ(norm(rolling::constantTorque(0.0, 2.0, 1e-2, w, 1e-3, 1e-6)), 0.0);
+}
+
+TEST(Restitution, MapIsExactAndMonotone) {
+  double prev = 1e300;
+  for (double e = 0.05; e < 1.0; e += 0.05) {
+    const double c = dampingCoeffForRestitution(e);
+    EXPECT_NEAR(restitutionForDampingCoeff(c), e, 1e-6);
+    EXPECT_LT(c, prev);
+    prev = c;
+  }
+  EXPECT_EQ(dampingCoeffForRestitution(1.0), 0.0);
+}
+
+TEST(Restitution, LinearSpringMappingIsWrongForHertz) {
+  // The mapping valid for linear springs restitutes far more than asked for with Hertz at low e.
+  EXPECT_GT(restitutionForDampingCoeff(linearSpringDampingCoeff(0.1)), 0.2);
+  EXPECT_GT(restitutionForDampingCoeff(linearSpringDampingCoeff(0.5)), 0.55);
+}
+
+}  // namespace
+}  // namespace pflow::compute::contact

@@ -1,0 +1,127 @@
+// Tangential history: keyed by the partner's gid, it survives reordering, grows without changing
+// results when slots run out, and is forgotten when a contact ends.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "compute/sim/Simulation.h"
+#include "tests/support/TestScenes.h"
+
+namespace pflow::test {
+namespace {
+
+using compute::RunConfig;
+using compute::Simulation;
+
+constexpr double kR = 1e-3;
+
+// Two spheres pressed together obliquely, sheared, both drifting fast through the cell grid so that
+// their order in the arrays changes at rebuilds.
+RunConfig shearedPair(double skin) {
+  RunConfig c;
+  c.materials = {material("m", 1e7, 0.3, 2500, 0.9, 0.5)};
+  const double d = 2 * kR - 2e-6;
+  const double th = -0.5;  // partner behind in y, ahead in x: their order flips as they cross y cells
+  addParticle(c, {0, 0, 0}, kR, 0, {0, 3.0, 0}, {0, 0, 40});
+  addParticle(c, {d * std::cos(th), d * std::sin(th), 0}, kR, 0, {-0.01, 3.0, 0.02}, {5, 0, 0});
+  c.sim.gravity = {0, 0, 0};
+  c.sim.duration = 1;
+  c.sim.dt = 2e-7;
+  c.sim.skin = skin;
+  c.sim.domain = compute::Aabb{{-0.01, -0.01, -0.01}, {0.01, 0.05, 0.01}};
+  return c;
+}
+
+std::vector<Vec3d> trajectory(const RunConfig& c, int steps, std::int64_t* rebuilds, double* maxTangential,
+                               int* swapped) {
+  auto sim = Simulation::create(c);
+  EXPECT_TRUE(sim.isOk()) << sim.status().toString();
+  std::vector<Vec3d> out;
+  for (int k = 0; k < steps; ++k) {
+    EXPECT_TRUE(sim.value()->step().isOk());
+    const auto s = sim.value()->snapshot();
+    const Vec3d* f = s.find("force")->as<Vec3d>();
+    const Gid* id = s.find("id")->as<Gid>();
+    const int first = id[0] == 0 ? 0 : 1;  // report by gid, not by array slot
+    *swapped += first;
+    out.push_back(f[first]);
+    const Vec3d* x = s.find("position")->as<Vec3d>();
+    const Vec3d n = (1.0 / norm(x[1] - x[0])) * (x[1] - x[0]);
+    const Vec3d ft = f[first] - dot(f[first], n) * n;
+    *maxTangential = std::max(*maxTangential, norm(ft));
+  }
+  *rebuilds = sim.value()->rebuilds();
+  return out;
+}
+
+TEST(History, SurvivesReorderingAtRebuilds) {
+  std::int64_t rebuildsA = 0, rebuildsB = 0;
+  double ftA = 0, ftB = 0;
+  int swappedA = 0, swappedB = 0;
+  const auto a = trajectory(shearedPair(1e-6), 3000, &rebuildsA, &ftA, &swappedA);  // rebuilds every few steps
+  const auto b = trajectory(shearedPair(5e-3), 3000, &rebuildsB, &ftB, &swappedB);  // never after the first
+  EXPECT_GT(swappedA, 0);  // the pair really changed places in the arrays
+  EXPECT_LT(swappedA, 3000);
+  EXPECT_GT(rebuildsA, 100);
+  EXPECT_EQ(rebuildsB, 1);
+  EXPECT_GT(ftA, 1e-6);  // the tangential spring is really loaded
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    ASSERT_NEAR(a[k].x, b[k].x, 1e-12 * norm(b[k]) + 1e-18) << "step " << k;
+    ASSERT_NEAR(a[k].y, b[k].y, 1e-12 * norm(b[k]) + 1e-18) << "step " << k;
+    ASSERT_NEAR(a[k].z, b[k].z, 1e-12 * norm(b[k]) + 1e-18) << "step " << k;
+  }
+}
+
+// A central sphere touching six neighbours, started with one history slot: the slots grow and the
+// forces are exactly those of a run that had enough slots from the start.
+TEST(History, SlotOverflowGrowsWithoutChangingResults) {
+  auto cluster = [](int slots) {
+    RunConfig c;
+    c.materials = {material("m", 1e7, 0.3, 2500, 0.5, 0.5)};
+    const double d = 2 * kR - 1e-6;
+    addParticle(c, {0, 0, 0}, kR, 0, {0, 0, 0}, {10, 20, 30});
+    const Vec3d dirs[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    for (int k = 0; k < 6; ++k) addParticle(c, d * dirs[k], kR, 0, 0.01 * dirs[(k + 2) % 6], {0, 0, 0});
+    c.sim.gravity = {0, 0, 0};
+    c.sim.duration = 1;
+    c.sim.historySlots = slots;
+    return c;
+  };
+  auto small = Simulation::create(cluster(1));
+  auto big = Simulation::create(cluster(16));
+  ASSERT_TRUE(small.isOk() && big.isOk());
+  EXPECT_GE(small.value()->engine().historySlots(), 6);
+  for (int k = 0; k < 200; ++k) {
+    ASSERT_TRUE(small.value()->step().isOk());
+    ASSERT_TRUE(big.value()->step().isOk());
+  }
+  const auto a = small.value()->snapshot(), b = big.value()->snapshot();
+  for (std::size_t i = 0; i < a.n; ++i) {
+    EXPECT_EQ(a.find("force")->as<Vec3d>()[i].x, b.find("force")->as<Vec3d>()[i].x);
+    EXPECT_EQ(a.find("angular_velocity")->as<Vec3d>()[i].z, b.find("angular_velocity")->as<Vec3d>()[i].z);
+  }
+  EXPECT_EQ(small.value()->contactStats().historyEntries, big.value()->contactStats().historyEntries);
+}
+
+// History exists while two spheres touch and is gone when they part.
+TEST(History, ForgottenWhenContactEnds) {
+  RunConfig c;
+  c.materials = {material("m", 1e7, 0.3, 2500, 0.5, 0.5)};
+  addParticle(c, {-kR - 1e-7, 0, 0}, kR, 0, {0.1, 0.05, 0});
+  addParticle(c, {kR + 1e-7, 0, 0}, kR, 0, {-0.1, 0, 0});
+  c.sim.gravity = {0, 0, 0};
+  c.sim.duration = 1;
+  auto sim = Simulation::create(c);
+  ASSERT_TRUE(sim.isOk());
+  std::size_t during = 0;
+  for (int k = 0; k < 2000; ++k) {
+    ASSERT_TRUE(sim.value()->step().isOk());
+    during = std::max(during, sim.value()->contactStats().historyEntries);
+  }
+  EXPECT_EQ(during, 2u);  // one slot on each side
+  EXPECT_EQ(sim.value()->contactStats().particleContacts, 0u);
+  EXPECT_EQ(sim.value()->contactStats().historyEntries, 0u);
+}
+
+}  // namespace
+}  // namespace pflow::test
