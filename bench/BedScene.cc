@@ -1,0 +1,66 @@
+#include "bench/BedScene.h"
+
+#include <cmath>
+#include <random>
+
+namespace pflow::bench {
+
+compute::RunConfig bedScene(const BedSpec& s) {
+  compute::RunConfig c;
+  compute::MaterialConfig m;
+  m.name = "bead";
+  m.youngsModulus = 1e7;
+  m.poissonRatio = 0.3;
+  m.density = 2500;
+  m.restitution = 0.5;
+  m.friction = 0.5;
+  m.rollingFriction = 0.0;
+  c.materials = {m};
+  const double a = s.spacing * s.diameter;
+  std::mt19937_64 rng(s.seed);
+  std::uniform_real_distribution<double> jit(-s.jitter * s.diameter, s.jitter * s.diameter);
+  std::uniform_real_distribution<double> rad(s.diameter / 4, s.diameter / 2);
+  const std::size_t n = std::size_t(s.nx) * s.ny * s.nz;
+  c.particles.position.reserve(n);
+  c.particles.radius.reserve(n);
+  for (int k = 0; k < s.nz; ++k)
+    for (int j = 0; j < s.ny; ++j)
+      for (int i = 0; i < s.nx; ++i) {
+        c.particles.position.push_back({(i + 0.5) * a + jit(rng), (j + 0.5) * a + jit(rng), (k + 0.5) * a + jit(rng)});
+        c.particles.radius.push_back(s.polydisperse ? rad(rng) : s.diameter / 2);
+      }
+  c.particles.material.assign(n, 0);
+  const double lx = s.nx * a, ly = s.ny * a;
+  auto plane = [&](const char* name, Vec3d p, Vec3d nrm) {
+    compute::PlaneConfig pl;
+    pl.name = name;
+    pl.point = p;
+    pl.normal = nrm;
+    pl.material = 0;
+    c.planes.push_back(pl);
+  };
+  plane("floor", {0, 0, 0}, {0, 0, 1});
+  plane("x_lo", {0, 0, 0}, {1, 0, 0});
+  plane("x_hi", {lx, 0, 0}, {-1, 0, 0});
+  plane("y_lo", {0, 0, 0}, {0, 1, 0});
+  plane("y_hi", {0, ly, 0}, {0, -1, 0});
+  c.sim.gravity = {0, 0, -9.81};
+  c.sim.dt = s.dt;
+  c.sim.skin = s.skin * s.diameter;
+  c.sim.duration = 1.0;
+  c.sim.threads = s.threads;
+  c.sim.historySlots = s.polydisperse ? 16 : 8;
+  // The bed only sinks: a domain from the floor to the top of the lattice.
+  c.sim.domain = compute::Aabb{{0, 0, 0}, {lx, ly, s.nz * a + s.diameter}};
+  return c;
+}
+
+BedSpec bedSpecFor(std::int64_t n, bool polydisperse) {
+  BedSpec s;
+  s.polydisperse = polydisperse;
+  const int side = std::max(1, int(std::lround(std::sqrt(double(n) / s.nz))));
+  s.nx = s.ny = side;
+  return s;
+}
+
+}  // namespace pflow::bench

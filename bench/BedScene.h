@@ -1,0 +1,29 @@
+// The standard throughput scene (../shared/design/benchmarks.md): a box with walls on five faces,
+// spheres on a jittered cubic lattice that settle under gravity into a dense bed.
+#pragma once
+#include <cstdint>
+
+#include "compute/sim/RunConfig.h"
+
+namespace pflow::bench {
+
+struct BedSpec {
+  int nx = 100, ny = 100, nz = 20;  // lattice sites
+  double diameter = 1e-3;           // d [m]; polydisperse radii are uniform in [d/4, d/2]
+  bool polydisperse = false;
+  double spacing = 1.05;            // lattice spacing in diameters
+  double jitter = 0.02;             // per-axis random shift, in diameters
+  double dt = 5e-6;                 // [s]
+  double skin = 0.1;                // in diameters
+  std::uint64_t seed = 1;
+  int threads = 0;
+};
+
+// Material per benchmarks.md: rho 2500, E 1e7, nu 0.3, e 0.5, mu 0.5, no rolling friction; walls
+// of the same material; planes at x = 0, x = Lx, y = 0, y = Ly, z = 0.
+compute::RunConfig bedScene(const BedSpec& spec);
+
+// nx = ny chosen so that nx * ny * nz is close to n.
+BedSpec bedSpecFor(std::int64_t n, bool polydisperse);
+
+}  // namespace pflow::bench

@@ -1,0 +1,51 @@
+// A bed of 20 000 polydisperse spheres (radius ratio 2) settles under gravity in a box of planes:
+// no overlap above 1 % of the smaller radius, kinetic energy decays to rest, no slot overflow.
+#include <gtest/gtest.h>
+
+#include "bench/BedScene.h"
+#include "compute/sim/Simulation.h"
+
+namespace pflow::test {
+namespace {
+
+TEST(SettledBed, PolydisperseBedComesToRest) {
+  bench::BedSpec spec;
+  spec.nx = 50;
+  spec.ny = 40;
+  spec.nz = 10;
+  spec.polydisperse = true;
+  spec.dt = 4e-6;  // 0.18 of the Rayleigh time of the smallest sphere (d/4)
+  auto cfg = bench::bedScene(spec);
+  ASSERT_EQ(cfg.particles.size(), 20000u);
+  auto sim = compute::Simulation::create(cfg);
+  ASSERT_TRUE(sim.isOk()) << sim.status().toString();
+  const int slots0 = sim.value()->engine().historySlots();
+
+  // Energy scale: the bed's weight times one diameter.
+  double weight = 0;
+  for (std::size_t i = 0; i < cfg.particles.size(); ++i) {
+    const double r = cfg.particles.radius[i];
+    weight += 2500 * 4.0 / 3.0 * 3.141592653589793 * r * r * r * 9.81;
+  }
+  const double scale = weight * spec.diameter;
+
+  double peakKe = 0;
+  for (int block = 0; block < 30; ++block) {
+    ASSERT_TRUE(sim.value()->runSteps(1000).isOk());
+    const auto st = sim.value()->contactStats();
+    peakKe = std::max(peakKe, st.kineticEnergy);
+  }
+  const auto st = sim.value()->contactStats();
+  RecordProperty("coordination", std::to_string(st.coordinationNumber));
+  EXPECT_GT(peakKe, 1e-3 * scale);                 // it really fell
+  EXPECT_LT(st.kineticEnergy, 1e-6 * scale);       // and came to rest
+  EXPECT_LT(st.maxOverlapRatio, 0.01);             // no overlap above 1 % of the smaller radius
+  EXPECT_GT(st.coordinationNumber, 3.5);           // a dense, connected bed
+  EXPECT_EQ(sim.value()->engine().historySlots(), slots0);  // no slot overflow
+  std::printf("settled bed: t = %.3f s, KE/scale = %.3g, coordination %.2f, max overlap/r %.4f, slots %d\n%s\n",
+              sim.value()->time(), st.kineticEnergy / scale, st.coordinationNumber, st.maxOverlapRatio,
+              sim.value()->engine().historySlots(), sim.value()->timers().report().c_str());
+}
+
+}  // namespace
+}  // namespace pflow::test
