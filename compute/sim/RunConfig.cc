@@ -28,7 +28,12 @@ std::string num(double v) {
   std::snprintf(buf, sizeof buf, "%.6g", v);
   return buf;
 }
-std::string vec(const Vec3d& v) { return "[" + num(v.x) + ", " + num(v.y) + ", " + num(v.z) + "]"; }
+std::string vec(const Vec3d& v) {
+  // Built by appending: GCC 12 warns falsely (-Wrestrict, PR105329) on "[" + std::string chains.
+  std::string out = "[";
+  out.append(num(v.x)).append(", ").append(num(v.y)).append(", ").append(num(v.z)).append("]");
+  return out;
+}
 std::string at(const std::string& base, std::size_t i) { return base + "[" + std::to_string(i) + "]"; }
 std::string percent(double fraction) { return num(100.0 * fraction) + "%"; }
 
@@ -150,11 +155,15 @@ void validateMeshes(const RunConfig& c, ErrorList& e) {
     Capped degenerate(p + ".triangles", "degenerate (zero-area) triangles");
     for (std::size_t t = 0; t < m.triangles.size(); ++t) {
       const auto& tri = m.triangles[t];
-      const std::string tp = at(p + ".triangles", t);
-      const std::string triText = "[" + std::to_string(tri[0]) + ", " + std::to_string(tri[1]) + ", " + std::to_string(tri[2]) + "]";
+      auto tp = [&] { return at(p + ".triangles", t); };
+      auto triText = [&tri] {
+        std::string out = "[";
+        out.append(std::to_string(tri[0])).append(", ").append(std::to_string(tri[1])).append(", ").append(std::to_string(tri[2])).append("]");
+        return out;
+      };
       if (tri[0] >= nv || tri[1] >= nv || tri[2] >= nv) {
         if (badIndex.take()) {
-          e.add(tp, "triangle " + triText + " refers to a vertex outside [0, " + std::to_string(nv) + ")" +
+          e.add(tp(), "triangle " + triText() + " refers to a vertex outside [0, " + std::to_string(nv) + ")" +
                         (nv == 0 ? " (the mesh has no vertices)" : ""));
         }
         continue;
@@ -164,7 +173,7 @@ void validateMeshes(const RunConfig& c, ErrorList& e) {
       const double longest2 = std::max({norm2(b - a), norm2(cc - a), norm2(cc - b)});
       const double area2 = norm(cross(b - a, cc - a));  // twice the area
       if (!(area2 > kDegenerate * longest2) && degenerate.take()) {
-        e.add(tp, "triangle " + triText + " is degenerate (zero area): its corners " + vec(a) + ", " + vec(b) + ", " + vec(cc) +
+        e.add(tp(), "triangle " + triText() + " is degenerate (zero area): its corners " + vec(a) + ", " + vec(b) + ", " + vec(cc) +
                       " are collinear or coincide");
       }
     }
@@ -263,7 +272,9 @@ void validateParticles(const RunConfig& c, ErrorList& e) {
     behind.emplace_back("particles.position", "particles behind plane " + planeLabel(c.planes, up.index));
     overlapping.emplace_back("particles.position", "particles overlapping plane " + planeLabel(c.planes, up.index) + " too deeply");
   }
-  const bool domainOk = c.sim.domain && isFinite(c.sim.domain->lo) && isFinite(c.sim.domain->hi);
+  // Particles are checked against the domain only when it is itself valid (else that is the one error).
+  const bool domainOk = c.sim.domain && isFinite(c.sim.domain->lo) && isFinite(c.sim.domain->hi) && c.sim.domain->hi.x > c.sim.domain->lo.x &&
+                        c.sim.domain->hi.y > c.sim.domain->lo.y && c.sim.domain->hi.z > c.sim.domain->lo.z;
   double minRadius = std::numeric_limits<double>::infinity();
 
   for (std::size_t i = 0; i < n; ++i) {

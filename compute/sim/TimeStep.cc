@@ -134,9 +134,9 @@ Result<TimeStepInfo> chooseTimeStep(const RunConfig& c) {
     }
     const double steps = tContact / info.dt;
     if (steps < kMinStepsPerContact) {
-      info.warnings.push_back("the fastest initial particle (" + num(vMax) + " m/s) makes contacts that last " + num(tContact) + " s, only " +
-                              num(steps) + " steps of dt = " + num(info.dt) + " s (want >= " + num(kMinStepsPerContact) +
-                              "): contact forces will be poorly resolved and overlaps too deep; reduce dt or the initial speeds");
+      info.warnings.push_back("at the fastest initial speed (" + num(vMax) + " m/s, two of the smallest particles meeting head on) a contact lasts " +
+                              num(tContact) + " s, only " + num(steps) + " steps of dt = " + num(info.dt) + " s (want >= " +
+                              num(kMinStepsPerContact) + "): contact forces will be poorly resolved and overlaps too deep; reduce dt or the initial speeds");
     }
   }
   return info;
