@@ -1,9 +1,11 @@
 // Contact forces on one particle per thread, from its full candidate list (each pair is evaluated by
 // both partners, so every thread writes only its own particle: no atomics, same result on CPU and GPU).
 //
-// Tangential history is double-buffered: a thread reads its particle's slots from the current
-// buffers and writes the next ones, so a pass that overflows its slots can be redone exactly after
-// the slots are grown. Slots are keyed by the partner's gid (particles) or a wall key (walls).
+// Tangential history lives in per-particle slots keyed by the partner's gid (particles) or a wall
+// key (walls), updated in place: a slot is claimed when a contact starts and cleared when it ends.
+// When a new contact finds no free slot, the pass still computes its force exactly (a new contact
+// starts from zero displacement) and raises a flag; the host grows the slots and runs a store-only
+// pass that records just the displacements that could not be stored, so growth changes no result.
 #pragma once
 #include <cstdint>
 
@@ -50,10 +52,8 @@ struct ForceArgs {
   const std::uint32_t* nbrCount;
   Index nbrCapacity;
   int slots;
-  const Gid* histPartner;  // current
-  const Vec3d* histDisp;
-  Gid* histPartnerNext;    // written
-  Vec3d* histDispNext;
+  Gid* histPartner;
+  Vec3d* histDisp;
   // walls
   const PlaneParams* planes;
   int numPlanes;
@@ -65,15 +65,14 @@ struct ForceArgs {
   const std::uint32_t* wallCandCount;
   Index wallCandCapacity;
   int wallSlots;
-  const std::uint64_t* wallKey;  // current
-  const Vec3d* wallDisp;
-  std::uint64_t* wallKeyNext;    // written
-  Vec3d* wallDispNext;
+  std::uint64_t* wallKey;
+  Vec3d* wallDisp;
   // parameters
   const ContactParams* params;  // [matI * numMaterials + matJ]
   int numMaterials;
   double dt;
-  double time;  // at which walls' velocities are evaluated
+  double time;      // at which walls' velocities are evaluated
+  bool storeOnly;   // redo after slot growth: store the displacements that found no slot, nothing else
   Conditions* cond;
 };
 
@@ -92,61 +91,77 @@ struct ComputeForces {
   ForceArgs a;
 
   PFLOW_HOSTDEVICE void operator()(Index i) const {
-    const Vec3d xi = a.pos[i], vi = a.vel[i], wi = a.omega[i];
-    const double ri = a.radius[i], mi = a.mass[i];
+    // Local restrict copies: the int8 slot stores could otherwise alias every pointer in `a` and
+    // force the compiler to reload them after each store.
+    const Vec3d* __restrict__ pos = a.pos;
+    const Vec3d* __restrict__ vel = a.vel;
+    const Vec3d* __restrict__ omega = a.omega;
+    const double* __restrict__ radius = a.radius;
+    const double* __restrict__ mass = a.mass;
+    const std::int32_t* __restrict__ material = a.material;
+    const Gid* __restrict__ gid = a.gid;
+    const Index* __restrict__ nbr = a.nbr + std::size_t(i) * a.nbrCapacity;
+    std::int8_t* __restrict__ nbrSlot = a.nbrSlot + std::size_t(i) * a.nbrCapacity;
+    const int slots = a.slots;
+    Gid* __restrict__ partner = a.histPartner + std::size_t(i) * slots;
+    Vec3d* __restrict__ disp = a.histDisp + std::size_t(i) * slots;
+    const ContactParams* __restrict__ params = a.params + std::size_t(a.material[i]) * a.numMaterials;
+    const double dt = a.dt;
+    const bool storeOnly = a.storeOnly;
+
+    const Vec3d xi = pos[i], vi = vel[i], wi = omega[i];
+    const double ri = radius[i], mi = mass[i];
     const double Ii = 0.4 * mi * ri * ri;
-    const std::int32_t mati = a.material[i];
     Vec3d f = zero3<double>(), tq = zero3<double>();
 
     // ---- particle-particle ----
-    const std::size_t hrow = std::size_t(i) * a.slots;
-    for (int k = 0; k < a.slots; ++k) a.histPartnerNext[hrow + k] = kNoGid;
-    const std::size_t nrow = std::size_t(i) * a.nbrCapacity;
     const std::uint32_t count = a.nbrCount[i] < a.nbrCapacity ? a.nbrCount[i] : a.nbrCapacity;
     std::uint32_t contacts = 0;
     bool overflow = false;
     for (std::uint32_t e = 0; e < count; ++e) {
-      const Index j = a.nbr[nrow + e];
-      const Vec3d d = a.pos[j] - xi;
-      const double rj = a.radius[j], rs = ri + rj;
+      const Index j = nbr[e];
+      const Vec3d d = pos[j] - xi;
+      const double rj = radius[j], rs = ri + rj;
       const double d2 = norm2(d);
+      int slot = nbrSlot[e];
       if (d2 >= rs * rs) {
-        a.nbrSlot[nrow + e] = -1;
+        if (slot >= 0) {  // the contact has ended: forget its history
+          if (partner[slot] == gid[j]) partner[slot] = kNoGid;
+          nbrSlot[e] = -1;
+        }
         continue;
       }
       ++contacts;
+      const Gid gj = gid[j];
+      Vec3d xiOld = zero3<double>();
+      if (slot >= 0 && partner[slot] == gj) {
+        if (storeOnly) continue;  // stored by the first pass
+        xiOld = disp[slot];
+      } else {
+        slot = claimSlot(partner, slots, gj);
+        overflow |= slot < 0;
+        if (storeOnly && slot < 0) continue;
+      }
       const double dist = std::sqrt(d2);
       const Vec3d n = (1.0 / dist) * d;
       const double overlap = rs - dist;
-      const Gid gj = a.gid[j];
-      int slot = a.nbrSlot[nrow + e];
-      Vec3d xiOld = zero3<double>();
-      if (slot >= 0 && a.histPartner[hrow + slot] == gj) {
-        xiOld = a.histDisp[hrow + slot];
-      } else {
-        slot = freeSlot(a.histPartner + hrow, a.histPartnerNext + hrow, a.slots);
-        if (slot < 0) overflow = true;
-      }
-      const double mj = a.mass[j];
+      const double mj = mass[j];
       const double Ij = 0.4 * mj * rj * rj;
       const double li = ri - 0.5 * overlap, lj = rj - 0.5 * overlap;
       contact::ContactState<double> s;
       s.n = n;
       s.overlap = overlap;
-      s.vRel = (vi + cross(wi, li * n)) - (a.vel[j] + cross(a.omega[j], -lj * n));
-      s.omegaRel = wi - a.omega[j];
+      s.vRel = (vi + cross(wi, li * n)) - (vel[j] + cross(omega[j], -lj * n));
+      s.omegaRel = wi - omega[j];
       s.effRadius = ri * rj / rs;
       s.effMass = mi * mj / (mi + mj);
       s.effInertia = Ii * Ij / (Ii + Ij);
       s.leverArm = li;
-      const auto out = contact::hertzMindlin(a.params[mati * a.numMaterials + a.material[j]], s, xiOld, a.dt);
+      const auto out = contact::hertzMindlin(params[material[j]], s, xiOld, dt);
       f += out.force;
       tq += out.torque;
-      if (slot >= 0) {
-        a.histPartnerNext[hrow + slot] = gj;
-        a.histDispNext[hrow + slot] = out.history;
-      }
-      a.nbrSlot[nrow + e] = std::int8_t(slot);
+      if (slot >= 0) disp[slot] = out.history;
+      nbrSlot[e] = std::int8_t(slot);
     }
     if (overflow) {
       atomicOrU32(&a.cond->flags, kHistoryOverflow);
@@ -154,21 +169,26 @@ struct ComputeForces {
     }
 
     // ---- walls ----
-    wallForces(i, xi, vi, wi, ri, mi, Ii, mati, f, tq);
+    wallForces(i, xi, vi, wi, ri, mi, Ii, params, f, tq);
 
-    a.force[i] = f;
-    a.torque[i] = tq;
+    if (!storeOnly) {
+      a.force[i] = f;
+      a.torque[i] = tq;
+    }
   }
 
-  // A slot empty in the current buffer and not yet taken in the next one, or -1.
-  PFLOW_HOSTDEVICE static int freeSlot(const Gid* cur, const Gid* next, int slots) {
+  // Claims an empty slot for partner g, or returns -1 when all are taken.
+  PFLOW_HOSTDEVICE static int claimSlot(Gid* partner, int slots, Gid g) {
     for (int k = 0; k < slots; ++k)
-      if (cur[k] == kNoGid && next[k] == kNoGid) return k;
+      if (partner[k] == kNoGid) {
+        partner[k] = g;
+        return k;
+      }
     return -1;
   }
 
   PFLOW_HOSTDEVICE void wallForces(Index i, Vec3d xi, Vec3d vi, Vec3d wi, double ri, double mi, double Ii,
-                                   std::int32_t mati, Vec3d& f, Vec3d& tq) const {
+                                   const ContactParams* params, Vec3d& f, Vec3d& tq) const {
     WallContact wc[kMaxWallContacts];
     int nwc = 0;
     bool tooMany = false;
@@ -196,6 +216,13 @@ struct ComputeForces {
                    a.triMaterial[t], cp.feature == geometry::Feature::kFace};
     }
     if (tooMany) atomicOrU32(&a.cond->flags, kTooManyWallContacts);
+    std::uint64_t* key = a.wallKey + std::size_t(i) * a.wallSlots;
+    Vec3d* disp = a.wallDisp + std::size_t(i) * a.wallSlots;
+    if (nwc == 0) {  // the common case: no wall contact; forget any that just ended
+      for (int k = 0; k < a.wallSlots; ++k)
+        if (key[k] != kNoGid) key[k] = kNoGid;
+      return;
+    }
 
     // Keep only genuine contacts: deepest first; drop a contact at the same point as a kept one
     // (an edge or vertex shared by two triangles), and an edge or vertex contact lying in the plane
@@ -203,6 +230,7 @@ struct ComputeForces {
     sortByOverlap(wc, nwc);
     bool keep[kMaxWallContacts];
     const double tol = 1e-9 * ri;
+    int kept = 0;
     for (int k = 0; k < nwc; ++k) {
       keep[k] = true;
       for (int m = 0; m < k && keep[k]; ++m) {
@@ -211,39 +239,35 @@ struct ComputeForces {
         else if (!wc[k].isFace && wc[m].isFace && std::fabs(dot(wc[m].faceNormal, wc[k].point - wc[m].point)) <= tol)
           keep[k] = false;
       }
+      kept += keep[k];
     }
 
-    // History slots: same key continues; a new triangle of the same mesh inherits the slot of a
-    // triangle of that mesh the particle has just left (rolling across a shared edge keeps its
-    // tangential spring); otherwise a free slot.
-    const std::size_t wrow = std::size_t(i) * a.wallSlots;
-    const std::uint64_t* oldKey = a.wallKey + wrow;
-    std::uint64_t* newKey = a.wallKeyNext + wrow;
-    for (int k = 0; k < a.wallSlots; ++k) newKey[k] = kNoGid;
+    // Slots: the same key continues; a new triangle of the same mesh inherits the slot of a triangle
+    // of that mesh the particle has just left (rolling across a shared edge keeps its tangential
+    // spring); otherwise a free slot. Slots of ended contacts are cleared.
     int slotOf[kMaxWallContacts];
+    bool claimedNow[kMaxWallContacts];  // took an empty slot in this pass
+    bool matched[32];  // wall slots are limited to 32
+    for (int s = 0; s < a.wallSlots; ++s) matched[s] = false;
     for (int k = 0; k < nwc; ++k) {
       slotOf[k] = -1;
+      claimedNow[k] = false;
       if (!keep[k]) continue;
       for (int s = 0; s < a.wallSlots; ++s)
-        if (oldKey[s] == wc[k].key) { slotOf[k] = s; newKey[s] = wc[k].key; }
+        if (key[s] == wc[k].key) { slotOf[k] = s; matched[s] = true; }
     }
     bool overflow = false;
-    int kept = 0;
     for (int k = 0; k < nwc; ++k) {
-      if (!keep[k]) continue;
-      ++kept;
-      if (slotOf[k] >= 0) continue;
-      for (int s = 0; s < a.wallSlots && slotOf[k] < 0; ++s) {
-        if (newKey[s] != kNoGid || oldKey[s] == kNoGid || !sameMesh(oldKey[s], wc[k].key)) continue;
-        bool stillTouching = false;
-        for (int m = 0; m < nwc; ++m) stillTouching |= keep[m] && wc[m].key == oldKey[s];
-        if (!stillTouching) slotOf[k] = s;
-      }
+      if (!keep[k] || slotOf[k] >= 0) continue;
       for (int s = 0; s < a.wallSlots && slotOf[k] < 0; ++s)
-        if (newKey[s] == kNoGid && oldKey[s] == kNoGid) slotOf[k] = s;
+        if (!matched[s] && key[s] != kNoGid && sameMesh(key[s], wc[k].key)) slotOf[k] = s;  // inherit
+      for (int s = 0; s < a.wallSlots && slotOf[k] < 0; ++s)
+        if (key[s] == kNoGid) { slotOf[k] = s; claimedNow[k] = true; disp[s] = zero3<double>(); }  // fresh
       if (slotOf[k] < 0) overflow = true;
-      else newKey[slotOf[k]] = wc[k].key;
+      else { key[slotOf[k]] = wc[k].key; matched[slotOf[k]] = true; }
     }
+    for (int s = 0; s < a.wallSlots; ++s)
+      if (!matched[s]) key[s] = kNoGid;
     if (overflow) {
       atomicOrU32(&a.cond->flags, kWallHistoryOverflow);
       atomicMaxU32(&a.cond->neededWallHistory, std::uint32_t(kept));
@@ -253,6 +277,7 @@ struct ComputeForces {
       if (!keep[k]) continue;
       const WallContact& c = wc[k];
       const int s = slotOf[k];
+      if (a.storeOnly && !claimedNow[k]) continue;  // the first pass handled it
       const double li = ri - 0.5 * c.overlap;
       contact::ContactState<double> st;
       st.n = c.n;
@@ -263,11 +288,11 @@ struct ComputeForces {
       st.effMass = mi;
       st.effInertia = Ii;
       st.leverArm = li;
-      const Vec3d xiOld = s >= 0 && oldKey[s] != kNoGid ? a.wallDisp[wrow + s] : zero3<double>();
-      const auto out = contact::hertzMindlin(a.params[mati * a.numMaterials + c.material], st, xiOld, a.dt);
+      const Vec3d xiOld = s >= 0 ? disp[s] : zero3<double>();
+      const auto out = contact::hertzMindlin(params[c.material], st, xiOld, a.dt);
       f += out.force;
       tq += out.torque;
-      if (s >= 0) a.wallDispNext[wrow + s] = out.history;
+      if (s >= 0) disp[s] = out.history;
     }
   }
 

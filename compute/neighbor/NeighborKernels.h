@@ -33,14 +33,15 @@ struct CopyPositions {
 
 // Candidates j of particle i with |x_i - x_j| < r_i + r_j + skin, in fixed-stride rows of `capacity`.
 // Each candidate's history slot (the slot of i holding j's gid, or -1) is resolved here, so the
-// force loop reaches its history directly.
+// force loop reaches its history directly; slots whose partner is no longer a candidate (it moved
+// beyond the skin, so the contact has ended) are cleared.
 struct BuildNeighbors {
   CellGrid grid;
   const Index* cellStart;  // numCells + 1
   const Vec3d* pos;
   const double* radius;
   const Gid* gid;
-  const Gid* historyPartner;  // [i * slots + k]
+  Gid* historyPartner;  // [i * slots + k]
   int slots;
   double skin;
   Index capacity;
@@ -56,7 +57,7 @@ struct BuildNeighbors {
     grid.coords(xi, cx, cy, cz);
     std::uint32_t count = 0;
     const std::size_t row = std::size_t(i) * capacity;
-    const Gid* partners = historyPartner + std::size_t(i) * slots;
+    Gid* partners = historyPartner + std::size_t(i) * slots;
     for (int dz = -1; dz <= 1; ++dz) {
       const int z = cz + dz;
       if (z < 0 || z >= grid.nz) continue;
@@ -88,6 +89,13 @@ struct BuildNeighbors {
     if (count > capacity) {
       atomicOrU32(&cond->flags, kNeighborOverflow);
       atomicMaxU32(&cond->neededNeighbors, count);
+      return;
+    }
+    for (int k = 0; k < slots; ++k) {
+      if (partners[k] == kNoGid) continue;
+      bool candidate = false;
+      for (std::uint32_t e = 0; e < count && !candidate; ++e) candidate = nbrSlot[row + e] == k;
+      if (!candidate) partners[k] = kNoGid;
     }
   }
 };

@@ -47,7 +47,8 @@ struct ContactStats {
   double maxOverlapRatio = 0;        // max over contacts of overlap / smaller radius (walls: / radius)
   double kineticEnergy = 0;          // translational + rotational [J]
   double maxSpeed = 0;               // [m/s]
-  std::size_t historyEntries = 0;    // occupied tangential-history slots (particle and wall)
+  std::size_t historyEntries = 0;
+  double candidatesPerParticle = 0;  // mean length of the neighbour candidate lists    // occupied tangential-history slots (particle and wall)
 };
 
 class Engine {

@@ -101,30 +101,34 @@ class EngineImpl final : public Engine {
   }
 
   Status computeForces(double dt, double time) override {
-    for (;;) {
-      resetConditions();
-      m_exec.forEach(m_n, kernels::ComputeForces{forceArgs(dt, time)});
-      const Conditions c = readConditions();
-      if (c.flags & kTooManyWallContacts)
-        return Status(StatusCode::kResourceExhausted,
-                      "a particle touches more than " + std::to_string(kMaxWallContacts) +
-                          " wall faces at once; the mesh is finer than the particles, coarsen it");
-      if (!(c.flags & (kHistoryOverflow | kWallHistoryOverflow))) break;
-      // Grow the slots and redo the pass: the current history is untouched (double buffer).
+    resetConditions();
+    m_exec.forEach(m_n, kernels::ComputeForces{forceArgs(dt, time, false)});
+    Conditions c = readConditions();
+    if (c.flags & kTooManyWallContacts)
+      return Status(StatusCode::kResourceExhausted,
+                    "a particle touches more than " + std::to_string(kMaxWallContacts) +
+                        " wall faces at once; the mesh is finer than the particles, coarsen it");
+    // Slots ran out: the forces are already exact (a new contact starts from zero displacement); grow
+    // the slots and store the displacements that found no slot.
+    while (c.flags & (kHistoryOverflow | kWallHistoryOverflow)) {
       if (c.flags & kHistoryOverflow) {
         const int grown = std::max<int>(m_particles.contactSlots() + 4, int(c.neededHistory) + 2);
         if (grown > 127)
           return Status(StatusCode::kResourceExhausted,
                         "a particle has " + std::to_string(c.neededHistory) + " simultaneous contacts, above the 127-slot limit");
-        growSlots(Multiplicity::kContactSlots, grown);
+        m_particles.resizeSlots(Multiplicity::kContactSlots, grown);
       }
-      if (c.flags & kWallHistoryOverflow)
-        growSlots(Multiplicity::kWallSlots, std::max<int>(m_particles.wallSlots() + 2, int(c.neededWallHistory) + 1));
+      if (c.flags & kWallHistoryOverflow) {
+        const int grown = std::max<int>(m_particles.wallSlots() + 2, int(c.neededWallHistory) + 1);
+        if (grown > 32)
+          return Status(StatusCode::kResourceExhausted, "a particle has " + std::to_string(c.neededWallHistory) +
+                                                            " simultaneous wall contacts, above the 32-slot limit");
+        m_particles.resizeSlots(Multiplicity::kWallSlots, grown);
+      }
+      resetConditions();
+      m_exec.forEach(m_n, kernels::ComputeForces{forceArgs(dt, time, true)});
+      c = readConditions();
     }
-    m_particles.buffer(Field::HistoryPartner).swap(m_histPartnerNext);
-    m_particles.buffer(Field::HistoryDisp).swap(m_histDispNext);
-    m_particles.buffer(Field::WallKey).swap(m_wallKeyNext);
-    m_particles.buffer(Field::WallDisp).swap(m_wallDispNext);
     return Status::ok();
   }
 
@@ -180,16 +184,6 @@ class EngineImpl final : public Engine {
     m_nbrSlot.resize(std::size_t(m_n) * m_nbrCap * sizeof(std::int8_t));
   }
   void allocWallCandidates() { m_wallCand.resize(std::size_t(m_n) * m_wallCap * sizeof(Index)); }
-  void allocNextHistory() {
-    for (auto [next, f] : {std::pair{&m_histPartnerNext, Field::HistoryPartner}, std::pair{&m_histDispNext, Field::HistoryDisp},
-                           std::pair{&m_wallKeyNext, Field::WallKey}, std::pair{&m_wallDispNext, Field::WallDisp}})
-      next->resize(m_particles.buffer(f).bytes());
-  }
-  void growSlots(Multiplicity kind, int slots) {
-    m_particles.resizeSlots(kind, slots);
-    allocNextHistory();
-    // Cached slot indices of the neighbour list stay valid: existing slots keep their positions.
-  }
   void binTriangles();
   void resetConditions() {
     Conditions c;
@@ -208,7 +202,7 @@ class EngineImpl final : public Engine {
             m_particles.ptr<Field::Torque>(), m_particles.ptr<Field::Radius>(), m_particles.ptr<Field::Mass>(),
             m_refPos.as<Vec3d>(), m_setup.gravity, dt, m_cond.as<Conditions>()};
   }
-  kernels::ForceArgs forceArgs(double dt, double time) {
+  kernels::ForceArgs forceArgs(double dt, double time, bool storeOnly) {
     kernels::ForceArgs a{};
     a.pos = m_particles.ptr<Field::Position>();
     a.vel = m_particles.ptr<Field::Velocity>();
@@ -226,8 +220,6 @@ class EngineImpl final : public Engine {
     a.slots = m_particles.contactSlots();
     a.histPartner = m_particles.ptr<Field::HistoryPartner>();
     a.histDisp = m_particles.ptr<Field::HistoryDisp>();
-    a.histPartnerNext = m_histPartnerNext.as<Gid>();
-    a.histDispNext = m_histDispNext.as<Vec3d>();
     a.planes = m_planes.as<PlaneParams>();
     a.numPlanes = int(m_setup.planes.size());
     a.triVerts = m_triVerts.as<Vec3d>();
@@ -240,12 +232,11 @@ class EngineImpl final : public Engine {
     a.wallSlots = m_particles.wallSlots();
     a.wallKey = m_particles.ptr<Field::WallKey>();
     a.wallDisp = m_particles.ptr<Field::WallDisp>();
-    a.wallKeyNext = m_wallKeyNext.as<std::uint64_t>();
-    a.wallDispNext = m_wallDispNext.as<Vec3d>();
     a.params = m_params.as<ContactParams>();
     a.numMaterials = m_setup.numMaterials;
     a.dt = dt;
     a.time = time;
+    a.storeOnly = storeOnly;
     a.cond = m_cond.as<Conditions>();
     return a;
   }
@@ -268,7 +259,6 @@ class EngineImpl final : public Engine {
   std::size_t m_rebuilds = 0;
   Buffer m_refPos{m_mem, 0}, m_cellKey{m_mem, 0}, m_perm{m_mem, 0}, m_cellStart{m_mem, 0}, m_scratch{m_mem, 0};
   Buffer m_nbr{m_mem, 0}, m_nbrSlot{m_mem, 0}, m_nbrCount{m_mem, 0};
-  Buffer m_histPartnerNext{m_mem, 0}, m_histDispNext{m_mem, 0}, m_wallKeyNext{m_mem, 0}, m_wallDispNext{m_mem, 0};
   Buffer m_planes{m_mem, 0}, m_triRef{m_mem, 0}, m_triVerts{m_mem, 0}, m_triRebuild{m_mem, 0};
   Buffer m_triMesh{m_mem, 0}, m_triMaterial{m_mem, 0}, m_meshMotion{m_mem, 0};
   Buffer m_binStart{m_mem, 0}, m_binItems{m_mem, 0}, m_binCount{m_mem, 0};
@@ -301,7 +291,6 @@ void EngineImpl<Exec>::init() {
     m_mem.fillBytes(m_particles.buffer(f).data(), 0xFF, m_particles.buffer(f).bytes());
   for (Field f : {Field::HistoryDisp, Field::WallDisp})
     m_mem.fillBytes(m_particles.buffer(f).data(), 0, m_particles.buffer(f).bytes());
-  allocNextHistory();
 
   m_refPos.resize(std::size_t(m_n) * sizeof(Vec3d));
   m_cellKey.resize(std::size_t(m_n) * sizeof(std::uint32_t));
@@ -379,6 +368,7 @@ ContactStats EngineImpl<Exec>::contactStats() const {
   m_mem.copyToHost(nbr.data(), m_nbr.data(), nbr.size() * sizeof(Index));
   m_mem.copyToHost(cnt.data(), m_nbrCount.data(), n * sizeof(std::uint32_t));
   ContactStats st;
+  for (Index i = 0; i < n; ++i) st.candidatesPerParticle += double(cnt[i]) / std::max<Index>(n, 1);
   for (Index i = 0; i < n; ++i) {
     st.kineticEnergy += 0.5 * mass[i] * norm2(vel[i]) + 0.5 * 0.4 * mass[i] * rad[i] * rad[i] * norm2(om[i]);
     st.maxSpeed = std::max(st.maxSpeed, norm(vel[i]));

@@ -1,0 +1,41 @@
+// `pflow run` and `pflow validate`: a scene file run in this process, snapshots to one HDF5 file.
+#pragma once
+#include <cstdint>
+#include <string>
+
+#include "common/Status.h"
+
+namespace pflow::cli {
+
+struct RunOptions {
+  std::string scenePath;
+  std::string outputPath;      // empty: the scene's output.file, else <scene stem>.h5 beside the scene
+  std::string executor = "auto";  // auto | cpu | cuda
+  int threads = 0;             // 0: the scene's, else all cores
+  double progressSeconds = 2;  // progress line interval (wall clock); 0 = none
+  bool json = false;           // print the summary as one JSON object on stdout
+};
+
+struct RunSummary {
+  std::string outputPath;
+  std::string xdmfPath;
+  std::int64_t steps = 0;
+  double simulatedTime = 0;    // [s]
+  double wallSeconds = 0;
+  double particleStepsPerSecond = 0;
+  std::size_t particles = 0;
+  std::size_t snapshots = 0;
+  std::string executor;
+};
+
+// Exit codes: 0 ok, 1 invalid scene or options, 2 I/O failure, 3 the simulation failed (e.g. went
+// non-finite: the message names the particle, step and quantity).
+enum ExitCode { kExitOk = 0, kExitInvalid = 1, kExitIo = 2, kExitSimulation = 3 };
+
+Result<RunSummary> runScene(const RunOptions& options);
+int exitCodeFor(const Status& s);
+
+// Prints the scene's errors (all of them) or a summary; returns 0 when valid.
+int validateScene(const std::string& scenePath, bool json);
+
+}  // namespace pflow::cli

@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Installs every Debian package pflow builds, tests and benchmarks with. Idempotent: packages already
+# present are skipped without touching apt.
+set -euo pipefail
+
+packages=(
+  build-essential cmake ninja-build pkg-config git
+  libgtest-dev libgmock-dev         # tests
+  libopenmpi-dev openmpi-bin        # MPI (multi-rank compute)
+  libhdf5-dev                       # snapshot files
+  libspdlog-dev                     # logging
+  libyaml-cpp-dev                   # scene files
+  libcli11-dev                      # command line
+  nlohmann-json3-dev                # JSON output
+  python3 python3-h5py python3-numpy python3-matplotlib   # pictures and file checks
+  lammps                            # the reference code the benchmark compares with
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]} == 0)); then
+  echo "install-deps: all ${#packages[@]} packages present"
+  exit 0
+fi
+echo "install-deps: installing ${missing[*]}"
+SUDO=""
+if [[ $(id -u) -ne 0 ]]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
