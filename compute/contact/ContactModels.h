@@ -112,10 +112,14 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE ContactOutput<T> hertzMindlin(const ContactPa
                                                                  Vec3<T> xiOld, T dt) {
   ContactOutput<T> out;
   const T E = T(p.effYoung), G = T(p.effShear), c = T(p.dampingCoeff);
-  // Normal: positive vn means approaching.
+  // Normal: positive vn means approaching. Written out (rather than through the sub-model helpers)
+  // so that sqrt(R* delta) and sqrt(S_n m*) are computed once; the helpers above are the reference
+  // the unit tests hold this to.
   const T vn = dot(s.vRel, s.n);
-  const T sn = normal::hertzStiffness(E, s.effRadius, s.overlap);
-  T fn = normal::hertzForce(E, s.effRadius, s.overlap) + damping::coefficient(c, sn, s.effMass) * vn;
+  const T sqrtRd = std::sqrt(s.effRadius * s.overlap);
+  const T sn = T(2) * E * sqrtRd;
+  const T dampN = c * std::sqrt(sn * s.effMass);
+  T fn = T(4) / T(3) * E * sqrtRd * s.overlap + dampN * vn;
   if (fn < T(0)) fn = T(0);
   out.normalForce = fn;
   Vec3<T> force = (-fn) * s.n;
@@ -123,14 +127,14 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE ContactOutput<T> hertzMindlin(const ContactPa
   // Tangential.
   const Vec3<T> vt = s.vRel - vn * s.n;
   Vec3<T> xi = tangential::rotateHistory(xiOld, s.n) + dt * vt;
-  const T st = tangential::mindlinStiffness(G, s.effRadius, s.overlap);
-  const Vec3<T> ft = tangential::mindlinForce(st, damping::coefficient(c, st, s.effMass), T(p.friction), fn, vt,
-                                              xi, out.sliding);
+  const T st = T(8) * G * sqrtRd;
+  const Vec3<T> ft = tangential::mindlinForce(st, dampN * T(p.tangentialRatio), T(p.friction), fn, vt, xi, out.sliding);
   force += ft;
   out.history = xi;
   out.force = force;
-  out.torque = cross(s.leverArm * s.n, ft) +
-               rolling::constantTorque(T(p.rollingFriction), fn, s.effRadius, s.omegaRel, s.effInertia, dt);
+  out.torque = cross(s.leverArm * s.n, ft);
+  if (p.rollingFriction > 0)
+    out.torque += rolling::constantTorque(T(p.rollingFriction), fn, s.effRadius, s.omegaRel, s.effInertia, dt);
   return out;
 }
 

@@ -95,6 +95,7 @@ std::vector<ContactParams> buildContactTable(const std::vector<MaterialConfig>& 
         }
       }
       p.dampingCoeff = dampingCoeffForRestitution(p.restitution);
+      p.tangentialRatio = std::sqrt(4.0 * p.effShear / p.effYoung);
       table[a * nm + b] = p;
       table[b * nm + a] = p;
     }

@@ -13,6 +13,7 @@ struct ContactParams {
   double effYoung = 0;       // E*  [Pa]:   1/E* = (1-nu_i^2)/E_i + (1-nu_j^2)/E_j
   double effShear = 0;       // G*  [Pa]:   1/G* = (2-nu_i)/G_i + (2-nu_j)/G_j
   double dampingCoeff = 0;   // c [-]: F_d = -c sqrt(S m*) v, chosen so the Hertz contact restitutes e exactly
+  double tangentialRatio = 0;  // sqrt(S_t / S_n) = sqrt(4 G* / E*), so the tangential dashpot costs no sqrt
   double restitution = 1;    // e [-], the requested value (kept for reports)
   double friction = 0;       // mu_s [-]
   double rollingFriction = 0;  // mu_r [-]

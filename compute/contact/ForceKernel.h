@@ -146,7 +146,7 @@ struct ComputeForces {
       const Vec3d n = (1.0 / dist) * d;
       const double overlap = rs - dist;
       const double mj = mass[j];
-      const double Ij = 0.4 * mj * rj * rj;
+      const ContactParams& pp = params[material[j]];
       const double li = ri - 0.5 * overlap, lj = rj - 0.5 * overlap;
       contact::ContactState<double> s;
       s.n = n;
@@ -155,9 +155,14 @@ struct ComputeForces {
       s.omegaRel = wi - omega[j];
       s.effRadius = ri * rj / rs;
       s.effMass = mi * mj / (mi + mj);
-      s.effInertia = Ii * Ij / (Ii + Ij);
+      if (pp.rollingFriction > 0) {
+        const double Ij = 0.4 * mj * rj * rj;
+        s.effInertia = Ii * Ij / (Ii + Ij);
+      } else {
+        s.effInertia = 0;  // unused without rolling resistance
+      }
       s.leverArm = li;
-      const auto out = contact::hertzMindlin(params[material[j]], s, xiOld, dt);
+      const auto out = contact::hertzMindlin(pp, s, xiOld, dt);
       f += out.force;
       tq += out.torque;
       if (slot >= 0) disp[slot] = out.history;

@@ -7,7 +7,7 @@
 #define PFLOW_FORCEINLINE __forceinline__
 #else
 #define PFLOW_HOSTDEVICE
-#define PFLOW_FORCEINLINE inline
+#define PFLOW_FORCEINLINE inline __attribute__((always_inline))
 #endif
 
 namespace pflow {

@@ -15,6 +15,7 @@ ContactParams params(double mu = 0.5, double e = 0.5, double muR = 0.0) {
   p.effShear = 2e9;
   p.restitution = e;
   p.dampingCoeff = dampingCoeffForRestitution(e);
+  p.tangentialRatio = std::sqrt(4 * p.effShear / p.effYoung);
   p.friction = mu;
   p.rollingFriction = muR;
   return p;

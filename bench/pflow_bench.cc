@@ -1,0 +1,156 @@
+// pflow-bench: throughput of the DEM step loop on the standard settled bed
+// (../shared/design/benchmarks.md), and of LAMMPS on the very same bed, for the ratio.
+// Prints one JSON line per run (pflow, then LAMMPS) on stdout.
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <ctime>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "bench/BedScene.h"
+#include "bench/LammpsRunner.h"
+#include "common/Log.h"
+#include "compute/sim/Simulation.h"
+
+namespace {
+
+std::string shell(const char* cmd) {
+  std::string out;
+  if (FILE* p = popen(cmd, "r")) {
+    char buf[256];
+    while (std::fgets(buf, sizeof buf, p)) out += buf;
+    pclose(p);
+  }
+  while (!out.empty() && (out.back() == '\n' || out.back() == ' ')) out.pop_back();
+  return out;
+}
+
+std::string today() {
+  std::time_t t = std::time(nullptr);
+  char buf[16];
+  std::strftime(buf, sizeof buf, "%Y-%m-%d", std::gmtime(&t));
+  return buf;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"pflow-bench: settled-bed throughput of pflow and LAMMPS"};
+  std::vector<long> sizes{100000};
+  int settleSteps = 30000, steps = 3000, threads = 0, lammpsRanks = 0;
+  bool poly = false, noLammps = false;
+  std::string device = shell("lscpu | sed -n 's/^Model name: *//p' | head -1");
+  app.add_option("-n,--particles", sizes, "particle counts (nx = ny scaled, nz = 20)")->delimiter(',');
+  app.add_option("--settle-steps", settleSteps, "steps to settle the bed before timing")->capture_default_str();
+  app.add_option("--steps", steps, "timed steps")->capture_default_str();
+  app.add_option("--threads", threads, "OpenMP threads (0: all cores)");
+  app.add_option("--lammps-ranks", lammpsRanks, "LAMMPS MPI ranks (0: as many as pflow's threads)");
+  app.add_flag("--poly", poly, "polydisperse bed: radii uniform in [d/4, d/2]");
+  app.add_flag("--no-lammps", noLammps, "skip the LAMMPS run");
+  app.add_option("--device", device, "device name for the results table");
+  CLI11_PARSE(app, argc, argv);
+  pflow::log::init("pflow-bench", "warn");
+
+  const std::string commit = shell("git rev-parse --short HEAD 2>/dev/null");
+  std::ostringstream cmdline;
+  for (int i = 0; i < argc; ++i) cmdline << (i ? " " : "") << argv[i];
+  const std::string caseName = poly ? "settled_bed_poly" : "settled_bed_mono";
+  int rc = 0;
+
+  for (long n : sizes) {
+    auto spec = pflow::bench::bedSpecFor(n, poly);
+    spec.threads = threads;
+    auto cfg = pflow::bench::bedScene(spec);
+    auto sim = pflow::compute::Simulation::create(cfg);
+    if (!sim) {
+      std::fprintf(stderr, "%s\n", sim.status().toString().c_str());
+      return 1;
+    }
+    auto& s = *sim.value();
+    const auto t0 = std::chrono::steady_clock::now();
+    if (auto st = s.runSteps(settleSteps); !st.isOk()) {
+      std::fprintf(stderr, "settling failed: %s\n", st.toString().c_str());
+      return 1;
+    }
+    const double settleWall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const auto before = s.contactStats();
+    s.timers().reset();
+    const auto rebuilds0 = s.rebuilds();
+    const auto t1 = std::chrono::steady_clock::now();
+    if (auto st = s.runSteps(steps); !st.isOk()) {
+      std::fprintf(stderr, "timed run failed: %s\n", st.toString().c_str());
+      return 1;
+    }
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+    const double rate = double(s.numParticles()) * steps / wall;
+    nlohmann::json phases;
+    for (int p = 0; p < int(pflow::compute::Phase::kCount); ++p)
+      phases[pflow::compute::kPhaseNames[p]] = s.timers().seconds(pflow::compute::Phase(p));
+    const int usedThreads = std::stoi(s.executorDescription().substr(s.executorDescription().find(" on ") + 4));
+    nlohmann::json j{{"code", "pflow"}, {"executor", "cpu"}, {"threads", usedThreads}, {"precision", "double"},
+                     {"case", caseName}, {"n", s.numParticles()}, {"settle_steps", settleSteps},
+                     {"settle_s", settleWall}, {"steps", steps}, {"wall_s", wall},
+                     {"particle_steps_per_s", rate}, {"phases_s", phases},
+                     {"coordination", before.coordinationNumber}, {"rebuilds", s.rebuilds() - rebuilds0},
+                     {"history_slots", s.engine().historySlots()},
+                     {"device_bytes_per_particle", double(s.deviceBytes()) / double(s.numParticles())},
+                     {"device", device}, {"commit", commit}, {"command", cmdline.str()}};
+    std::printf("%s\n", j.dump().c_str());
+    std::fflush(stdout);
+    std::fprintf(stderr, "| %s | %s | %s | pflow cpu | double | %s | %zu | %d threads | %.3g | `%s` |\n", today().c_str(),
+                 commit.c_str(), device.c_str(), caseName.c_str(), s.numParticles(), usedThreads, rate, cmdline.str().c_str());
+
+    if (noLammps) continue;
+    if (!pflow::bench::findLammps()) {
+      std::fprintf(stderr, "lmp not found: LAMMPS comparison skipped\n");
+      continue;
+    }
+    const auto snap = s.snapshot();
+    pflow::bench::LammpsBed bed;
+    const std::size_t np = snap.n;
+    const auto* x = snap.find("position")->as<pflow::Vec3d>();
+    const auto* v = snap.find("velocity")->as<pflow::Vec3d>();
+    const auto* w = snap.find("angular_velocity")->as<pflow::Vec3d>();
+    const auto* r = snap.find("radius")->as<double>();
+    bed.position.assign(x, x + np);
+    bed.velocity.assign(v, v + np);
+    bed.angularVelocity.assign(w, w + np);
+    bed.radius.assign(r, r + np);
+    const auto& m = cfg.materials[0];
+    bed.density = m.density;
+    bed.youngsModulus = m.youngsModulus;
+    bed.poissonRatio = m.poissonRatio;
+    bed.restitution = m.restitution;
+    bed.friction = m.friction;
+    bed.boxLo = cfg.sim.domain->lo;
+    bed.boxHi = cfg.sim.domain->hi;
+    bed.gravity = cfg.sim.gravity;
+    bed.dt = *cfg.sim.dt;
+    bed.skin = cfg.sim.skin;
+    bed.steps = steps;
+    pflow::bench::LammpsOptions lo;
+    lo.ranks = lammpsRanks > 0 ? lammpsRanks : usedThreads;
+    auto lr = pflow::bench::runLammps(bed, lo);
+    if (!lr) {
+      std::fprintf(stderr, "LAMMPS failed: %s\n", lr.status().toString().c_str());
+      rc = 2;
+      continue;
+    }
+    const auto& l = lr.value();
+    nlohmann::json jl{{"code", "lammps"}, {"version", l.lammpsVersion}, {"ranks", l.ranks}, {"precision", "double"},
+                      {"case", caseName}, {"n", l.atoms}, {"steps", l.steps}, {"wall_s", l.loopSeconds},
+                      {"particle_steps_per_s", l.particleStepsPerSecond}, {"neighbor_builds", l.neighborBuilds},
+                      {"pflow_over_lammps", rate / l.particleStepsPerSecond}, {"device", device},
+                      {"commit", commit}, {"command", l.command}};
+    std::printf("%s\n", jl.dump().c_str());
+    std::fflush(stdout);
+    std::fprintf(stderr, "| %s | %s | %s | LAMMPS %s | double | %s | %ld | %d ranks | %.3g | `%s` (ratio pflow/LAMMPS %.2f) |\n",
+                 today().c_str(), commit.c_str(), device.c_str(), l.lammpsVersion.c_str(), caseName.c_str(), l.atoms,
+                 l.ranks, l.particleStepsPerSecond, cmdline.str().c_str(), rate / l.particleStepsPerSecond);
+  }
+  return rc;
+}
