@@ -16,21 +16,6 @@
 
 namespace pflow::compute {
 
-struct PlaneParams {
-  Vec3d point;
-  Vec3d normal;  // unit, towards the particles
-  std::int32_t material;
-};
-
-// Wall keys: planes have the top bit set; triangles carry their mesh in the upper word.
-PFLOW_HOSTDEVICE PFLOW_FORCEINLINE std::uint64_t planeKey(Index p) { return (std::uint64_t(1) << 63) | p; }
-PFLOW_HOSTDEVICE PFLOW_FORCEINLINE std::uint64_t triangleKey(std::int32_t mesh, Index t) {
-  return (std::uint64_t(std::uint32_t(mesh)) << 32) | t;
-}
-PFLOW_HOSTDEVICE PFLOW_FORCEINLINE bool sameMesh(std::uint64_t a, std::uint64_t b) {
-  return !(a >> 63) && !(b >> 63) && (a >> 32) == (b >> 32);
-}
-
 inline constexpr int kMaxWallContacts = 16;  // simultaneous wall contacts of one particle
 
 namespace kernels {
@@ -56,7 +41,7 @@ struct ForceArgs {
   Vec3d* histDisp;
   // walls
   const PlaneParams* planes;
-  int numPlanes;
+  const std::uint32_t* planeMask;  // per particle: planes within r + skin at the last rebuild
   const Vec3d* triVerts;
   const std::int32_t* triMesh;
   const std::int32_t* triMaterial;
@@ -123,22 +108,23 @@ struct ComputeForces {
       const Vec3d d = pos[j] - xi;
       const double rj = radius[j], rs = ri + rj;
       const double d2 = norm2(d);
+      // Invariant: nbrSlot[e] >= 0 exactly when slot nbrSlot[e] holds j's history (set at rebuild,
+      // on claiming, cleared here when the contact ends), so the hot path never reads gid[j].
       int slot = nbrSlot[e];
       if (d2 >= rs * rs) {
         if (slot >= 0) {  // the contact has ended: forget its history
-          if (partner[slot] == gid[j]) partner[slot] = kNoGid;
+          partner[slot] = kNoGid;
           nbrSlot[e] = -1;
         }
         continue;
       }
       ++contacts;
-      const Gid gj = gid[j];
       Vec3d xiOld = zero3<double>();
-      if (slot >= 0 && partner[slot] == gj) {
+      if (slot >= 0) {
         if (storeOnly) continue;  // stored by the first pass
         xiOld = disp[slot];
       } else {
-        slot = claimSlot(partner, slots, gj);
+        slot = claimSlot(partner, slots, gid[j]);
         overflow |= slot < 0;
         if (storeOnly && slot < 0) continue;
       }
@@ -197,7 +183,8 @@ struct ComputeForces {
     WallContact wc[kMaxWallContacts];
     int nwc = 0;
     bool tooMany = false;
-    for (int p = 0; p < a.numPlanes; ++p) {
+    for (std::uint32_t mask = a.planeMask[i]; mask; mask &= mask - 1) {
+      const int p = __builtin_ctz(mask);
       const PlaneParams& pl = a.planes[p];
       const double sd = dot(xi - pl.point, pl.normal);
       if (sd >= ri) continue;
@@ -223,7 +210,8 @@ struct ComputeForces {
     if (tooMany) atomicOrU32(&a.cond->flags, kTooManyWallContacts);
     std::uint64_t* key = a.wallKey + std::size_t(i) * a.wallSlots;
     Vec3d* disp = a.wallDisp + std::size_t(i) * a.wallSlots;
-    if (nwc == 0) {  // the common case: no wall contact; forget any that just ended
+    if (nwc == 0) {  // no wall contact; forget any that just ended
+      if (a.planeMask[i] == 0 && nc == 0) return;  // far from every wall: its slots were cleared at rebuild
       for (int k = 0; k < a.wallSlots; ++k)
         if (key[k] != kNoGid) key[k] = kNoGid;
       return;

@@ -34,6 +34,23 @@ struct MeshMotionParams {
   }
 };
 
+struct PlaneParams {
+  Vec3d point;
+  Vec3d normal;  // unit, towards the particles
+  std::int32_t material;
+};
+
+// Wall keys (tangential-history slots of wall contacts): planes have the top bit set; triangles carry their mesh in the upper word.
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE std::uint64_t planeKey(Index p) { return (std::uint64_t(1) << 63) | p; }
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE std::uint64_t triangleKey(std::int32_t mesh, Index t) {
+  return (std::uint64_t(std::uint32_t(mesh)) << 32) | t;
+}
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE bool sameMesh(std::uint64_t a, std::uint64_t b) {
+  return !(a >> 63) && !(b >> 63) && (a >> 32) == (b >> 32);
+}
+
+inline constexpr int kMaxPlanes = 32;  // planes are selected per particle through a 32-bit mask
+
 namespace kernels {
 
 // Moves triangle vertices (3 per triangle, triangle soup) to time t; returns the squared
@@ -108,10 +125,13 @@ struct SortBins {
   }
 };
 
-// Triangles within r_i + skin of particle i, from its cell's bin.
+// Walls near particle i at rebuild time: planes within r_i + skin (a bit mask) and triangles within
+// r_i + skin (from its cell's bin). Wall-history slots of walls no longer near are cleared.
 struct WallCandidates {
   CellGrid grid;
-  const Index* binStart;
+  const PlaneParams* planes;
+  int numPlanes;
+  const Index* binStart;  // null when there are no triangles
   const Index* binItems;
   const Vec3d* verts;
   const Vec3d* pos;
@@ -120,23 +140,44 @@ struct WallCandidates {
   Index capacity;
   Index* cand;               // [i * capacity + e]
   std::uint32_t* candCount;  // [i]
+  std::uint32_t* planeMask;  // [i]
+  std::uint64_t* wallKey;    // [i * wallSlots + k]
+  int wallSlots;
   Conditions* cond;
   PFLOW_HOSTDEVICE void operator()(Index i) const {
     const Vec3d x = pos[i];
     const double cut = radius[i] + skin;
-    const std::uint32_t c = grid.cellOf(x);
+    std::uint32_t mask = 0;
+    for (int p = 0; p < numPlanes; ++p)
+      if (dot(x - planes[p].point, planes[p].normal) < cut) mask |= 1u << p;
+    planeMask[i] = mask;
     std::uint32_t count = 0;
-    for (Index k = binStart[c]; k < binStart[c + 1]; ++k) {
-      const Index t = binItems[k];
-      const auto cp = geometry::closestPointOnTriangle(x, verts[3 * t], verts[3 * t + 1], verts[3 * t + 2]);
-      if (norm2(x - cp.point) >= cut * cut) continue;
-      if (count < capacity) cand[std::size_t(i) * capacity + count] = t;
-      ++count;
+    if (binStart) {
+      const std::uint32_t c = grid.cellOf(x);
+      for (Index k = binStart[c]; k < binStart[c + 1]; ++k) {
+        const Index t = binItems[k];
+        const auto cp = geometry::closestPointOnTriangle(x, verts[3 * t], verts[3 * t + 1], verts[3 * t + 2]);
+        if (norm2(x - cp.point) >= cut * cut) continue;
+        if (count < capacity) cand[std::size_t(i) * capacity + count] = t;
+        ++count;
+      }
     }
     candCount[i] = count;
     if (count > capacity) {
       atomicOrU32(&cond->flags, kWallCandidateOverflow);
       atomicMaxU32(&cond->neededWallCandidates, count);
+      return;
+    }
+    std::uint64_t* key = wallKey + std::size_t(i) * wallSlots;
+    for (int k = 0; k < wallSlots; ++k) {
+      if (key[k] == kNoGid) continue;
+      bool near = false;
+      if (key[k] >> 63) {
+        near = (mask >> (key[k] & 31u)) & 1u;
+      } else {
+        for (std::uint32_t e = 0; e < count && !near; ++e) near = (key[k] & 0xffffffffu) == cand[std::size_t(i) * capacity + e];
+      }
+      if (!near) key[k] = kNoGid;
     }
   }
 };

@@ -51,13 +51,10 @@ struct IntegrateSecondHalf {
     const Vec3d w = a.omega[i] + (h * invI) * a.torque[i];
     a.vel[i] = v;
     a.omega[i] = w;
-    std::uint32_t bad = 0;
-    if (!isFinite(a.pos[i])) bad |= kQPosition;
-    if (!isFinite(v)) bad |= kQVelocity;
-    if (!isFinite(w)) bad |= kQAngularVelocity;
-    if (!isFinite(a.force[i])) bad |= kQForce;
-    if (!isFinite(a.torque[i])) bad |= kQTorque;
-    if (bad) {
+    // One test on a sum: NaN and infinity propagate through it, so it is finite only if every term is.
+    const Vec3d x = a.pos[i], f = a.force[i], t = a.torque[i];
+    const double sum = x.x + x.y + x.z + v.x + v.y + v.z + w.x + w.y + w.z + f.x + f.y + f.z + t.x + t.y + t.z;
+    if (!std::isfinite(sum)) {
       atomicOrU32(&a.cond->flags, kNonFinite);
       atomicMinU32(&a.cond->badParticle, i);
     }

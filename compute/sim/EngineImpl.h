@@ -79,12 +79,13 @@ class EngineImpl final : public Engine {
                                                   m_particles.contactSlots(), m_setup.skin, m_nbrCap,
                                                   m_nbr.as<Index>(), m_nbrSlot.as<std::int8_t>(),
                                                   m_nbrCount.as<std::uint32_t>(), m_cond.as<Conditions>()});
-      if (m_numTri)
-        m_exec.forEach(m_n, kernels::WallCandidates{m_setup.grid, m_binStart.as<Index>(), m_binItems.as<Index>(),
-                                                    m_triVerts.as<Vec3d>(), m_particles.ptr<Field::Position>(),
-                                                    m_particles.ptr<Field::Radius>(), m_setup.skin, m_wallCap,
-                                                    m_wallCand.as<Index>(), m_wallCandCount.as<std::uint32_t>(),
-                                                    m_cond.as<Conditions>()});
+      m_exec.forEach(m_n, kernels::WallCandidates{m_setup.grid, m_planes.as<PlaneParams>(), int(m_setup.planes.size()),
+                                                  m_numTri ? m_binStart.as<Index>() : nullptr, m_binItems.as<Index>(),
+                                                  m_triVerts.as<Vec3d>(), m_particles.ptr<Field::Position>(),
+                                                  m_particles.ptr<Field::Radius>(), m_setup.skin, m_wallCap,
+                                                  m_wallCand.as<Index>(), m_wallCandCount.as<std::uint32_t>(),
+                                                  m_planeMask.as<std::uint32_t>(), m_particles.ptr<Field::WallKey>(),
+                                                  m_particles.wallSlots(), m_cond.as<Conditions>()});
       const Conditions c = readConditions();
       if (!(c.flags & (kNeighborOverflow | kWallCandidateOverflow))) break;
       if (c.flags & kNeighborOverflow) {
@@ -183,7 +184,7 @@ class EngineImpl final : public Engine {
     m_nbr.resize(std::size_t(m_n) * m_nbrCap * sizeof(Index));
     m_nbrSlot.resize(std::size_t(m_n) * m_nbrCap * sizeof(std::int8_t));
   }
-  void allocWallCandidates() { m_wallCand.resize(std::size_t(m_n) * m_wallCap * sizeof(Index)); }
+  void allocWallCandidates() { m_wallCand.resize(std::max<std::size_t>(1, std::size_t(m_n) * m_wallCap) * sizeof(Index)); }
   void binTriangles();
   void resetConditions() {
     Conditions c;
@@ -221,14 +222,14 @@ class EngineImpl final : public Engine {
     a.histPartner = m_particles.ptr<Field::HistoryPartner>();
     a.histDisp = m_particles.ptr<Field::HistoryDisp>();
     a.planes = m_planes.as<PlaneParams>();
-    a.numPlanes = int(m_setup.planes.size());
+    a.planeMask = m_planeMask.as<std::uint32_t>();
     a.triVerts = m_triVerts.as<Vec3d>();
     a.triMesh = m_triMesh.as<std::int32_t>();
     a.triMaterial = m_triMaterial.as<std::int32_t>();
     a.meshMotion = m_meshMotion.as<MeshMotionParams>();
     a.wallCand = m_wallCand.as<Index>();
     a.wallCandCount = m_wallCandCount.as<std::uint32_t>();
-    a.wallCandCapacity = m_numTri ? m_wallCap : 0;
+    a.wallCandCapacity = m_wallCap;
     a.wallSlots = m_particles.wallSlots();
     a.wallKey = m_particles.ptr<Field::WallKey>();
     a.wallDisp = m_particles.ptr<Field::WallDisp>();
@@ -262,7 +263,7 @@ class EngineImpl final : public Engine {
   Buffer m_planes{m_mem, 0}, m_triRef{m_mem, 0}, m_triVerts{m_mem, 0}, m_triRebuild{m_mem, 0};
   Buffer m_triMesh{m_mem, 0}, m_triMaterial{m_mem, 0}, m_meshMotion{m_mem, 0};
   Buffer m_binStart{m_mem, 0}, m_binItems{m_mem, 0}, m_binCount{m_mem, 0};
-  Buffer m_wallCand{m_mem, 0}, m_wallCandCount{m_mem, 0};
+  Buffer m_wallCand{m_mem, 0}, m_wallCandCount{m_mem, 0}, m_planeMask{m_mem, 0};
   Buffer m_params{m_mem, 0}, m_cond{m_mem, sizeof(Conditions)};
 };
 
@@ -312,7 +313,8 @@ void EngineImpl<Exec>::init() {
   m_binCount.resize(std::size_t(s.grid.numCells()) * sizeof(std::uint32_t));
   m_wallCandCount.resize(std::max<std::size_t>(1, m_n) * sizeof(std::uint32_t));
   m_mem.fillBytes(m_wallCandCount.data(), 0, m_wallCandCount.bytes());
-  if (m_numTri) allocWallCandidates();
+  m_planeMask.resize(std::max<std::size_t>(1, m_n) * sizeof(std::uint32_t));
+  allocWallCandidates();
 }
 
 template <class Exec>

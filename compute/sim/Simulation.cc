@@ -109,6 +109,9 @@ Result<EngineSetup> prepareEngineSetup(const RunConfig& c) {
   s.wallHistorySlots = c.sim.wallHistorySlots;
   s.threads = c.sim.threads;
 
+  if (c.planes.size() > std::size_t(kMaxPlanes))
+    return invalidArgument("geometry: " + std::to_string(c.planes.size()) + " planes, at most " +
+                           std::to_string(kMaxPlanes) + " infinite planes are supported; use a box or mesh for more walls");
   for (const auto& pl : c.planes) {
     s.planes.push_back({pl.point, (1.0 / norm(pl.normal)) * pl.normal, pl.material});
     s.planeNames.push_back(pl.name);
