@@ -52,10 +52,11 @@ int main(int argc, char** argv) {
   app.add_flag("--poly", poly, "polydisperse bed: radii uniform in [d/4, d/2]");
   app.add_flag("--no-lammps", noLammps, "skip the LAMMPS run");
   app.add_option("--device", device, "device name for the results table");
+  std::string commit = shell("git rev-parse --short HEAD 2>/dev/null");
+  app.add_option("--commit", commit, "commit for the results table (default: git rev-parse)");
   CLI11_PARSE(app, argc, argv);
   pflow::log::init("pflow-bench", "warn");
 
-  const std::string commit = shell("git rev-parse --short HEAD 2>/dev/null");
   std::ostringstream cmdline;
   for (int i = 0; i < argc; ++i) cmdline << (i ? " " : "") << argv[i];
   const std::string caseName = poly ? "settled_bed_poly" : "settled_bed_mono";

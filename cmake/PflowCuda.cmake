@@ -12,7 +12,9 @@ if(PFLOW_ENABLE_CUDA)
       set(CMAKE_CUDA_ARCHITECTURES 90-real 90-virtual)
     endif()
     enable_language(CUDA)
-    set(CMAKE_CUDA_STANDARD 20)
+    # CMake 3.25 knows no CUDA20 dialect flags for nvcc 13: device code is C++17 (the kernel headers
+    # use nothing newer); host code stays C++20.
+    set(CMAKE_CUDA_STANDARD 17)
     set(CMAKE_CUDA_STANDARD_REQUIRED ON)
     find_package(CUDAToolkit REQUIRED)
     set(PFLOW_HAVE_CUDA ON)

@@ -184,7 +184,7 @@ struct ComputeForces {
     int nwc = 0;
     bool tooMany = false;
     for (std::uint32_t mask = a.planeMask[i]; mask; mask &= mask - 1) {
-      const int p = __builtin_ctz(mask);
+      const int p = lowestBit(mask);
       const PlaneParams& pl = a.planes[p];
       const double sd = dot(xi - pl.point, pl.normal);
       if (sd >= ri) continue;
