@@ -9,7 +9,7 @@ cd "$(dirname "$0")/.."
 mkdir -p out/quickstart
 ./build/bin/pflow validate examples/settling_box.yaml
 ./build/bin/pflow run examples/settling_box.yaml -o out/quickstart/settling_box.h5
-python3 deploy/tools/render_snapshot.py out/quickstart/settling_box.h5 -o out/quickstart/settling_box.png
+/usr/bin/python3 deploy/tools/render_snapshot.py out/quickstart/settling_box.h5 -o out/quickstart/settling_box.png
 echo
 echo "results: out/quickstart/settling_box.h5 (open out/quickstart/settling_box.xmf in ParaView)"
 echo "picture: out/quickstart/settling_box.png"

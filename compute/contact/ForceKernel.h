@@ -131,6 +131,7 @@ struct ComputeForces {
       const double dist = std::sqrt(d2);
       const Vec3d n = (1.0 / dist) * d;
       const double overlap = rs - dist;
+      if (overlap > kMaxOverlapRatio * (ri < rj ? ri : rj)) flagDeep(i);
       const double mj = mass[j];
       const ContactParams& pp = params[material[j]];
       const double li = ri - 0.5 * overlap, lj = rj - 0.5 * overlap;
@@ -168,6 +169,11 @@ struct ComputeForces {
     }
   }
 
+  PFLOW_HOSTDEVICE void flagDeep(Index i) const {
+    atomicOrU32(&a.cond->flags, kExcessiveOverlap);
+    atomicMinU32(&a.cond->deepParticle, i);
+  }
+
   // Claims an empty slot for partner g, or returns -1 when all are taken.
   PFLOW_HOSTDEVICE static int claimSlot(Gid* partner, int slots, Gid g) {
     for (int k = 0; k < slots; ++k)
@@ -189,6 +195,7 @@ struct ComputeForces {
       const double sd = dot(xi - pl.point, pl.normal);
       if (sd >= ri) continue;
       if (nwc == kMaxWallContacts) { tooMany = true; break; }
+      if (ri - sd > kMaxOverlapRatio * ri) flagDeep(i);
       wc[nwc++] = {-pl.normal, xi - sd * pl.normal, pl.normal, zero3<double>(), ri - sd, planeKey(Index(p)), pl.material, true};
     }
     const std::uint32_t nc = a.wallCandCount[i] < a.wallCandCapacity ? a.wallCandCount[i] : a.wallCandCapacity;
@@ -203,6 +210,7 @@ struct ComputeForces {
       const Vec3d fn = geometry::triangleNormal(v[0], v[1], v[2]);
       const double d = std::sqrt(d2);
       const Vec3d n = d > 0 ? (1.0 / d) * dv : -fn;
+      if (ri - d > kMaxOverlapRatio * ri) flagDeep(i);
       const std::int32_t mesh = a.triMesh[t];
       wc[nwc++] = {n, cp.point, fn, a.meshMotion[mesh].velocityAt(cp.point, a.time), ri - d, triangleKey(mesh, t),
                    a.triMaterial[t], cp.feature == geometry::Feature::kFace};

@@ -14,7 +14,12 @@ enum ConditionBits : std::uint32_t {
   kWallCandidateOverflow = 1u << 3, // a particle has more candidate triangles than the stride
   kNonFinite = 1u << 4,             // a position, velocity, spin, force or torque is NaN or infinite
   kTooManyWallContacts = 1u << 5,   // more simultaneous triangle contacts than kMaxWallContacts
+  kExcessiveOverlap = 1u << 6,      // an overlap beyond kMaxOverlapRatio of the smaller radius: blow-up
 };
+
+// Overlaps this deep (relative to the smaller radius) mean the integration has failed: dt too large
+// for the speeds, or a material far too soft. The run stops with an error instead of going on.
+inline constexpr double kMaxOverlapRatio = 0.5;
 
 // Which quantity went non-finite (lowest set bit wins in the report).
 enum NonFiniteQuantity : std::uint32_t { kQPosition = 1, kQVelocity = 2, kQAngularVelocity = 4, kQForce = 8, kQTorque = 16 };
@@ -27,6 +32,7 @@ struct Conditions {
   std::uint32_t neededWallCandidates = 0;
   std::uint32_t badParticle = kNoIndex;  // lowest local index with a non-finite value
   std::uint32_t badQuantity = 0;         // NonFiniteQuantity bits of that particle
+  std::uint32_t deepParticle = kNoIndex; // lowest local index with an excessive overlap
 };
 
 }  // namespace pflow::compute

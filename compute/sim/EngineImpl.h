@@ -3,6 +3,7 @@
 #pragma once
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -105,6 +106,7 @@ class EngineImpl final : public Engine {
     resetConditions();
     m_exec.forEach(m_n, kernels::ComputeForces{forceArgs(dt, time, false)});
     Conditions c = readConditions();
+    if (c.flags & kExcessiveOverlap) return deepOverlapError(c.deepParticle);
     if (c.flags & kTooManyWallContacts)
       return Status(StatusCode::kResourceExhausted,
                     "a particle touches more than " + std::to_string(kMaxWallContacts) +
@@ -196,6 +198,7 @@ class EngineImpl final : public Engine {
     return c;
   }
   Status nonFiniteError(Index i) const;
+  Status deepOverlapError(Index i) const;
 
   kernels::IntegrateArgs integrateArgs(double dt) {
     return {m_particles.ptr<Field::Position>(), m_particles.ptr<Field::Velocity>(),
@@ -352,6 +355,24 @@ Status EngineImpl<Exec>::nonFiniteError(Index i) const {
   if (!isFinite(f)) what += std::string(what.empty() ? "" : ", ") + "force";
   if (!isFinite(t)) what += std::string(what.empty() ? "" : ", ") + "torque";
   return numericalError("particle " + std::to_string(gid) + " has a non-finite " + what);
+}
+
+template <class Exec>
+Status EngineImpl<Exec>::deepOverlapError(Index i) const {
+  Gid gid;
+  double r;
+  Vec3d x, v;
+  m_mem.copyToHost(&gid, m_particles.ptr<Field::Gid>() + i, sizeof gid);
+  m_mem.copyToHost(&r, m_particles.ptr<Field::Radius>() + i, sizeof r);
+  m_mem.copyToHost(&x, m_particles.ptr<Field::Position>() + i, sizeof x);
+  m_mem.copyToHost(&v, m_particles.ptr<Field::Velocity>() + i, sizeof v);
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "particle %llu (radius %.4g m at (%.4g, %.4g, %.4g) m, speed %.4g m/s) overlaps a neighbour or wall by more "
+                "than %.0f%% of the smaller radius: the integration has blown up (time step too large for these speeds, "
+                "or the material too soft)",
+                (unsigned long long)gid, r, x.x, x.y, x.z, norm(v), 100 * kMaxOverlapRatio);
+  return numericalError(buf);
 }
 
 template <class Exec>

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Draws one snapshot of a pflow result file (HDF5) to a PNG: particles as spheres coloured by
 speed, walls as translucent triangles, in a 3D view and a side view (x-z)."""
 import argparse
@@ -57,7 +57,7 @@ def main():
 
     ax2 = fig.add_subplot(1, 2, 2)
     order = np.argsort(x[:, 1])[::-1]
-    ax2.scatter(x[order, 0], x[order, 2], c=x[order, 1], s=size[order] * 2, cmap="copper", edgecolors="none")
+    ax2.scatter(x[order, 0], x[order, 2], c=x[order, 1], s=size[order] * 2, cmap="viridis", edgecolors="none")
     if tris is not None:
         for tri in tris:
             ax2.plot(np.append(tri[:, 0], tri[0, 0]), np.append(tri[:, 2], tri[0, 2]), color="k", lw=0.3, alpha=0.3)
