@@ -2,6 +2,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "compute/core/Format.h"
+
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -80,18 +82,9 @@ Loc locOf(const YAML::Node& n, Loc fallback = {}) {
   }
 }
 
-std::string at(const std::string& base, std::size_t i) { return base + "[" + std::to_string(i) + "]"; }
-std::string num(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
-std::string vec(const Vec3d& v) {
-  // Built by appending: GCC 12 warns falsely (-Wrestrict, PR105329) on "[" + std::string chains.
-  std::string out = "[";
-  out.append(num(v.x)).append(", ").append(num(v.y)).append(", ").append(num(v.z)).append("]");
-  return out;
-}
+using format::at;
+using format::num;
+using format::vec;
 
 template <class Range>
 std::string joinNames(const Range& names) {

@@ -91,7 +91,8 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE Vec3<T> mindlinForce(T stiffness, T dampCoeff
 }  // namespace tangential
 
 namespace rolling {
-// Constant directional torque ("type A"): -mu_r F_n R* w/|w|, limited so that it cannot reverse the
+// Constant directional torque ("type A"): -mu_r F_n R* w/|w| for the rolling part w of the relative
+// spin (its component normal to the contact removed by the caller), limited so that it cannot reverse the
 // relative spin within one step (|tau| <= I* |w| / dt), which removes the sign chatter at rest.
 template <class T>
 PFLOW_HOSTDEVICE PFLOW_FORCEINLINE Vec3<T> constantTorque(T rollingFriction, T normalForce, T effRadius,
@@ -133,8 +134,11 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE ContactOutput<T> hertzMindlin(const ContactPa
   out.history = xi;
   out.force = force;
   out.torque = cross(s.leverArm * s.n, ft);
-  if (p.rollingFriction > 0)
-    out.torque += rolling::constantTorque(T(p.rollingFriction), fn, s.effRadius, s.omegaRel, s.effInertia, dt);
+  if (p.rollingFriction > 0) {
+    // Rolling resists the relative spin about tangent axes only; twisting about n is not rolling.
+    const Vec3<T> wRoll = s.omegaRel - dot(s.omegaRel, s.n) * s.n;
+    out.torque += rolling::constantTorque(T(p.rollingFriction), fn, s.effRadius, wRoll, s.effInertia, dt);
+  }
   return out;
 }
 

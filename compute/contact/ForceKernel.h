@@ -169,6 +169,17 @@ struct ComputeForces {
     }
   }
 
+  // Triangles are stored as a soup; neighbours share vertices bit for bit (same source vertex, same
+  // motion applied), so exact comparison finds them.
+  PFLOW_HOSTDEVICE bool sharesVertex(Index t, Index u) const {
+    const Vec3d* a3 = a.triVerts + 3 * t;
+    const Vec3d* b3 = a.triVerts + 3 * u;
+    for (int p = 0; p < 3; ++p)
+      for (int q = 0; q < 3; ++q)
+        if (a3[p].x == b3[q].x && a3[p].y == b3[q].y && a3[p].z == b3[q].z) return true;
+    return false;
+  }
+
   PFLOW_HOSTDEVICE void flagDeep(Index i) const {
     atomicOrU32(&a.cond->flags, kExcessiveOverlap);
     atomicMinU32(&a.cond->deepParticle, i);
@@ -243,9 +254,9 @@ struct ComputeForces {
       kept += keep[k];
     }
 
-    // Slots: the same key continues; a new triangle of the same mesh inherits the slot of a triangle
-    // of that mesh the particle has just left (rolling across a shared edge keeps its tangential
-    // spring); otherwise a free slot. Slots of ended contacts are cleared.
+    // Slots: the same key continues; a new triangle inherits the slot of a neighbouring triangle
+    // (same mesh, a shared vertex) the particle has just left, so rolling across a shared edge keeps
+    // its tangential spring; otherwise a free slot. Slots of ended contacts are cleared.
     int slotOf[kMaxWallContacts];
     bool claimedNow[kMaxWallContacts];  // took an empty slot in this pass
     bool matched[32];  // wall slots are limited to 32
@@ -261,7 +272,9 @@ struct ComputeForces {
     for (int k = 0; k < nwc; ++k) {
       if (!keep[k] || slotOf[k] >= 0) continue;
       for (int s = 0; s < a.wallSlots && slotOf[k] < 0; ++s)
-        if (!matched[s] && key[s] != kNoGid && sameMesh(key[s], wc[k].key)) slotOf[k] = s;  // inherit
+        if (!matched[s] && key[s] != kNoGid && sameMesh(key[s], wc[k].key) &&
+            sharesVertex(Index(key[s] & 0xffffffffu), Index(wc[k].key & 0xffffffffu)))
+          slotOf[k] = s;  // inherit from the neighbouring triangle just left
       for (int s = 0; s < a.wallSlots && slotOf[k] < 0; ++s)
         if (key[s] == kNoGid) { slotOf[k] = s; claimedNow[k] = true; disp[s] = zero3<double>(); }  // fresh
       if (slotOf[k] < 0) overflow = true;

@@ -1,5 +1,7 @@
 #include "compute/sim/RunConfig.h"
 
+#include "compute/core/Format.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -23,18 +25,9 @@ constexpr double kAntiParallel = 1.0 - 1e-9;
 // A triangle is degenerate when |(b-a)x(c-a)| <= kDegenerate * (longest edge)^2, i.e. its smallest angle is ~0.
 constexpr double kDegenerate = 1e-12;
 
-std::string num(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
-std::string vec(const Vec3d& v) {
-  // Built by appending: GCC 12 warns falsely (-Wrestrict, PR105329) on "[" + std::string chains.
-  std::string out = "[";
-  out.append(num(v.x)).append(", ").append(num(v.y)).append(", ").append(num(v.z)).append("]");
-  return out;
-}
-std::string at(const std::string& base, std::size_t i) { return base + "[" + std::to_string(i) + "]"; }
+using format::num;
+using format::vec;
+using format::at;
 std::string percent(double fraction) { return num(100.0 * fraction) + "%"; }
 
 // Counts errors of one kind; the first kMaxErrorsPerKind are reported, the rest become one summary line.

