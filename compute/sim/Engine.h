@@ -46,6 +46,7 @@ struct ContactStats {
   double coordinationNumber = 0;     // 2 * pairs / N
   double maxOverlapRatio = 0;        // max over contacts of overlap / smaller radius (walls: / radius)
   double kineticEnergy = 0;          // translational + rotational [J]
+  double translationalEnergy = 0;    // translational part [J] (a rattler may spin freely in its void)
   double maxSpeed = 0;               // [m/s]
   std::size_t historyEntries = 0;
   double candidatesPerParticle = 0;  // mean length of the neighbour candidate lists    // occupied tangential-history slots (particle and wall)

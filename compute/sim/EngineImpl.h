@@ -393,6 +393,7 @@ ContactStats EngineImpl<Exec>::contactStats() const {
   ContactStats st;
   for (Index i = 0; i < n; ++i) st.candidatesPerParticle += double(cnt[i]) / std::max<Index>(n, 1);
   for (Index i = 0; i < n; ++i) {
+    st.translationalEnergy += 0.5 * mass[i] * norm2(vel[i]);
     st.kineticEnergy += 0.5 * mass[i] * norm2(vel[i]) + 0.5 * 0.4 * mass[i] * rad[i] * rad[i] * norm2(om[i]);
     st.maxSpeed = std::max(st.maxSpeed, norm(vel[i]));
     for (std::uint32_t e = 0; e < std::min<std::uint32_t>(cnt[i], m_nbrCap); ++e) {
