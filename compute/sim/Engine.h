@@ -73,6 +73,7 @@ class Engine {
   virtual ContactStats contactStats() const = 0;
   virtual std::size_t deviceBytes() const = 0;
   virtual int historySlots() const = 0;
+  virtual int wallHistorySlots() const = 0;
 };
 
 std::unique_ptr<Engine> makeCpuEngine(EngineSetup setup);

@@ -37,6 +37,7 @@ class EngineImpl final : public Engine {
   std::string executorDescription() const override { return m_exec.description(); }
   std::size_t size() const override { return m_n; }
   int historySlots() const override { return m_particles.contactSlots(); }
+  int wallHistorySlots() const override { return m_particles.wallSlots(); }
   std::size_t deviceBytes() const override { return m_mem.bytesInUse(); }
 
   double integrateFirstHalf(double dt) override {

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "common/Log.h"
+
 namespace pflow::compute {
 
 #define PFLOW_RETURN_IF_ERROR(expr)         \
@@ -22,6 +24,7 @@ Status Simulation::step() {
   if (2 * moved > m_setup.skin || moved + meshMoved > m_setup.skin) PFLOW_RETURN_IF_ERROR(rebuild());
   { auto t = m_timers.time(Phase::kForces);     PFLOW_RETURN_IF_ERROR(m_engine->computeForces(dt, tNext)); }
   { auto t = m_timers.time(Phase::kIntegrate2); PFLOW_RETURN_IF_ERROR(m_engine->integrateSecondHalf(dt)); }
+  reportSlotGrowth();
   ++m_step;
   m_time = tNext;
   return Status::ok();
@@ -36,6 +39,19 @@ Status Simulation::rebuild() {
 }
 // ---------------------------------------------------------------------------------------------
 
+// History slots grow on demand (never silently): say so once per growth.
+void Simulation::reportSlotGrowth() {
+  const int slots = m_engine->historySlots(), wallSlots = m_engine->wallHistorySlots();
+  if (slots != m_historySlots)
+    spdlog::info("step {}: a particle has more contacts than tangential-history slots; grew from {} to {} per particle",
+                 m_step + 1, m_historySlots, slots);
+  if (wallSlots != m_wallHistorySlots)
+    spdlog::info("step {}: a particle has more wall contacts than wall-history slots; grew from {} to {} per particle",
+                 m_step + 1, m_wallHistorySlots, wallSlots);
+  m_historySlots = slots;
+  m_wallHistorySlots = wallSlots;
+}
+
 Status Simulation::withStep(Status s) const {
   if (s.isOk()) return s;
   return Status(s.code(), s.message() + " at step " + std::to_string(m_step + 1) + " (t = " +
@@ -43,8 +59,11 @@ Status Simulation::withStep(Status s) const {
 }
 
 Status Simulation::initialise() {
+  m_historySlots = m_engine->historySlots();
+  m_wallHistorySlots = m_engine->wallHistorySlots();
   PFLOW_RETURN_IF_ERROR(rebuild());
   PFLOW_RETURN_IF_ERROR(m_engine->computeForces(0.0, 0.0));
+  reportSlotGrowth();
   return Status::ok();
 }
 

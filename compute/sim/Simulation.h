@@ -56,6 +56,7 @@ class Simulation {
   Status initialise();
   Status rebuild();
   Status withStep(Status s) const;
+  void reportSlotGrowth();
 
   RunConfig m_config;
   EngineSetup m_setup;  // host copy of the static setup (grid, skin, walls)
@@ -65,6 +66,7 @@ class Simulation {
   std::int64_t m_step = 0;
   double m_time = 0;
   std::int64_t m_rebuilds = 0;
+  int m_historySlots = 0, m_wallHistorySlots = 0;  // last reported
 };
 
 // Host preparation, exposed for tests and benchmarks: masses, contact table, walls, domain and grid.
