@@ -23,20 +23,27 @@ struct IntegrateArgs {
   Vec3d gravity;
   double dt;
   Conditions* cond;
+
+  // Half kick of particle i: v += (F/m + g) dt/2 and w += T/I dt/2, with I = (2/5) m r^2.
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void halfKick(Index i, Vec3d& v, Vec3d& w) const {
+    const double h = 0.5 * dt;
+    const double invM = 1.0 / mass[i];
+    const double invI = invM / (0.4 * radius[i] * radius[i]);
+    v = vel[i] + h * (invM * force[i] + gravity);
+    w = omega[i] + (h * invI) * torque[i];
+  }
 };
 
 // Returns the squared displacement since the last rebuild (for the skin criterion).
 struct IntegrateFirstHalf {
   IntegrateArgs a;
   PFLOW_HOSTDEVICE double operator()(Index i) const {
-    const double h = 0.5 * a.dt;
-    const double invM = 1.0 / a.mass[i];
-    const double invI = invM / (0.4 * a.radius[i] * a.radius[i]);
-    Vec3d v = a.vel[i] + h * (invM * a.force[i] + a.gravity);
+    Vec3d v, w;
+    a.halfKick(i, v, w);
     const Vec3d x = a.pos[i] + a.dt * v;
     a.vel[i] = v;
     a.pos[i] = x;
-    a.omega[i] = a.omega[i] + (h * invI) * a.torque[i];
+    a.omega[i] = w;
     return norm2(x - a.refPos[i]);
   }
 };
@@ -44,11 +51,8 @@ struct IntegrateFirstHalf {
 struct IntegrateSecondHalf {
   IntegrateArgs a;
   PFLOW_HOSTDEVICE void operator()(Index i) const {
-    const double h = 0.5 * a.dt;
-    const double invM = 1.0 / a.mass[i];
-    const double invI = invM / (0.4 * a.radius[i] * a.radius[i]);
-    const Vec3d v = a.vel[i] + h * (invM * a.force[i] + a.gravity);
-    const Vec3d w = a.omega[i] + (h * invI) * a.torque[i];
+    Vec3d v, w;
+    a.halfKick(i, v, w);
     a.vel[i] = v;
     a.omega[i] = w;
     // One test on a sum: NaN and infinity propagate through it, so it is finite only if every term is.
