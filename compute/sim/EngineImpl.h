@@ -55,13 +55,16 @@ class EngineImpl final : public Engine {
     const CellGrid& g = m_setup.grid;
     m_exec.forEach(m_n, kernels::CellKey{g, m_particles.ptr<Field::Position>(), m_cellKey.as<std::uint32_t>()});
     m_exec.sortByKey(m_cellKey.as<std::uint32_t>(), m_n, g.numCells(), m_perm.as<Index>(), m_cellStart.as<Index>());
-    // Reorder every field of the table by the permutation.
+    // Reorder every field of the table by the permutation, through one scratch buffer of the largest
+    // field's size (allocated once, not per field and rebuild).
+    std::size_t largest = 0;
+    for (const auto& f : kFieldTable) largest = std::max(largest, m_particles.buffer(f.id).bytes());
+    if (m_scratch.bytes() < largest) m_scratch.resize(largest);
     for (const auto& f : kFieldTable) {
-      Buffer& src = m_particles.buffer(f.id);
-      m_scratch.resize(src.bytes());
-      m_exec.forEach(m_n, kernels::GatherBytes{src.template as<unsigned char>(), m_scratch.as<unsigned char>(),
+      Buffer& field = m_particles.buffer(f.id);
+      m_exec.forEach(m_n, kernels::GatherBytes{field.template as<unsigned char>(), m_scratch.as<unsigned char>(),
                                                m_perm.as<Index>(), m_particles.strideBytes(f)});
-      src.swap(m_scratch);
+      m_mem.copyWithin(field.data(), m_scratch.data(), field.bytes());
     }
   }
 
