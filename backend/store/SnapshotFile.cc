@@ -466,7 +466,7 @@ Status validateSnapshot(const ParticleSnapshot& s) {
     if (!names.insert(a.name).second) return invalidArgument(where + "array '" + a.name + "' appears twice");
     if (a.components < 1)
       return invalidArgument(where + "array '" + a.name + "' has " + std::to_string(a.components) + " components");
-    const std::size_t bytes = compute::scalarBytes(a.type);
+    const std::size_t bytes = compute::scalarBytesOf(a.type);
     if (bytes == 0) return invalidArgument(where + "array '" + a.name + "' has an unknown scalar type");
     const std::size_t expected = s.n * static_cast<std::size_t>(a.components) * bytes;
     if (a.data.size() != expected)
@@ -943,7 +943,7 @@ struct SnapshotReader::Impl {
     array.name = name;
     array.type = *type;
     array.components = d.size() == 2 ? static_cast<int>(d[1]) : 1;
-    array.data.resize(n * static_cast<std::size_t>(array.components) * compute::scalarBytes(*type));
+    array.data.resize(n * static_cast<std::size_t>(array.components) * compute::scalarBytesOf(*type));
     if (!array.data.empty() &&
         H5Dread(dset.get(), memTypeOf(*type), H5S_ALL, H5S_ALL, H5P_DEFAULT, array.data.data()) < 0)
       return h5Error(path, "cannot read dataset " + what);

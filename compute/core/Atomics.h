@@ -15,13 +15,23 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void atomicOrU32(std::uint32_t* addr, std::ui
 #endif
 }
 
+#if !defined(__CUDA_ARCH__)
+namespace detail {
+// Host: stores v while `better(v, current)` holds, by compare-and-swap.
+template <class Better>
+inline void atomicUpdateU32(std::uint32_t* addr, std::uint32_t v, Better better) {
+  std::uint32_t cur = __atomic_load_n(addr, __ATOMIC_RELAXED);
+  while (better(v, cur) && !__atomic_compare_exchange_n(addr, &cur, v, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+  }
+}
+}  // namespace detail
+#endif
+
 PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void atomicMaxU32(std::uint32_t* addr, std::uint32_t v) {
 #if defined(__CUDA_ARCH__)
   atomicMax(reinterpret_cast<unsigned int*>(addr), v);
 #else
-  std::uint32_t cur = __atomic_load_n(addr, __ATOMIC_RELAXED);
-  while (cur < v && !__atomic_compare_exchange_n(addr, &cur, v, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
-  }
+  detail::atomicUpdateU32(addr, v, [](std::uint32_t a, std::uint32_t b) { return a > b; });
 #endif
 }
 
@@ -29,9 +39,7 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void atomicMinU32(std::uint32_t* addr, std::u
 #if defined(__CUDA_ARCH__)
   atomicMin(reinterpret_cast<unsigned int*>(addr), v);
 #else
-  std::uint32_t cur = __atomic_load_n(addr, __ATOMIC_RELAXED);
-  while (cur > v && !__atomic_compare_exchange_n(addr, &cur, v, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
-  }
+  detail::atomicUpdateU32(addr, v, [](std::uint32_t a, std::uint32_t b) { return a < b; });
 #endif
 }
 

@@ -21,17 +21,13 @@ enum ConditionBits : std::uint32_t {
 // for the speeds, or a material far too soft. The run stops with an error instead of going on.
 inline constexpr double kMaxOverlapRatio = 0.5;
 
-// Which quantity went non-finite (lowest set bit wins in the report).
-enum NonFiniteQuantity : std::uint32_t { kQPosition = 1, kQVelocity = 2, kQAngularVelocity = 4, kQForce = 8, kQTorque = 16 };
-
 struct Conditions {
   std::uint32_t flags = 0;
   std::uint32_t neededNeighbors = 0;     // largest candidate count seen
   std::uint32_t neededHistory = 0;       // largest contact count seen
   std::uint32_t neededWallHistory = 0;   // largest wall-contact count seen
   std::uint32_t neededWallCandidates = 0;
-  std::uint32_t badParticle = kNoIndex;  // lowest local index with a non-finite value
-  std::uint32_t badQuantity = 0;         // NonFiniteQuantity bits of that particle
+  std::uint32_t badParticle = kNoIndex;  // lowest local index with a non-finite value (the host names the quantity)
   std::uint32_t deepParticle = kNoIndex; // lowest local index with an excessive overlap
 };
 

@@ -2,8 +2,6 @@
 
 namespace pflow::compute {
 
-std::size_t scalarBytes(ScalarType t) { return scalarBytesOf(t); }
-
 const char* scalarName(ScalarType t) {
   switch (t) {
     case ScalarType::kF64: return "f64";

@@ -19,7 +19,6 @@ constexpr std::size_t scalarBytesOf(ScalarType t) {
   }
   return 0;
 }
-std::size_t scalarBytes(ScalarType t);
 const char* scalarName(ScalarType t);  // "f64", "f32", ...
 
 struct SnapshotArray {
@@ -27,7 +26,7 @@ struct SnapshotArray {
   ScalarType type;         // element scalar type
   int components = 1;      // 3 for vectors
   std::string unit;        // SI unit, e.g. "m", "m/s", "rad/s", "" for dimensionless
-  std::vector<std::byte> data;  // n * components * scalarBytes(type), row-major (N x components)
+  std::vector<std::byte> data;  // n * components * scalarBytesOf(type), row-major (N x components)
   template <class T> const T* as() const { return reinterpret_cast<const T*>(data.data()); }
   template <class T> T* as() { return reinterpret_cast<T*>(data.data()); }
 };

@@ -21,7 +21,7 @@ Status Simulation::step() {
   double moved, meshMoved;
   { auto t = m_timers.time(Phase::kIntegrate1); moved = std::sqrt(m_engine->integrateFirstHalf(dt)); }
   { auto t = m_timers.time(Phase::kMeshes);     meshMoved = std::sqrt(m_engine->moveMeshes(tNext)); }
-  if (2 * moved > m_setup.skin || moved + meshMoved > m_setup.skin) PFLOW_RETURN_IF_ERROR(rebuild());
+  if (2 * moved > m_skin || moved + meshMoved > m_skin) PFLOW_RETURN_IF_ERROR(rebuild());
   { auto t = m_timers.time(Phase::kForces);     PFLOW_RETURN_IF_ERROR(m_engine->computeForces(dt, tNext)); }
   { auto t = m_timers.time(Phase::kIntegrate2); PFLOW_RETURN_IF_ERROR(m_engine->integrateSecondHalf(dt)); }
   reportSlotGrowth();
@@ -84,8 +84,12 @@ Status Simulation::runUntil(double time, const std::function<Status(const Simula
   return Status::ok();
 }
 
-Simulation::Simulation(RunConfig config, EngineSetup setup, TimeStepInfo ts, std::unique_ptr<Engine> engine)
-    : m_config(std::move(config)), m_setup(std::move(setup)), m_timeStep(std::move(ts)), m_engine(std::move(engine)) {}
+Simulation::Simulation(RunConfig config, const EngineSetup& setup, TimeStepInfo ts, std::unique_ptr<Engine> engine)
+    : m_config(std::move(config)),
+      m_grid(setup.grid),
+      m_skin(setup.skin),
+      m_timeStep(std::move(ts)),
+      m_engine(std::move(engine)) {}
 
 Result<std::unique_ptr<Simulation>> Simulation::create(const RunConfig& config, const SimulationOptions& options) {
   if (ErrorList errors = config.validate(); !errors.empty()) return errors.toStatus("invalid run configuration");
@@ -97,9 +101,8 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const RunConfig& config, 
   if (!ts) return ts.status();
   auto setup = prepareEngineSetup(config);
   if (!setup) return setup.status();
-  EngineSetup hostCopy = setup.value();
-  auto engine = makeCpuEngine(std::move(setup).value());
-  std::unique_ptr<Simulation> sim(new Simulation(config, std::move(hostCopy), ts.value(), std::move(engine)));
+  std::unique_ptr<Simulation> sim(new Simulation(config, setup.value(), ts.value(), nullptr));
+  sim->m_engine = makeCpuEngine(std::move(setup).value());
   if (Status s = sim->initialise(); !s.isOk()) return s;
   return sim;
 }

@@ -37,8 +37,8 @@ class Simulation {
   double dt() const { return m_timeStep.dt; }
   const TimeStepInfo& timeStep() const { return m_timeStep; }
   const RunConfig& config() const { return m_config; }
-  const CellGrid& grid() const { return m_setup.grid; }
-  double skin() const { return m_setup.skin; }
+  const CellGrid& grid() const { return m_grid; }
+  double skin() const { return m_skin; }
   std::size_t numParticles() const { return m_engine->size(); }
   std::int64_t rebuilds() const { return m_rebuilds; }
 
@@ -52,14 +52,15 @@ class Simulation {
   Engine& engine() { return *m_engine; }
 
  private:
-  Simulation(RunConfig config, EngineSetup setup, TimeStepInfo ts, std::unique_ptr<Engine> engine);
+  Simulation(RunConfig config, const EngineSetup& setup, TimeStepInfo ts, std::unique_ptr<Engine> engine);
   Status initialise();
   Status rebuild();
   Status withStep(Status s) const;
   void reportSlotGrowth();
 
   RunConfig m_config;
-  EngineSetup m_setup;  // host copy of the static setup (grid, skin, walls)
+  CellGrid m_grid;  // of the engine, for reports
+  double m_skin;    // neighbour skin [m]
   TimeStepInfo m_timeStep;
   std::unique_ptr<Engine> m_engine;
   PhaseTimers m_timers;
