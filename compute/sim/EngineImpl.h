@@ -71,9 +71,11 @@ class EngineImpl final : public Engine {
   Status buildContacts() override {
     // Positions and vertices now are the reference for the skin criterion.
     m_exec.forEach(m_n, kernels::CopyPositions{m_particles.ptr<Field::Position>(), m_refPos.as<Vec3d>()});
-    if (m_numTri) {
+    // Static meshes are binned once; moving ones at every rebuild, from where they are now.
+    if (m_numTri && (m_anyMeshMoves || !m_binned)) {
       m_mem.copyWithin(m_triRebuild.data(), m_triVerts.data(), m_triVerts.bytes());
       binTriangles();
+      m_binned = true;
     }
     for (;;) {
       resetConditions();
@@ -262,6 +264,7 @@ class EngineImpl final : public Engine {
   Index m_n = 0;
   Index m_numTri = 0;
   bool m_anyMeshMoves = false;
+  bool m_binned = false;
   Index m_nbrCap = 16;
   Index m_wallCap = 4;
   std::size_t m_rebuilds = 0;
