@@ -1,0 +1,395 @@
+#include "frontend/scene/Loader.h"
+#include <charconv>
+#include <new>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "compute/core/Format.h"
+
+namespace pflow::frontend::detail {
+
+using format::at;
+using format::num;
+using format::vec;
+
+// ---- generic readers --------------------------------------------------------------------------------------------
+
+std::optional<Loader::Fields> Loader::mapping(const YAML::Node& n, const std::string& path, Loc loc, Keys allowed) {
+  if (!n.IsMap()) {
+    badValue(path, "expected a mapping with keys " + joinNames(allowed) + ", got " + describe(n), locOf(n, loc));
+    return std::nullopt;
+  }
+  Fields f;
+  f.path = path;
+  f.loc = locOf(n, loc);
+  std::map<std::string, Loc> seen;
+  for (auto it = n.begin(); it != n.end(); ++it) {
+    const YAML::Node keyNode = it->first;  // a copy: `it->` yields a temporary
+    const Loc keyLoc = locOf(keyNode, f.loc);
+    if (!keyNode.IsScalar()) {
+      error(path, "keys must be plain names, got " + describe(keyNode), keyLoc);
+      continue;
+    }
+    const std::string key = keyNode.Scalar();
+    const std::string childPath = f.child(key);
+    if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
+      error(childPath, unknownName("key", key, allowed, "Valid keys here"), keyLoc);
+      continue;
+    }
+    if (auto [prev, inserted] = seen.emplace(key, keyLoc); !inserted) {
+      error(childPath, "duplicate key '" + key + "' (first given at line " + std::to_string(prev->second.line) + "); this one is ignored", keyLoc);
+      continue;
+    }
+    Entry e{key, it->second, keyLoc, locOf(it->second, keyLoc)};
+    m_marks[childPath] = e.loc;
+    f.entries.push_back(std::move(e));
+  }
+  return f;
+}
+
+bool Loader::isList(const YAML::Node& n, const std::string& path, Loc loc, std::string_view itemWhat) {
+  if (n.IsSequence()) return true;
+  badValue(path, "expected a list of " + std::string(itemWhat) + " (one '- ...' per item), got " + describe(n), locOf(n, loc));
+  return false;
+}
+
+bool Loader::read(const YAML::Node& n, const std::string& path, Loc loc, double& out) {
+  if (const auto v = parseDouble(n)) {
+    out = *v;
+    return true;
+  }
+  std::string msg = "expected a number, got " + describe(n);
+  if (n.IsScalar() && isQuoted(n) && parseDouble(YAML::Node(n.Scalar()))) msg += " (write numbers without quotes)";
+  badValue(path, msg, locOf(n, loc));
+  return false;
+}
+
+bool Loader::read(const YAML::Node& n, const std::string& path, Loc loc, int& out) {
+  const auto v = parseInteger(n);
+  if (v && *v >= std::numeric_limits<int>::min() && *v <= std::numeric_limits<int>::max()) {
+    out = static_cast<int>(*v);
+    return true;
+  }
+  badValue(path, v ? std::to_string(*v) + " is too large" : "expected an integer, got " + describe(n), locOf(n, loc));
+  return false;
+}
+
+bool Loader::read(const YAML::Node& n, const std::string& path, Loc loc, std::uint64_t& out) {
+  if (n.IsScalar() && !isQuoted(n)) {
+    const std::string& s = n.Scalar();
+    const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
+    if (ec == std::errc() && ptr == s.data() + s.size()) return true;
+  }
+  badValue(path, "expected an integer in [0, 2^64), got " + describe(n), locOf(n, loc));
+  return false;
+}
+
+bool Loader::read(const YAML::Node& n, const std::string& path, Loc loc, std::string& out) {
+  if (n.IsScalar() && !n.Scalar().empty()) {
+    out = n.Scalar();
+    return true;
+  }
+  badValue(path, "expected a name, got " + describe(n), locOf(n, loc));
+  return false;
+}
+
+bool Loader::read(const YAML::Node& n, const std::string& path, Loc loc, Vec3d& out) {
+  if (!n.IsSequence() || n.size() != 3) {
+    badValue(path, "expected a list of 3 numbers [x, y, z], got " + describe(n), locOf(n, loc));
+    return false;
+  }
+  double c[3] = {0, 0, 0};
+  bool ok = true;
+  for (std::size_t k = 0; k < 3; ++k) {
+    const YAML::Node item = n[k];
+    if (const auto v = parseDouble(item)) {
+      c[k] = *v;
+    } else {
+      ok = false;
+      badValue(path, "component " + std::to_string(k) + " of [x, y, z]: expected a number, got " + describe(item), locOf(item, loc));
+    }
+  }
+  if (ok) out = {c[0], c[1], c[2]};
+  return ok;
+}
+
+std::optional<double> Loader::autoOrNumber(const Entry& e, const std::string& path, std::string_view unit) {
+  if (e.value.IsScalar() && !isQuoted(e.value) && e.value.Scalar() == "auto") return std::nullopt;
+  if (const auto v = parseDouble(e.value)) return *v;
+  badValue(path, "expected a number (" + std::string(unit) + ") or 'auto', got " + describe(e.value), e.loc);
+  return std::nullopt;
+}
+
+int Loader::materialByName(const YAML::Node& n, const std::string& path, Loc loc) {
+  std::string name;
+  if (!read(n, path, loc, name)) return -1;
+  if (const auto it = m_materialIndex.find(name); it != m_materialIndex.end()) return it->second;
+  if (m_materialNames.empty()) {
+    badValue(path, "unknown material '" + name + "': no materials are defined (see 'materials')", locOf(n, loc));
+  } else {
+    badValue(path, unknownName("material", name, m_materialNames, "Materials"), locOf(n, loc));
+  }
+  return -1;
+}
+
+// A `material: name` reference; optional when the scene defines exactly one material.
+int Loader::materialRef(const Fields& f, std::string_view key) {
+  if (const Entry* e = f.find(key)) return materialByName(e->value, f.child(key), e->loc);
+  if (m_materialNames.size() == 1) return 0;
+  if (m_materialNames.empty()) {
+    badValue(f.child(key), "required key '" + std::string(key) + "' is missing (and no materials are defined)", f.loc);
+  } else {
+    missing(f, key, "one of: " + joinNames(m_materialNames));
+  }
+  return -1;
+}
+
+// ---- sections ---------------------------------------------------------------------------------------------------
+
+void Loader::parseMaterials(const Fields& top) {
+  const Entry* e = top.find("materials");
+  if (!e) {
+    missing(top, "materials", "a list with at least one material");
+    return;
+  }
+  if (!isList(e->value, "materials", e->loc, "materials")) return;
+  std::size_t i = 0;
+  for (const YAML::Node& item : e->value) {
+    const std::string path = at("materials", i++);
+    m_marks[path] = locOf(item, e->loc);
+    MaterialConfig m;
+    if (const auto f = mapping(item, path, e->loc, kMaterialKeys)) {
+      get(*f, "name", m.name, true);
+      get(*f, "youngs_modulus", m.youngsModulus, true);
+      get(*f, "poisson_ratio", m.poissonRatio, true);
+      get(*f, "density", m.density, true);
+      get(*f, "restitution", m.restitution, true);
+      get(*f, "friction", m.friction, true);
+      get(*f, "rolling_friction", m.rollingFriction);
+    }
+    const int index = static_cast<int>(m_config.materials.size());
+    if (!m.name.empty() && m_materialIndex.emplace(m.name, index).second) m_materialNames.push_back(m.name);
+    m_config.materials.push_back(std::move(m));
+  }
+}
+
+void Loader::parsePairs(const Fields& top) {
+  const Entry* e = top.find("pairs");
+  if (!e || !isList(e->value, "pairs", e->loc, "material pair overrides")) return;
+  std::size_t i = 0;
+  for (const YAML::Node& item : e->value) {
+    const std::string path = at("pairs", i++);
+    m_marks[path] = locOf(item, e->loc);
+    MaterialPairConfig pair;
+    if (const auto f = mapping(item, path, e->loc, kPairKeys)) {
+      if (const Entry* names = f->find("materials")) {
+        const std::string np = f->child("materials");
+        if (!names->value.IsSequence() || names->value.size() != 2) {
+          badValue(np, "expected a list of 2 material names [a, b], got " + describe(names->value), names->loc);
+        } else {
+          for (std::size_t k = 0; k < 2; ++k) {
+            const YAML::Node item2 = names->value[k];
+            const std::string ip = at(np, k);
+            m_marks[ip] = locOf(item2, names->loc);
+            const int idx = materialByName(item2, ip, names->loc);
+            (k == 0 ? pair.a : pair.b) = idx;
+          }
+        }
+      } else {
+        missing(*f, "materials", "the two material names [a, b]");
+      }
+      double v = 0;
+      if (get(*f, "restitution", v)) pair.restitution = v;
+      if (get(*f, "friction", v)) pair.friction = v;
+      if (get(*f, "rolling_friction", v)) pair.rollingFriction = v;
+    }
+    m_config.pairs.push_back(pair);
+  }
+}
+
+void Loader::parseSimulation(const Fields& top) {
+  const Entry* e = top.find("simulation");
+  if (!e) {
+    missing(top, "simulation", "at least simulation.duration");
+    return;
+  }
+  const auto f = mapping(e->value, "simulation", e->loc, kSimulationKeys);
+  if (!f) return;
+  compute::SimulationSettings& s = m_config.sim;
+  get(*f, "gravity", s.gravity);
+  get(*f, "duration", s.duration, true);
+  if (const Entry* dt = f->find("dt")) s.dt = autoOrNumber(*dt, "simulation.dt", "s");
+  get(*f, "dt_fraction", s.dtFraction);
+  if (const Entry* skin = f->find("skin")) {
+    const auto v = autoOrNumber(*skin, "simulation.skin", "m");
+    s.skin = v ? *v : -1.0;
+  }
+  get(*f, "snapshot_interval", s.snapshotInterval);
+  compute::Aabb domain;
+  if (parseRegion(*f, "domain", domain.lo, domain.hi, false)) s.domain = domain;
+  if (const Entry* p = f->find("precision")) {
+    std::string name;
+    if (read(p->value, "simulation.precision", p->loc, name)) {
+      if (name == "double") {
+        s.precision = compute::Precision::kDouble;
+      } else if (name == "float") {
+        s.precision = compute::Precision::kFloat;
+      } else {
+        badValue("simulation.precision", unknownName("precision", name, kPrecisions, "Choices"), p->loc);
+      }
+    }
+  }
+  get(*f, "history_slots", s.historySlots);
+  get(*f, "wall_history_slots", s.wallHistorySlots);
+  get(*f, "threads", s.threads);
+  get(*f, "seed", s.seed);
+}
+
+// `key: {min: [..], max: [..]}`; checks min < max per axis. True when both corners were read and are ordered.
+bool Loader::parseRegion(const Fields& parent, std::string_view key, Vec3d& lo, Vec3d& hi, bool required) {
+  const Entry* e = parent.find(key);
+  if (!e) {
+    if (required) missing(parent, key, "{min: [x, y, z], max: [x, y, z]}");
+    return false;
+  }
+  const std::string path = parent.child(key);
+  const auto f = mapping(e->value, path, e->loc, kRegionKeys);
+  if (!f) return false;
+  const bool haveLo = get(*f, "min", lo, true);
+  const bool haveHi = get(*f, "max", hi, true);
+  return haveLo && haveHi;
+}
+
+void Loader::parseOutput(const Fields& top) {
+  const Entry* e = top.find("output");
+  if (!e) return;
+  if (const auto f = mapping(e->value, "output", e->loc, kOutputKeys)) get(*f, "file", m_outputFile);
+}
+
+// ---- validate() findings -> YAML paths and marks ------------------------------------------------------------------
+
+// Strips the last `.name` or `[i]` component; false when nothing is left to strip.
+bool parentPath(std::string& p) {
+  if (p.empty()) return false;
+  if (p.back() == ']') {
+    const auto open = p.rfind('[');
+    if (open == std::string::npos) return false;
+    p.resize(open);
+    return true;
+  }
+  const auto dot = p.rfind('.');
+  if (dot == std::string::npos) {
+    p.clear();
+    return false;
+  }
+  p.resize(dot);
+  return true;
+}
+
+Loc Loader::markFor(std::string yamlPath) const {
+  do {
+    if (const auto it = m_marks.find(yamlPath); it != m_marks.end()) return it->second;
+  } while (parentPath(yamlPath));
+  return {};
+}
+
+// True when `a` is `b`, or one lies under the other (`a.x`, `a[3]`).
+bool related(const std::string& a, const std::string& b) {
+  const std::string& shorter = a.size() <= b.size() ? a : b;
+  const std::string& longer = a.size() <= b.size() ? b : a;
+  if (longer.compare(0, shorter.size(), shorter) != 0) return false;
+  return longer.size() == shorter.size() || longer[shorter.size()] == '.' || longer[shorter.size()] == '[';
+}
+
+bool Loader::isBad(const std::string& yamlPath) const {
+  return std::any_of(m_badPaths.begin(), m_badPaths.end(), [&](const std::string& b) { return related(b, yamlPath); });
+}
+
+std::pair<std::string, Loc> Loader::locate(const std::string& rcPath, std::string& message) const {
+  // particles.<field>[i]...: find the set particle i came from.
+  static const std::string kParticles = "particles.";
+  if (rcPath.compare(0, kParticles.size(), kParticles) == 0) {
+    const auto open = rcPath.find('[');
+    const auto close = rcPath.find(']');
+    if (open == std::string::npos || close == std::string::npos || close < open) return {rcPath, {}};
+    const std::string field = rcPath.substr(kParticles.size(), open - kParticles.size());
+    const std::size_t i = std::stoull(rcPath.substr(open + 1, close - open - 1));
+    const auto it = std::upper_bound(m_sets.begin(), m_sets.end(), i, [](std::size_t v, const ParticleSet& s) { return v < s.first; });
+    if (it == m_sets.begin()) return {rcPath, {}};
+    const ParticleSet& set = *(it - 1);
+    if (i >= set.first + set.count) return {rcPath, {}};
+    const std::size_t j = i - set.first;
+    if (field == "material") return {set.path + ".material", markFor(set.path + ".material")};
+    if (!set.lattice) {
+      const std::string p = at(set.path + ".list", j) + "." + field;
+      const auto mark = m_marks.find(p);
+      return {p, mark != m_marks.end() ? mark->second : set.entryLocs[j]};
+    }
+    message = "particle " + std::to_string(j) + " of this lattice (" + rcPath + "): " + message;
+    const std::string p = set.path + ".lattice" + (field == "radius" ? ".radius" : field == "velocity" ? ".velocity" : "");
+    return {p, markFor(p)};
+  }
+  // planes[i] / meshes[i]: the longest mapped prefix.
+  const PathMap* best = nullptr;
+  for (const PathMap& m : m_pathMaps) {
+    if (related(m.rcPrefix, rcPath) && m.rcPrefix.size() <= rcPath.size() && (!best || m.rcPrefix.size() > best->rcPrefix.size())) best = &m;
+  }
+  std::string yamlPath = rcPath;  // materials, pairs and simulation use the same names as the file
+  if (best) {
+    const std::string suffix = rcPath.substr(best->rcPrefix.size());
+    if (best->keepSuffix) {
+      yamlPath = best->yamlPath + suffix;
+    } else {
+      yamlPath = best->yamlPath;
+      if (!suffix.empty()) message = "generated " + rcPath.substr(rcPath.find('.') + 1) + ": " + message;
+    }
+  }
+  return {yamlPath, markFor(yamlPath)};
+}
+
+void Loader::appendValidation(const ErrorList& found) {
+  for (const FieldError& fe : found.errors()) {
+    std::string message = fe.message;
+    auto [path, loc] = locate(fe.path, message);
+    if (isBad(path)) continue;  // already reported as a parse error; validate() saw a placeholder
+    error(path, message, loc);
+  }
+}
+
+Result<LoadedScene> Loader::run(const std::string& yaml, const std::string& sourceName) {
+  try {
+    YAML::Node root;
+    try {
+      root = YAML::Load(yaml);
+    } catch (const YAML::ParserException& ex) {
+      error("", "YAML syntax error: " + ex.msg, locOf(ex.mark));
+      return m_errors.toStatus(sourceName);
+    }
+    if (!root.IsDefined() || root.IsNull()) {
+      error("", "the scene is empty; expected a mapping with keys " + joinNames(kTopKeys), {1, 1});
+      return m_errors.toStatus(sourceName);
+    }
+    const auto top = mapping(root, "", {1, 1}, kTopKeys);
+    if (!top) return m_errors.toStatus(sourceName);
+    parseMaterials(*top);
+    parseSimulation(*top);  // before particles: the lattice jitter uses simulation.seed
+    parsePairs(*top);
+    parseParticles(*top);
+    parseGeometry(*top);
+    parseOutput(*top);
+    appendValidation(m_config.validate());
+  } catch (const YAML::Exception& ex) {
+    error("", "YAML error: " + ex.msg, locOf(ex.mark));
+  } catch (const std::bad_alloc&) {
+    error("", "out of memory while building the scene (too many particles or triangles?)", {});
+  } catch (const std::exception& ex) {
+    error("", std::string("internal error while loading the scene: ") + ex.what(), {});
+  }
+  if (!m_errors.empty()) return m_errors.toStatus(sourceName);
+  return LoadedScene{std::move(m_config), sourceName, std::move(m_outputFile)};
+}
+
+}  // namespace pflow::frontend::detail

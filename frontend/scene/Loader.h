@@ -1,0 +1,151 @@
+// The scene loader's internals: one Loader per load, reading sections in order (materials, simulation, pairs,
+// particles, geometry, output) and collecting every error with its YAML path and location. Split over
+// Loader.cc (generic readers, top-level sections, validation), Particles.cc and Geometry.cc.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "common/Status.h"
+#include "compute/sim/RunConfig.h"
+#include "frontend/SceneLoader.h"
+#include "frontend/scene/YamlUtil.h"
+
+namespace pflow::frontend::detail {
+
+using compute::MaterialConfig;
+using compute::MaterialPairConfig;
+using compute::MeshConfig;
+using compute::MeshMotion;
+using compute::PlaneConfig;
+using compute::RunConfig;
+using Keys = std::span<const std::string_view>;
+
+// Guards against scenes that would exhaust memory before the run even starts.
+constexpr std::size_t kMaxParticles = std::size_t(1) << 30;
+constexpr std::size_t kMaxBoxTriangles = 10'000'000;
+constexpr double kDefaultSpacingFactor = 2.1;  // lattice spacing, in radii
+constexpr double kDefaultJitter = 0.005;       // lattice jitter, in radii per axis
+
+constexpr std::string_view kTopKeys[] = {"materials", "pairs", "particles", "geometry", "simulation", "output"};
+constexpr std::string_view kMaterialKeys[] = {"name", "youngs_modulus", "poisson_ratio", "density", "restitution", "friction", "rolling_friction"};
+constexpr std::string_view kPairKeys[] = {"materials", "restitution", "friction", "rolling_friction"};
+constexpr std::string_view kParticleSetKeys[] = {"material", "list", "lattice"};
+constexpr std::string_view kParticleKeys[] = {"position", "radius", "velocity", "angular_velocity"};
+constexpr std::string_view kLatticeKeys[] = {"box", "radius", "spacing", "jitter", "velocity", "count"};
+constexpr std::string_view kRegionKeys[] = {"min", "max"};
+constexpr std::string_view kGeometryKeys[] = {"plane", "box", "mesh", "name", "material", "motion"};
+constexpr std::string_view kPlaneKeys[] = {"point", "normal"};
+constexpr std::string_view kBoxKeys[] = {"min", "max", "open", "resolution"};
+constexpr std::string_view kMeshKeys[] = {"vertices", "triangles", "surfaces"};
+constexpr std::string_view kMotionKeys[] = {"velocity", "angular_velocity", "axis", "axis_point", "start_time"};
+constexpr std::string_view kSimulationKeys[] = {"gravity", "duration", "dt", "dt_fraction", "skin", "snapshot_interval",
+                                                "domain", "precision", "history_slots", "wall_history_slots", "threads", "seed"};
+constexpr std::string_view kOutputKeys[] = {"file"};
+constexpr std::string_view kPrecisions[] = {"double", "float"};
+// Box faces; the index is the face's surface number.
+constexpr std::array<std::string_view, 6> kBoxFaces = {"bottom", "top", "left", "right", "front", "back"};
+
+class Loader {
+ public:
+  Result<LoadedScene> run(const std::string& yaml, const std::string& sourceName);
+
+ private:
+  struct Entry {
+    std::string key;
+    YAML::Node value;
+    Loc keyLoc;
+    Loc loc;  // of the value; the key's when the value is empty
+  };
+  struct Fields {
+    std::string path;
+    Loc loc;
+    std::vector<Entry> entries;
+    const Entry* find(std::string_view k) const {
+      for (const Entry& e : entries) {
+        if (e.key == k) return &e;
+      }
+      return nullptr;
+    }
+    std::string child(std::string_view k) const { return path.empty() ? std::string(k) : path + "." + std::string(k); }
+  };
+  struct ParticleSet {
+    std::size_t first = 0, count = 0;
+    std::string path;
+    bool lattice = false;
+    std::vector<Loc> entryLocs;  // explicit lists: one per particle
+  };
+  // RunConfig path prefix -> YAML path; keepSuffix appends what follows the prefix (e.g. `[3]`).
+  struct PathMap {
+    std::string rcPrefix, yamlPath;
+    bool keepSuffix;
+  };
+
+  void error(const std::string& path, const std::string& message, Loc loc) { m_errors.add(path, message, loc.line, loc.column); }
+  // An error that leaves the value unusable: validate() findings at or under this path are not repeated.
+  void badValue(const std::string& path, const std::string& message, Loc loc) {
+    error(path, message, loc);
+    m_badPaths.push_back(path);
+  }
+  void missing(const Fields& f, std::string_view key, std::string_view hint = {}) {
+    badValue(f.child(key), "required key '" + std::string(key) + "' is missing" + (hint.empty() ? "" : " (" + std::string(hint) + ")"), f.loc);
+  }
+
+  std::optional<Fields> mapping(const YAML::Node& n, const std::string& path, Loc loc, Keys allowed);
+  bool isList(const YAML::Node& n, const std::string& path, Loc loc, std::string_view itemWhat);
+
+  bool read(const YAML::Node& n, const std::string& path, Loc loc, double& out);
+  bool read(const YAML::Node& n, const std::string& path, Loc loc, int& out);
+  bool read(const YAML::Node& n, const std::string& path, Loc loc, std::uint64_t& out);
+  bool read(const YAML::Node& n, const std::string& path, Loc loc, std::string& out);
+  bool read(const YAML::Node& n, const std::string& path, Loc loc, Vec3d& out);
+  template <class T>
+  bool get(const Fields& f, std::string_view key, T& out, bool required = false) {
+    const Entry* e = f.find(key);
+    if (!e) {
+      if (required) missing(f, key);
+      return false;
+    }
+    return read(e->value, f.child(key), e->loc, out);
+  }
+  // `auto` or a number; nullopt for auto (and, after reporting it, for a type error).
+  std::optional<double> autoOrNumber(const Entry& e, const std::string& path, std::string_view unit);
+  int materialRef(const Fields& f, std::string_view key);
+  int materialByName(const YAML::Node& n, const std::string& path, Loc loc);
+
+  void parseMaterials(const Fields& top);
+  void parsePairs(const Fields& top);
+  void parseSimulation(const Fields& top);
+  void parseParticles(const Fields& top);
+  void parseParticleList(const YAML::Node& list, const std::string& path, Loc loc, int material, ParticleSet& set);
+  void parseLattice(const YAML::Node& lattice, const std::string& path, Loc loc, int material, std::size_t setIndex);
+  void parseGeometry(const Fields& top);
+  bool parseRegion(const Fields& f, std::string_view key, Vec3d& lo, Vec3d& hi, bool required);
+  void parseMotion(const Fields& g, MeshMotion& motion);
+  void parseOutput(const Fields& top);
+
+  void addParticle(const Vec3d& x, double r, const Vec3d& v, const Vec3d& w, int material);
+  void appendValidation(const ErrorList& found);
+  std::pair<std::string, Loc> locate(const std::string& rcPath, std::string& message) const;
+  Loc markFor(std::string yamlPath) const;
+  bool isBad(const std::string& yamlPath) const;
+
+  ErrorList m_errors;
+  RunConfig m_config;
+  std::string m_outputFile;
+  std::vector<std::string> m_badPaths;
+  std::unordered_map<std::string, Loc> m_marks;  // YAML path -> where its value starts
+  std::vector<PathMap> m_pathMaps;
+  std::vector<ParticleSet> m_sets;
+  std::map<std::string, int, std::less<>> m_materialIndex;
+  std::vector<std::string> m_materialNames;
+};
+
+}  // namespace pflow::frontend::detail
