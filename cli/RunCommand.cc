@@ -77,15 +77,27 @@ Result<RunSummary> runScene(const RunOptions& o) {
   if (!writer) return writer.status();
   sum.xdmfPath = writer.value()->xdmfPath();
   if (Status s = writer.value()->writeGeometry(sim.geometry()); !s.isOk()) return s;
+  const std::vector<std::string>& fields = scene.value().outputFields;
   auto writeSnapshot = [&]() -> Status {
     auto t = sim.timers().time(compute::Phase::kOutput);
     ++sum.snapshots;
-    return writer.value()->writeSnapshot(sim.snapshot());
+    compute::ParticleSnapshot snap = sim.snapshot();
+    if (!fields.empty())  // output.fields: keep only the arrays asked for
+      std::erase_if(snap.arrays, [&](const compute::SnapshotArray& a) {
+        return std::find(fields.begin(), fields.end(), a.name) == fields.end();
+      });
+    return writer.value()->writeSnapshot(snap);
   };
   if (Status s = writeSnapshot(); !s.isOk()) return s;
+  if (o.initialOnly) {
+    if (Status s = writer.value()->close(); !s.isOk()) return s;
+    spdlog::info("initial state written to {} (open {} in ParaView)", sum.outputPath, sum.xdmfPath);
+    return sum;
+  }
 
   const double duration = cfg.sim.duration, interval = cfg.sim.snapshotInterval;
-  const auto totalSteps = std::int64_t(std::llround(duration / sim.dt()));
+  auto totalSteps = std::int64_t(std::llround(duration / sim.dt()));
+  if (o.maxSteps >= 0 && o.maxSteps < totalSteps) totalSteps = o.maxSteps;
   const auto stepsPerSnapshot = interval > 0 ? std::max<std::int64_t>(1, std::llround(interval / sim.dt())) : totalSteps;
   spdlog::info("running {} steps to t = {} s, a snapshot every {} steps, output {}", totalSteps, duration,
                stepsPerSnapshot, sum.outputPath);
@@ -106,7 +118,7 @@ Result<RunSummary> runScene(const RunOptions& o) {
     }
     return Status::ok();
   };
-  Status run = sim.runUntil(duration, observer);
+  Status run = sim.runUntil(o.maxSteps >= 0 ? double(totalSteps) * sim.dt() : duration, observer);
   sum.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
   sum.steps = sim.stepCount();
   sum.simulatedTime = sim.time();

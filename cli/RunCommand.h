@@ -14,6 +14,8 @@ struct RunOptions {
   int threads = 0;             // 0: the scene's, else all cores
   double progressSeconds = 2;  // progress line interval (wall clock); 0 = none
   bool json = false;           // print the summary as one JSON object on stdout
+  std::int64_t maxSteps = -1;  // stop after this many steps (< 0: run the whole duration)
+  bool initialOnly = false;    // write the initial state (/snapshots/0 and /geometry) and stop: `pflow build`
 };
 
 struct RunSummary {

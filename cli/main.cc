@@ -1,4 +1,4 @@
-// pflow: the command-line client. This build has the in-process commands (run, validate); the
+// pflow: the command-line client. This build has the in-process commands (run, build, validate); the
 // cluster commands (submit, jobs, nodes, cancel, watch, fetch) come with the services.
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -20,6 +20,15 @@ int main(int argc, char** argv) {
   runCmd->add_option("--threads", run.threads, "CPU threads (default: all)");
   runCmd->add_option("--progress", run.progressSeconds, "seconds between progress lines (0: none)")->capture_default_str();
   runCmd->add_flag("--json", run.json, "print the summary as JSON on stdout");
+  runCmd->add_option("--steps", run.maxSteps, "stop after this many steps (default: the scene's duration)");
+
+  pflow::cli::RunOptions build;
+  build.initialOnly = true;
+  auto* buildCmd = app.add_subcommand(
+      "build", "generate the scene's particles and geometry and write the initial state (HDF5 + XDMF), without running");
+  buildCmd->add_option("scene", build.scenePath, "scene file (YAML)")->required()->check(CLI::ExistingFile);
+  buildCmd->add_option("-o,--output", build.outputPath, "output HDF5 file (default: the scene's output.file, else SCENE.h5)");
+  buildCmd->add_flag("--json", build.json, "print the summary as JSON on stdout");
 
   std::string validatePath;
   bool validateJson = false;
@@ -32,9 +41,11 @@ int main(int argc, char** argv) {
 
   if (*valCmd) return pflow::cli::validateScene(validatePath, validateJson);
 
+  const bool building = buildCmd->parsed();
+  if (building) run = build;
   auto result = pflow::cli::runScene(run);
   if (!result) {
-    std::fprintf(stderr, "pflow run: %s\n", result.status().message().c_str());
+    std::fprintf(stderr, "pflow %s: %s\n", building ? "build" : "run", result.status().message().c_str());
     return pflow::cli::exitCodeFor(result.status());
   }
   if (run.json) {

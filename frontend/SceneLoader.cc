@@ -2,6 +2,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -21,11 +22,11 @@ Result<LoadedScene> loadScene(const std::string& path) {
   } catch (const std::exception& ex) {
     return ioError("cannot read scene file '" + path + "': " + ex.what());
   }
-  return loadSceneFromString(text, path);
+  return loadSceneFromString(text, path, std::filesystem::path(path).parent_path().string());
 }
 
-Result<LoadedScene> loadSceneFromString(const std::string& yaml, const std::string& sourceName) {
-  detail::Loader loader;
+Result<LoadedScene> loadSceneFromString(const std::string& yaml, const std::string& sourceName, const std::string& baseDir) {
+  detail::Loader loader(baseDir);
   return loader.run(yaml, sourceName);
 }
 

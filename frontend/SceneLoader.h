@@ -1,24 +1,53 @@
 // Scene file (YAML, SI units) -> compute::RunConfig. The format is documented in docs/scene-format.md.
 // Every problem is reported at once: parse errors, unknown keys (with a did-you-mean), wrong types, missing keys,
 // then RunConfig::validate()'s findings, each with its YAML key path and, where known, line and column.
+// Particles are generated (frontend/generators) and shapes tessellated (frontend/geometry) while loading, so a
+// LoadedScene is the complete initial state of a run. No gRPC here: the frontend service is an adapter over this.
 #pragma once
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "common/Status.h"
 #include "compute/sim/RunConfig.h"
 
 namespace pflow::frontend {
 
+// One scene-wide surface: a plane, or the triangles of one part of a shape (a box face, a hopper's cone).
+struct SurfaceInfo {
+  std::int32_t id = 0;     // the number results and forces refer to (RunConfig::surfaceNames index)
+  std::string name;        // "<wall>/<part>", e.g. "bin/bottom"; a plane's is its wall name
+  std::string wall;        // the geometry entry's name
+  std::size_t triangles = 0;  // 0 for a plane
+  double area = 0;         // [m^2]; 0 for a plane (infinite)
+};
+
+// One `particles` entry after generation.
+struct ParticleSetInfo {
+  std::string name;
+  std::string method;             // lattice, random, tiled, list
+  std::size_t first = 0, count = 0;  // particle indices [first, first + count)
+  double minRadius = 0, maxRadius = 0;  // [m] of the particles made
+  double solidVolume = 0;         // [m^3], sum of the particles' volumes
+  double regionVolume = 0;        // [m^3]; 0 when the set has no region (list)
+};
+
 struct LoadedScene {
   compute::RunConfig config;
   std::string sourcePath;  // the file read, or the sourceName given to loadSceneFromString
   std::string outputFile;  // output.file; empty = not given (the CLI's -o decides)
+  std::vector<std::string> outputFields;  // output.fields; empty = every snapshot field
+  std::vector<SurfaceInfo> surfaces;      // by surface number
+  std::vector<ParticleSetInfo> sets;
 };
 
-// Reads and loads a scene file. I/O problems give StatusCode::kIo, scene problems kInvalidArgument with one error per line.
+// Reads and loads a scene file. I/O problems give StatusCode::kIo, scene problems kInvalidArgument with one error per
+// line. Relative file names in the scene (meshes, particle CSV files) are relative to the scene file's folder.
 Result<LoadedScene> loadScene(const std::string& path);
 
-// Loads a scene from YAML text; sourceName names it in messages.
-Result<LoadedScene> loadSceneFromString(const std::string& yaml, const std::string& sourceName = "<string>");
+// Loads a scene from YAML text; sourceName names it in messages; relative file names are resolved against baseDir
+// (default: the current directory).
+Result<LoadedScene> loadSceneFromString(const std::string& yaml, const std::string& sourceName = "<string>",
+                                        const std::string& baseDir = "");
 
 }  // namespace pflow::frontend

@@ -510,6 +510,7 @@ Status validateGeometry(const GeometrySnapshot& g) {
   if (Status st = perPlane("plane_normal", g.planeNormals.size(), false); !st) return st;
   if (Status st = perPlane("plane_material", g.planeMaterial.size(), true); !st) return st;
   if (Status st = perPlane("plane_names", g.planeNames.size(), true); !st) return st;
+  if (Status st = perPlane("plane_surface", g.planeSurface.size(), true); !st) return st;
   return Status::ok();
 }
 
@@ -795,6 +796,8 @@ struct SnapshotWriter::Impl {
     if (Status st = vec3("plane_normal", g.planeNormals, ""); !st) return st;
     if (Status st = ints("plane_material", g.planeMaterial); !st) return st;
     if (Status st = strings("plane_names", g.planeNames); !st) return st;
+    if (Status st = ints("plane_surface", g.planeSurface); !st) return st;
+    if (Status st = strings("surface_names", g.surfaceNames); !st) return st;
     return Status::ok();
   }
 };
@@ -1086,6 +1089,9 @@ Result<compute::GeometrySnapshot> SnapshotReader::readGeometry() const {
   if (Status st = readOptionalArray(g, "plane_material", H5T_NATIVE_INT32, 1, 1, geo.planeMaterial, p, where); !st)
     return st;
   if (Status st = readOptionalStrings(g, "plane_names", geo.planeNames, p, where); !st) return st;
+  if (Status st = readOptionalArray(g, "plane_surface", H5T_NATIVE_INT32, 1, 1, geo.planeSurface, p, where); !st)
+    return st;
+  if (Status st = readOptionalStrings(g, "surface_names", geo.surfaceNames, p, where); !st) return st;
   return geo;
 }
 

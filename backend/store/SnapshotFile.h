@@ -10,7 +10,9 @@
 //   /geometry              optional (writeGeometry); datasets absent when empty:
 //     vertices (V,3) f64 [m], triangles (T,3) u32, triangle_mesh / triangle_surface / triangle_material (T) i32,
 //     plane_point (P,3) f64 [m], plane_normal (P,3) f64, plane_material (P) i32,
-//     mesh_names, plane_names: 1-D variable-length UTF-8 string datasets; numeric ones carry `unit` too
+//     plane_surface (P) i32: scene-wide surface number of each plane (triangle_surface for triangles)
+//     mesh_names, plane_names, surface_names (by surface number): 1-D variable-length UTF-8 string datasets;
+//     numeric ones carry `unit` too
 //   /xdmf/polyvertex_index helper for the sidecar: u32 0..M-1 (M = largest n so far); the .xmf selects its
 //                          first n entries as the particles' vertex cells
 //

@@ -54,6 +54,8 @@ struct GeometrySnapshot {
   std::vector<Vec3d> planePoints, planeNormals;
   std::vector<std::string> planeNames;
   std::vector<std::int32_t> planeMaterial;
+  std::vector<std::int32_t> planeSurface;  // surface number per plane
+  std::vector<std::string> surfaceNames;   // name per surface number
 };
 
 }  // namespace pflow::compute

@@ -23,6 +23,8 @@ struct EngineSetup {
   // walls
   std::vector<PlaneParams> planes;
   std::vector<std::string> planeNames;
+  std::vector<std::int32_t> planeSurface;
+  std::vector<std::string> surfaceNames;  // by surface number
   std::vector<Vec3d> triVerts;  // 3 per triangle, at t <= the motion's start
   std::vector<std::int32_t> triMesh, triMaterial, triSurface;
   std::vector<MeshMotionParams> meshMotion;  // per mesh

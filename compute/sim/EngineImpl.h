@@ -179,6 +179,8 @@ class EngineImpl final : public Engine {
       g.planeMaterial.push_back(p.material);
     }
     g.planeNames = m_setup.planeNames;
+    g.planeSurface = m_setup.planeSurface;
+    g.surfaceNames = m_setup.surfaceNames;
     return g;
   }
 

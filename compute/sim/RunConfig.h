@@ -44,6 +44,7 @@ struct PlaneConfig {
   Vec3d point{0, 0, 0};
   Vec3d normal{0, 0, 1};
   int material = 0;
+  std::int32_t surface = 0;  // scene-wide surface number (RunConfig::surfaceNames)
 };
 
 // Prescribed rigid motion of a mesh, from startTime on: translation at `velocity` and rotation
@@ -95,6 +96,9 @@ struct RunConfig {
   ParticleInit particles;
   std::vector<PlaneConfig> planes;
   std::vector<MeshConfig> meshes;
+  // Name of each scene-wide surface number ("bin/bottom"); planes and mesh triangles refer to them.
+  // Empty = unnamed (numbers still valid).
+  std::vector<std::string> surfaceNames;
   SimulationSettings sim;
 
   // Every problem at once, each naming the field (`particles.radius[12]`) and the bound it breaks.

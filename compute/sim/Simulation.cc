@@ -137,6 +137,7 @@ Result<EngineSetup> prepareEngineSetup(const RunConfig& c) {
   for (const auto& pl : c.planes) {
     s.planes.push_back({pl.point, (1.0 / norm(pl.normal)) * pl.normal, pl.material});
     s.planeNames.push_back(pl.name);
+    s.planeSurface.push_back(pl.surface);
   }
   for (std::size_t m = 0; m < c.meshes.size(); ++m) {
     const auto& mc = c.meshes[m];
@@ -152,6 +153,8 @@ Result<EngineSetup> prepareEngineSetup(const RunConfig& c) {
                             mo.angularSpeed, mo.startTime});
     s.meshNames.push_back(mc.name);
   }
+
+  s.surfaceNames = c.surfaceNames;
 
   s.skin = c.sim.skin > 0 ? c.sim.skin : 0.1 * 2.0 * maxR;
   if (!(s.skin > 0)) s.skin = 1e-3;  // no particles: any positive value works

@@ -1,5 +1,8 @@
 #include "frontend/scene/Loader.h"
 #include <charconv>
+#include <filesystem>
+
+#include "compute/particles/ParticleFields.h"
 #include <new>
 
 #include <algorithm>
@@ -266,7 +269,33 @@ bool Loader::parseRegion(const Fields& parent, std::string_view key, Vec3d& lo, 
 void Loader::parseOutput(const Fields& top) {
   const Entry* e = top.find("output");
   if (!e) return;
-  if (const auto f = mapping(e->value, "output", e->loc, kOutputKeys)) get(*f, "file", m_outputFile);
+  const auto f = mapping(e->value, "output", e->loc, kOutputKeys);
+  if (!f) return;
+  get(*f, "file", m_outputFile);
+  const Entry* fields = f->find("fields");
+  if (!fields || !isList(fields->value, "output.fields", fields->loc, "field names")) return;
+  // The snapshot fields of the particle field table; id and position are always written (ParaView needs them).
+  std::vector<std::string> known;
+  for (const auto& info : compute::kFieldTable)
+    if (info.flags & compute::kSnapshot) known.emplace_back(info.name);
+  for (std::size_t k = 0; k < fields->value.size(); ++k) {
+    const std::string path = at("output.fields", k);
+    std::string name;
+    if (!read(fields->value[k], path, fields->loc, name)) continue;
+    if (std::find(known.begin(), known.end(), name) == known.end()) {
+      badValue(path, unknownName("field", name, known, "Snapshot fields"), locOf(fields->value[k], fields->loc));
+    } else if (std::find(m_outputFields.begin(), m_outputFields.end(), name) == m_outputFields.end()) {
+      m_outputFields.push_back(name);
+    }
+  }
+  for (const char* always : {"id", "position"})
+    if (std::find(m_outputFields.begin(), m_outputFields.end(), always) == m_outputFields.end()) m_outputFields.emplace_back(always);
+}
+
+std::string Loader::resolvePath(const std::string& name) const {
+  const std::filesystem::path p(name);
+  if (p.is_absolute() || m_baseDir.empty()) return p.string();
+  return (std::filesystem::path(m_baseDir) / p).string();
 }
 
 // ---- validate() findings -> YAML paths and marks ------------------------------------------------------------------
@@ -389,7 +418,16 @@ Result<LoadedScene> Loader::run(const std::string& yaml, const std::string& sour
     error("", std::string("internal error while loading the scene: ") + ex.what(), {});
   }
   if (!m_errors.empty()) return m_errors.toStatus(sourceName);
-  return LoadedScene{std::move(m_config), sourceName, std::move(m_outputFile)};
+  m_config.surfaceNames.clear();
+  for (const SurfaceInfo& s : m_surfaces) m_config.surfaceNames.push_back(s.name);
+  LoadedScene scene;
+  scene.config = std::move(m_config);
+  scene.sourcePath = sourceName;
+  scene.outputFile = std::move(m_outputFile);
+  scene.outputFields = std::move(m_outputFields);
+  scene.surfaces = std::move(m_surfaces);
+  scene.sets = std::move(m_setInfo);
+  return scene;
 }
 
 }  // namespace pflow::frontend::detail

@@ -48,13 +48,14 @@ constexpr std::string_view kMeshKeys[] = {"vertices", "triangles", "surfaces"};
 constexpr std::string_view kMotionKeys[] = {"velocity", "angular_velocity", "axis", "axis_point", "start_time"};
 constexpr std::string_view kSimulationKeys[] = {"gravity", "duration", "dt", "dt_fraction", "skin", "snapshot_interval",
                                                 "domain", "precision", "history_slots", "wall_history_slots", "threads", "seed"};
-constexpr std::string_view kOutputKeys[] = {"file"};
+constexpr std::string_view kOutputKeys[] = {"file", "fields"};
 constexpr std::string_view kPrecisions[] = {"double", "float"};
 // Box faces; the index is the face's surface number.
 constexpr std::array<std::string_view, 6> kBoxFaces = {"bottom", "top", "left", "right", "front", "back"};
 
 class Loader {
  public:
+  explicit Loader(std::string baseDir) : m_baseDir(std::move(baseDir)) {}
   Result<LoadedScene> run(const std::string& yaml, const std::string& sourceName);
 
  private:
@@ -137,9 +138,16 @@ class Loader {
   Loc markFor(std::string yamlPath) const;
   bool isBad(const std::string& yamlPath) const;
 
+  // A file name from the scene, resolved against the scene file's folder.
+  std::string resolvePath(const std::string& name) const;
+
+  std::string m_baseDir;
   ErrorList m_errors;
   RunConfig m_config;
   std::string m_outputFile;
+  std::vector<std::string> m_outputFields;
+  std::vector<SurfaceInfo> m_surfaces;
+  std::vector<ParticleSetInfo> m_setInfo;
   std::vector<std::string> m_badPaths;
   std::unordered_map<std::string, Loc> m_marks;  // YAML path -> where its value starts
   std::vector<PathMap> m_pathMaps;

@@ -86,6 +86,8 @@ GeometrySnapshot makeGeometry() {
   g.planePoints = {{0, 0, -1}, {5, 0, 0}};
   g.planeNormals = {{0, 0, 1}, {-1, 0, 0}};
   g.planeNames = {"floor", "side"};
+  g.planeSurface = {3, 4};
+  g.surfaceNames = {"hopper/cone", "hopper/cylinder", "lid", "floor", "side"};
   g.planeMaterial = {0, 4};
   return g;
 }
@@ -257,6 +259,8 @@ TEST_F(SnapshotFileTest, RoundTripsGeometry) {
   EXPECT_TRUE(sameVec(got->planePoints, g.planePoints));
   EXPECT_TRUE(sameVec(got->planeNormals, g.planeNormals));
   EXPECT_EQ(got->planeNames, g.planeNames);
+  EXPECT_EQ(got->planeSurface, g.planeSurface);
+  EXPECT_EQ(got->surfaceNames, g.surfaceNames);
   EXPECT_EQ(got->planeMaterial, g.planeMaterial);
 }
 
