@@ -14,6 +14,7 @@ packages=(
   nlohmann-json3-dev                # JSON output
   python3 python3-h5py python3-numpy python3-matplotlib   # pictures and file checks
   lammps                            # the reference code the benchmark compares with
+  clang                             # libFuzzer for the scene-loader fuzz target (deploy/fuzz.sh)
 )
 
 missing=()

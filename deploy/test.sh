@@ -1,9 +1,13 @@
 #!/usr/bin/env bash
-# The test command: installs dependencies, builds, and runs the whole test suite with ctest.
-# Extra arguments go to ctest (e.g. ./deploy/test.sh -L unit).
+# The test command: installs dependencies, builds, runs the whole test suite with ctest, then fuzzes the scene
+# loader for a minute (deploy/fuzz.sh). Extra arguments go to ctest (e.g. ./deploy/test.sh -L unit) and skip the
+# fuzzing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./deploy/install-deps.sh
 ./deploy/build.sh
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 ctest --test-dir build --output-on-failure --timeout 1800 "$@"
+if (($# == 0)); then
+  ./deploy/fuzz.sh
+fi

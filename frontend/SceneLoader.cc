@@ -10,7 +10,7 @@
 
 namespace pflow::frontend {
 
-Result<LoadedScene> loadScene(const std::string& path) {
+Result<LoadedScene> loadScene(const std::string& path, LoadOptions options) {
   std::string text;
   try {
     std::ifstream in(path, std::ios::binary);
@@ -22,11 +22,12 @@ Result<LoadedScene> loadScene(const std::string& path) {
   } catch (const std::exception& ex) {
     return ioError("cannot read scene file '" + path + "': " + ex.what());
   }
-  return loadSceneFromString(text, path, std::filesystem::path(path).parent_path().string());
+  options.baseDir = std::filesystem::path(path).parent_path().string();
+  return loadSceneFromString(text, path, options);
 }
 
-Result<LoadedScene> loadSceneFromString(const std::string& yaml, const std::string& sourceName, const std::string& baseDir) {
-  detail::Loader loader(baseDir);
+Result<LoadedScene> loadSceneFromString(const std::string& yaml, const std::string& sourceName, const LoadOptions& options) {
+  detail::Loader loader(options);
   return loader.run(yaml, sourceName);
 }
 

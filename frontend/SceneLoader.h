@@ -41,13 +41,21 @@ struct LoadedScene {
   std::vector<ParticleSetInfo> sets;
 };
 
+// Where relative file names point, and limits that protect a process (a service, a fuzzer) from scenes that would
+// exhaust memory or time; exceeding one is an error naming the limit.
+struct LoadOptions {
+  std::string baseDir;                        // relative file names in the scene resolve here; "" = current dir
+  std::size_t maxParticles = std::size_t(1) << 30;
+  std::size_t maxTriangles = 20'000'000;
+};
+
 // Reads and loads a scene file. I/O problems give StatusCode::kIo, scene problems kInvalidArgument with one error per
 // line. Relative file names in the scene (meshes, particle CSV files) are relative to the scene file's folder.
-Result<LoadedScene> loadScene(const std::string& path);
+// options.baseDir is replaced by the scene file's folder.
+Result<LoadedScene> loadScene(const std::string& path, LoadOptions options = {});
 
-// Loads a scene from YAML text; sourceName names it in messages; relative file names are resolved against baseDir
-// (default: the current directory).
+// Loads a scene from YAML text; sourceName names it in messages.
 Result<LoadedScene> loadSceneFromString(const std::string& yaml, const std::string& sourceName = "<string>",
-                                        const std::string& baseDir = "");
+                                        const LoadOptions& options = {});
 
 }  // namespace pflow::frontend

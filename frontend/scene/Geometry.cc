@@ -169,9 +169,9 @@ void Loader::parseGeometry(const Fields& top) {
           const double c = std::sqrt(2.0) / resolution;
           const double cx = std::ceil(d.x * c), cy = std::ceil(d.y * c), cz = std::ceil(d.z * c);
           const double triangles = 2.0 * 2.0 * (cx * cy + cx * cz + cy * cz);
-          if (triangles > static_cast<double>(kMaxBoxTriangles)) {
+          if (triangles > static_cast<double>(m_options.maxTriangles)) {
             badValue(bf->child("resolution"), num(resolution) + " would make about " + num(triangles) + " triangles; the limit is " +
-                                                  std::to_string(kMaxBoxTriangles),
+                                                  std::to_string(m_options.maxTriangles),
                      bf->find("resolution")->loc);
             ok = false;
           }

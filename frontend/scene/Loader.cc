@@ -294,8 +294,8 @@ void Loader::parseOutput(const Fields& top) {
 
 std::string Loader::resolvePath(const std::string& name) const {
   const std::filesystem::path p(name);
-  if (p.is_absolute() || m_baseDir.empty()) return p.string();
-  return (std::filesystem::path(m_baseDir) / p).string();
+  if (p.is_absolute() || m_options.baseDir.empty()) return p.string();
+  return (std::filesystem::path(m_options.baseDir) / p).string();
 }
 
 // ---- validate() findings -> YAML paths and marks ------------------------------------------------------------------

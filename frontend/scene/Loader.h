@@ -28,9 +28,6 @@ using compute::PlaneConfig;
 using compute::RunConfig;
 using Keys = std::span<const std::string_view>;
 
-// Guards against scenes that would exhaust memory before the run even starts.
-constexpr std::size_t kMaxParticles = std::size_t(1) << 30;
-constexpr std::size_t kMaxBoxTriangles = 10'000'000;
 constexpr double kDefaultSpacingFactor = 2.1;  // lattice spacing, in radii
 constexpr double kDefaultJitter = 0.005;       // lattice jitter, in radii per axis
 
@@ -55,7 +52,7 @@ constexpr std::array<std::string_view, 6> kBoxFaces = {"bottom", "top", "left", 
 
 class Loader {
  public:
-  explicit Loader(std::string baseDir) : m_baseDir(std::move(baseDir)) {}
+  explicit Loader(LoadOptions options) : m_options(std::move(options)) {}
   Result<LoadedScene> run(const std::string& yaml, const std::string& sourceName);
 
  private:
@@ -141,7 +138,7 @@ class Loader {
   // A file name from the scene, resolved against the scene file's folder.
   std::string resolvePath(const std::string& name) const;
 
-  std::string m_baseDir;
+  LoadOptions m_options;
   ErrorList m_errors;
   RunConfig m_config;
   std::string m_outputFile;

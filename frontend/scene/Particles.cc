@@ -98,8 +98,8 @@ void Loader::parseParticleList(const YAML::Node& list, const std::string& path, 
       get(*f, "velocity", v);
       get(*f, "angular_velocity", w);
     }
-    if (m_config.particles.size() >= kMaxParticles) {
-      badValue(ip, "too many particles (the limit is " + std::to_string(kMaxParticles) + ")", itemLoc);
+    if (m_config.particles.size() >= m_options.maxParticles) {
+      badValue(ip, "too many particles (the limit is " + std::to_string(m_options.maxParticles) + ")", itemLoc);
       return;
     }
     addParticle(x, r, v, w, material);
@@ -161,8 +161,8 @@ void Loader::parseLattice(const YAML::Node& node, const std::string& path, Loc l
     return;
   }
   const double wanted = haveCount ? static_cast<double>(count) : sites;
-  if (wanted + static_cast<double>(m_config.particles.size()) > static_cast<double>(kMaxParticles)) {
-    badValue(path, "would generate " + num(wanted) + " particles; the limit is " + std::to_string(kMaxParticles) + " in all (set 'count' or a larger spacing)",
+  if (wanted + static_cast<double>(m_config.particles.size()) > static_cast<double>(m_options.maxParticles)) {
+    badValue(path, "would generate " + num(wanted) + " particles; the limit is " + std::to_string(m_options.maxParticles) + " in all (set 'count' or a larger spacing)",
              f->loc);
     return;
   }
