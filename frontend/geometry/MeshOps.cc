@@ -89,23 +89,27 @@ std::vector<std::uint32_t> exactRepresentatives(const std::vector<Vec3d>& v) {
 
 std::vector<std::uint32_t> gridRepresentatives(const std::vector<Vec3d>& v, double tol) {
   constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
-  auto cellOf = [tol](double x) { return static_cast<std::int64_t>(std::floor(x / tol)); };
+  // Cells of 4 tol: the ball of radius tol around a vertex usually lies in its own cell, so most
+  // vertices cost one lookup (at most 8 when it straddles cell faces).
+  const double cell = 4 * tol;
+  auto cellOf = [cell](double x) { return static_cast<std::int64_t>(std::floor(x / cell)); };
+  auto key = [](std::int64_t x, std::int64_t y, std::int64_t z) {
+    return Key3{static_cast<std::uint64_t>(x), static_cast<std::uint64_t>(y), static_cast<std::uint64_t>(z)};
+  };
   std::unordered_map<Key3, std::uint32_t, Key3Hash> head;  // cell -> last representative put there
   head.reserve(v.size());
   std::vector<std::uint32_t> next(v.size(), kNone);  // chain of representatives within a cell
   std::vector<std::uint32_t> rep(v.size());
   const double tol2 = tol * tol;
   for (std::size_t i = 0; i < v.size(); ++i) {
-    const std::int64_t cx = cellOf(v[i].x), cy = cellOf(v[i].y), cz = cellOf(v[i].z);
-    std::uint32_t found = kNone;
-    // A vertex within tol lies in this cell or one of its 26 neighbours (cell size = tol).
-    for (int dz = -1; dz <= 1 && found == kNone; ++dz) {
-      for (int dy = -1; dy <= 1 && found == kNone; ++dy) {
-        for (int dx = -1; dx <= 1 && found == kNone; ++dx) {
-          const Key3 k{static_cast<std::uint64_t>(cx + dx), static_cast<std::uint64_t>(cy + dy), static_cast<std::uint64_t>(cz + dz)};
-          const auto it = head.find(k);
+    const Vec3d p = v[i];
+    std::uint32_t found = kNone;  // the lowest-numbered representative within tol
+    for (std::int64_t cz = cellOf(p.z - tol); cz <= cellOf(p.z + tol); ++cz) {
+      for (std::int64_t cy = cellOf(p.y - tol); cy <= cellOf(p.y + tol); ++cy) {
+        for (std::int64_t cx = cellOf(p.x - tol); cx <= cellOf(p.x + tol); ++cx) {
+          const auto it = head.find(key(cx, cy, cz));
           for (std::uint32_t j = it == head.end() ? kNone : it->second; j != kNone; j = next[j]) {
-            if (norm2(v[j] - v[i]) <= tol2 && (found == kNone || j < found)) found = j;
+            if (norm2(v[j] - p) <= tol2 && j < found) found = j;
           }
         }
       }
@@ -115,8 +119,7 @@ std::vector<std::uint32_t> gridRepresentatives(const std::vector<Vec3d>& v, doub
       continue;
     }
     rep[i] = static_cast<std::uint32_t>(i);
-    const Key3 own{static_cast<std::uint64_t>(cx), static_cast<std::uint64_t>(cy), static_cast<std::uint64_t>(cz)};
-    auto [it, inserted] = head.try_emplace(own, static_cast<std::uint32_t>(i));
+    auto [it, inserted] = head.try_emplace(key(cellOf(p.x), cellOf(p.y), cellOf(p.z)), static_cast<std::uint32_t>(i));
     if (!inserted) {
       next[i] = it->second;
       it->second = static_cast<std::uint32_t>(i);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <iomanip>
 #include <numbers>
 #include <sstream>
 #include <string>
@@ -65,8 +66,10 @@ Status checkTessellation(const Tessellation& tess) {
 
 Status checkBudget(double triangles) {
   if (triangles <= static_cast<double>(kMaxPrimitiveTriangles)) return Status::ok();
-  return {StatusCode::kResourceExhausted, "tessellation would make " + num(std::ceil(triangles)) + " triangles, more than the limit of " +
-                                              std::to_string(kMaxPrimitiveTriangles) + "; increase maxEdge or maxAngle"};
+  std::ostringstream os;
+  os << std::fixed << std::setprecision(0) << "tessellation would make " << std::ceil(triangles) << " triangles, more than the limit of "
+     << kMaxPrimitiveTriangles << "; increase maxEdge or maxAngle";
+  return {StatusCode::kResourceExhausted, os.str()};
 }
 
 // Cells along a straight direction of `length`: no side longer than maxEdge / sqrt2, so the cell
