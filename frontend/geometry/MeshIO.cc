@@ -12,7 +12,6 @@
 #include <fstream>
 #include <limits>
 #include <map>
-#include <numeric>
 #include <set>
 #include <vector>
 
@@ -375,7 +374,7 @@ class ObjParser {
       const std::size_t start = static_cast<std::size_t>(w.size() > 1 ? w[1].data() - line.data() : line.size());
       std::string_view name = line.substr(start);
       while (!name.empty() && std::isspace(static_cast<unsigned char>(name.back()))) name.remove_suffix(1);
-      m_group = name.empty() ? "default" : std::string(name);
+      m_surface = surfaceNamed(name.empty() ? "default" : std::string(name));
       return Status::ok();
     }
     if (isIgnoredObjStatement(key)) return Status::ok();
@@ -399,7 +398,9 @@ class ObjParser {
 
   Status face(const std::vector<std::string_view>& w, std::size_t lineNo) {
     if (w.size() < 4) return lineError(m_path, lineNo, "a face needs at least 3 vertices, got " + std::to_string(w.size() - 1));
-    PendingFace f{{}, surfaceOfGroup(), lineNo};
+    // Faces before any group go to an implicit "default" group, numbered only if it has faces.
+    if (m_surface < 0) m_surface = surfaceNamed("default");
+    PendingFace f{{}, m_surface, lineNo};
     for (std::size_t k = 1; k < w.size(); ++k) {
       // i, i/j, i//k, i/j/k: only the vertex index (before the first '/') matters here.
       const std::string_view ref = w[k].substr(0, w[k].find('/'));
@@ -423,13 +424,14 @@ class ObjParser {
     return Status::ok();
   }
 
-  // A group becomes a surface when its first face appears, so empty groups take no number.
-  std::int32_t surfaceOfGroup() {
-    const auto it = m_surfaceOf.find(m_group);
+  // Surfaces are numbered in the order their names first appear, empty groups included, so a file
+  // written by writeObj() keeps its numbers even where a surface has no triangles (an open face).
+  std::int32_t surfaceNamed(const std::string& name) {
+    const auto it = m_surfaceOf.find(name);
     if (it != m_surfaceOf.end()) return it->second;
     const auto id = static_cast<std::int32_t>(m_mesh.surfaceNames.size());
-    m_mesh.surfaceNames.push_back(m_group);
-    m_surfaceOf.emplace(m_group, id);
+    m_mesh.surfaceNames.push_back(name);
+    m_surfaceOf.emplace(name, id);
     return id;
   }
 
@@ -438,7 +440,7 @@ class ObjParser {
   TriMesh m_mesh;
   std::vector<PendingFace> m_faces;
   std::vector<std::size_t> m_triangleLine;
-  std::string m_group = "default";
+  std::int32_t m_surface = -1;  // of the current group; -1 before the first group
   std::map<std::string, std::int32_t> m_surfaceOf;
 };
 
@@ -574,15 +576,21 @@ Status writeStlAscii(const TriMesh& mesh, const std::string& path, std::string_v
 
 Status writeObj(const TriMesh& mesh, const std::string& path) {
   if (Status s = checkWritable(mesh, path); !s) return s;
-  std::vector<std::size_t> order(mesh.triangles.size());
-  std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return mesh.surface[a] < mesh.surface[b]; });
+  // Every surface number from 0 to the last named or used one gets a group, empty or not, in
+  // ascending order; the reader numbers groups in order of appearance, so numbers survive.
+  std::int32_t last = static_cast<std::int32_t>(mesh.surfaceNames.size()) - 1;
+  for (std::int32_t s : mesh.surface) last = std::max(last, s);
+  std::vector<std::vector<std::size_t>> bySurface(static_cast<std::size_t>(last + 1));
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    if (mesh.surface[t] < 0) return invalidArgument("cannot write '" + path + "': triangle " + std::to_string(t) + " has a negative surface number");
+    bySurface[static_cast<std::size_t>(mesh.surface[t])].push_back(t);
+  }
   // Group names must be unique, or the reader would merge two surfaces.
   std::set<std::string> used;
-  auto groupName = [&](std::int32_t s) {
-    std::string name = s >= 0 && static_cast<std::size_t>(s) < mesh.surfaceNames.size() ? mesh.surfaceNames[s] : "";
+  auto groupName = [&](std::size_t s) {
+    std::string name = s < mesh.surfaceNames.size() ? mesh.surfaceNames[s] : "";
     for (char& c : name) {
-      if (c == '\n' || c == '\r' || c == '#') c = '_';
+      if (c == '\n' || c == '\r' || c == '#' || c == '\\') c = '_';
     }
     if (name.empty() || used.count(name)) name = (name.empty() ? "surface" : name + "_") + std::to_string(s);
     used.insert(name);
@@ -596,17 +604,14 @@ Status writeObj(const TriMesh& mesh, const std::string& path) {
     appendVec(out, v);
     out.push_back('\n');
   }
-  std::int32_t current = 0;
-  for (std::size_t k = 0; k < order.size(); ++k) {
-    const std::size_t t = order[k];
-    if (k == 0 || mesh.surface[t] != current) {
-      current = mesh.surface[t];
-      out.append("g ").append(groupName(current)).push_back('\n');
-    }
-    out.append("f ");
-    for (int c = 0; c < 3; ++c) {
-      out.append(std::to_string(mesh.triangles[t][c] + 1));
-      out.push_back(c < 2 ? ' ' : '\n');
+  for (std::size_t s = 0; s < bySurface.size(); ++s) {
+    out.append("g ").append(groupName(s)).push_back('\n');
+    for (std::size_t t : bySurface[s]) {
+      out.append("f ");
+      for (int c = 0; c < 3; ++c) {
+        out.append(std::to_string(mesh.triangles[t][c] + 1));
+        out.push_back(c < 2 ? ' ' : '\n');
+      }
     }
   }
   return writeWholeFile(path, out);

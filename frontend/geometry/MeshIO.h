@@ -27,7 +27,8 @@ struct MeshReadOptions {
 Result<TriMesh> readStl(const std::string& path, const MeshReadOptions& options = {});
 
 // Wavefront OBJ: `v` and `f` (i, i/j, i//k, i/j/k, negative = relative indices; polygons are
-// fan-triangulated); `o`/`g` names become surfaces, numbered in order of their first face.
+// fan-triangulated); `o`/`g` names become surfaces, numbered in order of first appearance (a group
+// named twice is one surface; faces before any group form a surface "default").
 // Texture/normal/material/smoothing lines are ignored; free-form geometry is an error.
 Result<TriMesh> readObj(const std::string& path, const MeshReadOptions& options = {});
 
@@ -38,9 +39,10 @@ Result<TriMesh> readMeshFile(const std::string& path, const MeshReadOptions& opt
 Status writeStlBinary(const TriMesh& mesh, const std::string& path);
 // ASCII STL with shortest round-trip decimal coordinates (doubles read back exactly).
 Status writeStlAscii(const TriMesh& mesh, const std::string& path, std::string_view solidName = "pflow");
-// OBJ with each surface as a `g` group named after surfaceNames (made unique; "surface<k>" when
-// unnamed). Triangles are written grouped by surface number, keeping their order within a surface,
-// so a mesh whose triangles are already in surface order reads back identical.
+// OBJ with each surface number 0..max as a `g` group (empty ones too, so numbers survive), named
+// after surfaceNames (made unique; "surface<k>" when unnamed). Triangles are written grouped by
+// surface, keeping their order within one, so a mesh whose triangles are in surface order reads
+// back identical. Surface numbers must be >= 0.
 Status writeObj(const TriMesh& mesh, const std::string& path);
 
 }  // namespace pflow::frontend

@@ -297,9 +297,11 @@ Result<TriMesh> tessellate(const BoxSpec& spec, const Tessellation& tess) {
     };
     for (std::size_t j = 0; j < cells[face.v]; ++j) {
       for (std::size_t i = 0; i < cells[face.u]; ++i) {
+        // Corners looked up in a fixed order (argument evaluation order is unspecified), so vertex numbering is portable.
+        const std::uint32_t c00 = vid(i, j), c10 = vid(i + 1, j), c11 = vid(i + 1, j + 1), c01 = vid(i, j + 1);
         // The loader's inward pair (a, b, c), (a, c, d) with b and c swapped: outward, and asContainer() restores it.
-        b.triangle(vid(i, j), vid(i + 1, j + 1), vid(i + 1, j), static_cast<int>(f));
-        b.triangle(vid(i, j), vid(i, j + 1), vid(i + 1, j + 1), static_cast<int>(f));
+        b.triangle(c00, c11, c10, static_cast<int>(f));
+        b.triangle(c00, c01, c11, static_cast<int>(f));
       }
     }
   }
