@@ -119,6 +119,16 @@ bool Loader::read(const YAML::Node& n, const std::string& path, Loc loc, Vec3d& 
   return ok;
 }
 
+bool Loader::read(const YAML::Node& n, const std::string& path, Loc loc, bool& out) {
+  if (n.IsScalar() && !isQuoted(n)) {
+    const std::string& s = n.Scalar();
+    if (s == "true" || s == "True" || s == "TRUE") return out = true, true;
+    if (s == "false" || s == "False" || s == "FALSE") return out = false, true;
+  }
+  badValue(path, "expected true or false, got " + describe(n), locOf(n, loc));
+  return false;
+}
+
 std::optional<double> Loader::autoOrNumber(const Entry& e, const std::string& path, std::string_view unit) {
   if (e.value.IsScalar() && !isQuoted(e.value) && e.value.Scalar() == "auto") return std::nullopt;
   if (const auto v = parseDouble(e.value)) return *v;

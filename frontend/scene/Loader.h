@@ -16,6 +16,8 @@
 #include "common/Status.h"
 #include "compute/sim/RunConfig.h"
 #include "frontend/SceneLoader.h"
+#include "frontend/geometry/Primitives.h"
+#include "frontend/geometry/TriMesh.h"
 #include "frontend/scene/YamlUtil.h"
 
 namespace pflow::frontend::detail {
@@ -38,10 +40,19 @@ constexpr std::string_view kParticleSetKeys[] = {"material", "list", "lattice"};
 constexpr std::string_view kParticleKeys[] = {"position", "radius", "velocity", "angular_velocity"};
 constexpr std::string_view kLatticeKeys[] = {"box", "radius", "spacing", "jitter", "velocity", "count"};
 constexpr std::string_view kRegionKeys[] = {"min", "max"};
-constexpr std::string_view kGeometryKeys[] = {"plane", "box", "mesh", "name", "material", "motion"};
+constexpr std::string_view kShapeKinds[] = {"plane", "box", "cylinder", "cone", "hopper", "drum", "mesh"};
+constexpr std::string_view kGeometryKeys[] = {"plane", "box", "cylinder", "cone", "hopper", "drum", "mesh", "name", "material", "motion"};
 constexpr std::string_view kPlaneKeys[] = {"point", "normal"};
-constexpr std::string_view kBoxKeys[] = {"min", "max", "open", "resolution"};
-constexpr std::string_view kMeshKeys[] = {"vertices", "triangles", "surfaces"};
+constexpr std::string_view kBoxKeys[] = {"min", "max", "open", "resolution", "side"};
+constexpr std::string_view kCylinderKeys[] = {"base", "axis", "radius", "height", "open", "resolution", "segments", "side"};
+constexpr std::string_view kConeKeys[] = {"base", "axis", "bottom_radius", "top_radius", "height", "open", "resolution", "segments", "side"};
+constexpr std::string_view kHopperKeys[] = {"orifice", "axis", "orifice_radius", "top_radius", "cone_height", "cylinder_height", "open", "resolution", "segments"};
+constexpr std::string_view kDrumKeys[] = {"center", "axis", "radius", "length", "angular_velocity", "start_time", "resolution", "segments"};
+constexpr std::string_view kMeshKeys[] = {"vertices", "triangles", "surfaces", "file", "scale", "translate", "rotate", "flip"};
+constexpr std::string_view kRotateKeys[] = {"axis", "angle"};
+constexpr std::string_view kSides[] = {"inside", "outside"};
+constexpr std::string_view kCapNames[] = {"bottom", "top"};
+constexpr std::string_view kHopperOpenings[] = {"orifice", "top"};
 constexpr std::string_view kMotionKeys[] = {"velocity", "angular_velocity", "axis", "axis_point", "start_time"};
 constexpr std::string_view kSimulationKeys[] = {"gravity", "duration", "dt", "dt_fraction", "skin", "snapshot_interval",
                                                 "domain", "precision", "history_slots", "wall_history_slots", "threads", "seed"};
@@ -104,6 +115,7 @@ class Loader {
   bool read(const YAML::Node& n, const std::string& path, Loc loc, std::uint64_t& out);
   bool read(const YAML::Node& n, const std::string& path, Loc loc, std::string& out);
   bool read(const YAML::Node& n, const std::string& path, Loc loc, Vec3d& out);
+  bool read(const YAML::Node& n, const std::string& path, Loc loc, bool& out);
   template <class T>
   bool get(const Fields& f, std::string_view key, T& out, bool required = false) {
     const Entry* e = f.find(key);
@@ -125,6 +137,25 @@ class Loader {
   void parseParticleList(const YAML::Node& list, const std::string& path, Loc loc, int material, ParticleSet& set);
   void parseLattice(const YAML::Node& lattice, const std::string& path, Loc loc, int material, std::size_t setIndex);
   void parseGeometry(const Fields& top);
+  // One shape entry -> its mesh as the particles see it (normals towards them), or nullopt after reporting why.
+  std::optional<TriMesh> parseShape(std::string_view kind, const Entry& shape, const std::string& path, MeshMotion& motion,
+                                    bool& motionGiven);
+  std::optional<TriMesh> parseBox(const Fields& f);
+  std::optional<TriMesh> parseCylinder(const Fields& f);
+  std::optional<TriMesh> parseCone(const Fields& f);
+  std::optional<TriMesh> parseHopper(const Fields& f);
+  std::optional<TriMesh> parseDrum(const Fields& f, MeshMotion& motion);
+  std::optional<TriMesh> parseMesh(const Fields& f);
+  std::optional<TriMesh> parseInlineMesh(const Fields& f);
+  bool parseTessellation(const Fields& f, Tessellation& t);
+  bool parseSide(const Fields& f, bool& inside);
+  // `key: [name, ...]` naming openings among `names`; false after reporting an error.
+  bool parseOpenings(const Fields& f, Keys names, std::vector<bool>& open);
+  // A required or optional number that must be > 0 (>= 0 with allowZero); false after reporting.
+  bool positive(const Fields& f, std::string_view key, double& out, bool required, bool allowZero = false);
+  bool unitAxis(const Fields& f, std::string_view key, Vec3d& axis);
+  // A tessellation error, with the spec's parameter names mapped to the scene's keys.
+  void shapeError(const Fields& f, const Status& s);
   bool parseRegion(const Fields& f, std::string_view key, Vec3d& lo, Vec3d& hi, bool required);
   void parseMotion(const Fields& g, MeshMotion& motion);
   void parseOutput(const Fields& top);
