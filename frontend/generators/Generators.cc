@@ -188,34 +188,172 @@ void validateAvoid(const Avoid& avoid, ErrorList& e) {
   }
 }
 
-// Random sequential addition of `radii` (placed in the given order). propose(r) gives a trial centre; accept(p, r)
-// says whether it is free; place(p, r) records it. Stops at the first particle that finds no place.
+// ---- free space: where a new centre may still go ------------------------------------------------------------------
+//
+// The sampling box (centres of the smallest radius) is cut into blocks of 4 x 4 x 4 voxels, one bit per voxel.
+// Trial centres are uniform over the voxels still marked free: a random block from the list of blocks with a free
+// voxel, a random voxel of it (redrawn until free), a uniform point in the voxel. When a trial is blocked by a
+// sphere that covers the whole voxel (its farthest corner closer than the sphere's radius plus the smallest
+// radius still to place), the voxel can never take a centre again and is cleared. Trials therefore stay uniform
+// over every place a centre could go, and they concentrate on the remaining holes as the packing fills up, instead
+// of slowing down like plain uniform trials near jamming.
+class FreeSpace {
+ public:
+  struct Voxel {
+    std::uint32_t block;
+    int bit;
+  };
+
+  FreeSpace(const Bounds& box, double rSmall, std::size_t expected) : m_box(box), m_rSmall(rSmall) {
+    const Vec3d s = box.size();
+    const double cap = std::max(double(1 << 18), 2.0 * static_cast<double>(expected));
+    double edge = 2 * rSmall;
+    for (;;) {
+      double blocks = 1;
+      for (int a = 0; a < 3; ++a) blocks *= std::max(1.0, std::ceil(comp(s, a) / edge));
+      if (blocks <= cap) break;
+      edge *= 1.25;
+    }
+    for (int a = 0; a < 3; ++a) {
+      m_n[a] = static_cast<std::uint32_t>(std::max(1.0, std::ceil(comp(s, a) / edge)));
+      m_voxel[a] = comp(s, a) / (4.0 * m_n[a]);
+    }
+    const std::size_t count = static_cast<std::size_t>(m_n[0]) * m_n[1] * m_n[2];
+    m_mask.assign(count, ~std::uint64_t{0});
+    m_active.resize(count);
+    m_slot.resize(count);
+    for (std::size_t i = 0; i < count; ++i) m_active[i] = m_slot[i] = static_cast<std::uint32_t>(i);
+  }
+
+  bool empty() const { return m_active.empty(); }
+
+  Vec3d propose(Random& rng, Voxel& v) const {
+    v.block = m_active[rng.below(m_active.size())];
+    const std::uint64_t mask = m_mask[v.block];
+    do {
+      v.bit = static_cast<int>(rng.bits() >> 58);
+    } while (!((mask >> v.bit) & 1u));
+    const Vec3d lo = corner(v);
+    const double u = rng.uniform(), w = rng.uniform(), t = rng.uniform();
+    return {lo.x + u * m_voxel[0], lo.y + w * m_voxel[1], lo.z + t * m_voxel[2]};
+  }
+
+  // A sphere (c, r) was placed: clear every voxel it excludes entirely, i.e. whose farthest corner is closer to c
+  // than r plus the smallest radius still to place. `periodic`: the box is a periodic cube starting at the origin.
+  void cover(const Vec3d& c, double r, bool periodic) {
+    const double reach = r + m_rSmall;
+    std::array<long, 3> lo{}, hi{}, n{};
+    for (int a = 0; a < 3; ++a) {
+      n[a] = 4L * m_n[a];
+      const double o = comp(m_box.min, a), x = comp(c, a);
+      lo[a] = static_cast<long>(std::floor((x - reach - o) / m_voxel[a]));
+      hi[a] = static_cast<long>(std::floor((x + reach - o) / m_voxel[a]));
+      if (periodic) {
+        if (hi[a] - lo[a] + 1 > n[a]) hi[a] = lo[a] + n[a] - 1;
+      } else {
+        lo[a] = std::max(lo[a], 0L);
+        hi[a] = std::min(hi[a], n[a] - 1);
+      }
+    }
+    const double r2 = reach * reach;
+    for (long z = lo[2]; z <= hi[2]; ++z) {
+      const double dz = farthest(c.z, z, 2);
+      const long wz = periodic ? ((z % n[2]) + n[2]) % n[2] : z;
+      for (long y = lo[1]; y <= hi[1]; ++y) {
+        const double dy = farthest(c.y, y, 1);
+        const long wy = periodic ? ((y % n[1]) + n[1]) % n[1] : y;
+        if (dz * dz + dy * dy >= r2) continue;
+        for (long x = lo[0]; x <= hi[0]; ++x) {
+          const double dx = farthest(c.x, x, 0);
+          if (dx * dx + dy * dy + dz * dz >= r2) continue;
+          const long wx = periodic ? ((x % n[0]) + n[0]) % n[0] : x;
+          const std::uint32_t block = static_cast<std::uint32_t>((wz / 4 * m_n[1] + wy / 4) * m_n[0] + wx / 4);
+          const int bit = static_cast<int>((wz % 4) * 16 + (wy % 4) * 4 + wx % 4);
+          if ((m_mask[block] >> bit) & 1u) clear({block, bit});
+        }
+      }
+    }
+  }
+
+  void clear(const Voxel& v) {
+    std::uint64_t& mask = m_mask[v.block];
+    mask &= ~(std::uint64_t{1} << v.bit);
+    if (mask != 0) return;
+    // Swap-remove the block from the active list.
+    const std::uint32_t slot = m_slot[v.block], last = m_active.back();
+    m_active[slot] = last;
+    m_slot[last] = slot;
+    m_active.pop_back();
+  }
+
+ private:
+  // Largest distance along axis a from coordinate x to voxel i of the (unwrapped) lattice.
+  double farthest(double x, long i, int a) const {
+    const double lo = comp(m_box.min, a) + static_cast<double>(i) * m_voxel[a];
+    return std::max(std::fabs(x - lo), std::fabs(lo + m_voxel[a] - x));
+  }
+  Vec3d corner(const Voxel& v) const {
+    const std::uint32_t bx = v.block % m_n[0], by = (v.block / m_n[0]) % m_n[1], bz = v.block / (m_n[0] * m_n[1]);
+    const int vx = v.bit & 3, vy = (v.bit >> 2) & 3, vz = v.bit >> 4;
+    return {m_box.min.x + (4.0 * bx + vx) * m_voxel[0], m_box.min.y + (4.0 * by + vy) * m_voxel[1], m_box.min.z + (4.0 * bz + vz) * m_voxel[2]};
+  }
+
+  Bounds m_box;
+  double m_rSmall;
+  std::array<std::uint32_t, 3> m_n{1, 1, 1};
+  std::array<double, 3> m_voxel{1, 1, 1};
+  std::vector<std::uint64_t> m_mask;
+  std::vector<std::uint32_t> m_active, m_slot;
+};
+
+// Random sequential addition of `radii`, in order. Each particle draws up to maxAttempts trial centres from
+// `space`; a trial must lie in its own sampling box (centres of its radius), clear the spheres in `grid`, and pass
+// accept(p, r) (region, reject rule). Stops at the first particle that finds no place.
 struct RsaOutcome {
   std::size_t placed = 0;
   std::uint64_t attempts = 0;
   bool complete = false;
+  bool saturated = false;  // no free voxel left at all
+  double placedVolume = 0;
 };
 
-template <class Propose, class Accept, class Place>
-RsaOutcome sequentialAddition(const std::vector<double>& radii, std::size_t maxAttempts, Propose&& propose, Accept&& accept, Place&& place) {
+template <class Accept, class Place>
+RsaOutcome sequentialAddition(const std::vector<double>& radii, std::size_t maxAttempts, const Bounds& box, bool periodic, SphereGrid& grid,
+                              FreeSpace& space, Random& rng, Accept&& accept, Place&& place) {
   RsaOutcome out;
   for (const double r : radii) {
+    // Centres of this radius (non-periodic: the box shrunk by r - the smallest radius, relative to the space).
+    const double shrink = periodic ? 0.0 : r - radii.back();
+    const Vec3d lo = box.min + Vec3d{shrink, shrink, shrink}, hi = box.max - Vec3d{shrink, shrink, shrink};
     bool done = false;
-    for (std::size_t a = 0; a < maxAttempts; ++a) {
-      ++out.attempts;
-      const auto p = propose(r);
-      if (!p) break;  // no room at all for this radius
-      if (accept(*p, r)) {
-        place(*p, r);
-        done = true;
-        break;
+    for (std::size_t a = 0; a < maxAttempts && !done; ++a) {
+      if (space.empty()) {
+        out.saturated = true;
+        return out;
       }
+      ++out.attempts;
+      FreeSpace::Voxel v;
+      const Vec3d p = space.propose(rng, v);
+      if (p.x < lo.x || p.x > hi.x || p.y < lo.y || p.y > hi.y || p.z < lo.z || p.z > hi.z) continue;
+      if (grid.overlaps(p, r)) continue;
+      if (!accept(p, r)) continue;
+      place(p, r);
+      grid.insert(p, r, out.placed);
+      space.cover(p, r, periodic);
+      out.placedVolume += sphereVolume(r);
+      done = true;
     }
     if (!done) return out;
     ++out.placed;
   }
   out.complete = true;
   return out;
+}
+
+std::string failureReport(const RsaOutcome& o, const std::vector<double>& radii, std::size_t maxAttempts) {
+  const std::string which = "particle " + std::to_string(o.placed + 1) + " of " + std::to_string(radii.size()) + " (radius " + num(radii[o.placed]) + ")";
+  const std::string why = o.saturated ? " found no free space left" : " found no free place in " + std::to_string(maxAttempts) + " attempts";
+  return which + why + "; placed " + std::to_string(o.placed) + " particles after " + std::to_string(o.attempts) + " attempts in all";
 }
 
 // Radii for a request: `count` draws, or draws until their volume reaches `volume`; sorted largest first.
@@ -364,34 +502,28 @@ Result<Particles> generateRandom(const Region& region, const SizeDistribution& s
 
   const Bounds b = region.bounds();
   const double rmax = radii.empty() ? size.maxRadius() : radii.front();
-  SphereGrid grid = existingGrid(b, rmax, avoid, radii.size());
-  const std::size_t nExisting = avoid.position.size();
+  const double rmin = radii.empty() ? size.minRadius() : radii.back();
+  const Bounds centres{b.min + Vec3d{rmin, rmin, rmin}, b.max - Vec3d{rmin, rmin, rmin}};
+  const Vec3d room = centres.size();
+  if (!radii.empty() && !(room.x >= 0 && room.y >= 0 && room.z >= 0)) {
+    return exhausted("random: the region's bounds cannot hold one sphere of radius " + num(rmin));
+  }
+  SphereGrid grid = existingGrid(b, rmax, avoid, radii.size() + avoid.position.size());
+  FreeSpace space(centres, rmin, radii.size());
+  for (std::size_t i = 0; i < avoid.position.size(); ++i) space.cover(avoid.position[i], avoid.radius[i], false);
   Particles out;
   out.position.reserve(radii.size());
   out.radius.reserve(radii.size());
-  double placedVolume = 0;
-
   const auto outcome = sequentialAddition(
-      radii, options.maxAttemptsPerParticle,
-      [&](double r) -> std::optional<Vec3d> {
-        const Vec3d lo = b.min + Vec3d{r, r, r}, hi = b.max - Vec3d{r, r, r};
-        if (!(hi.x >= lo.x && hi.y >= lo.y && hi.z >= lo.z)) return std::nullopt;
-        const double u = rng.uniform(), v = rng.uniform(), w = rng.uniform();
-        return Vec3d{lo.x + u * (hi.x - lo.x), lo.y + v * (hi.y - lo.y), lo.z + w * (hi.z - lo.z)};
-      },
-      [&](const Vec3d& p, double r) { return !grid.overlaps(p, r) && region.containsSphere(p, r) && !(avoid.reject && avoid.reject(p, r)); },
+      radii, options.maxAttemptsPerParticle, centres, false, grid, space, rng,
+      [&](const Vec3d& p, double r) { return region.containsSphere(p, r) && !(avoid.reject && avoid.reject(p, r)); },
       [&](const Vec3d& p, double r) {
-        grid.insert(p, r, nExisting + out.size());
         out.position.push_back(p);
         out.radius.push_back(r);
-        placedVolume += sphereVolume(r);
       });
   if (!outcome.complete) {
-    const double r = radii[outcome.placed];
-    return exhausted("random: the region cannot hold the request: particle " + std::to_string(outcome.placed + 1) + " of " +
-                     std::to_string(radii.size()) + " (radius " + num(r) + ") found no free place in " + std::to_string(options.maxAttemptsPerParticle) +
-                     " attempts; placed " + std::to_string(outcome.placed) + " particles after " + std::to_string(outcome.attempts) +
-                     " attempts in all; " + fractionReport(placedVolume, wantedVolume, regionVolume));
+    return exhausted("random: the region cannot hold the request: " + failureReport(outcome, radii, options.maxAttemptsPerParticle) + "; " +
+                     fractionReport(outcome.placedVolume, wantedVolume, regionVolume));
   }
   return out;
 }
@@ -421,27 +553,19 @@ Result<Particles> generateTiled(const Region& region, const SizeDistribution& si
   double wantedVolume = 0;
   for (double r : radii) wantedVolume += sphereVolume(r);
   SphereGrid tileGrid = SphereGrid::periodic(edge, 2 * (radii.empty() ? rmax : radii.front()));
+  FreeSpace space(Bounds{{0, 0, 0}, {edge, edge, edge}}, radii.empty() ? rmax : radii.back(), radii.size());
   std::vector<Vec3d> tileP;
   std::vector<double> tileR;
-  double placedVolume = 0;
   const auto outcome = sequentialAddition(
-      radii, options.maxAttemptsPerParticle,
-      [&](double) -> std::optional<Vec3d> {
-        const double u = rng.uniform(), v = rng.uniform(), w = rng.uniform();
-        return Vec3d{u * edge, v * edge, w * edge};
-      },
-      [&](const Vec3d& p, double r) { return !tileGrid.overlaps(p, r); },
+      radii, options.maxAttemptsPerParticle, Bounds{{0, 0, 0}, {edge, edge, edge}}, true, tileGrid, space, rng, [](const Vec3d&, double) { return true; },
       [&](const Vec3d& p, double r) {
-        tileGrid.insert(p, r, tileP.size());
-        tileP.push_back(p);
+        // [0, edge) exactly, so that copies sit at exact tile offsets.
+        tileP.push_back({p.x < edge ? p.x : 0.0, p.y < edge ? p.y : 0.0, p.z < edge ? p.z : 0.0});
         tileR.push_back(r);
-        placedVolume += sphereVolume(r);
       });
   if (!outcome.complete) {
-    return exhausted("tiled: the periodic tile (edge " + num(edge) + ") cannot hold the request: particle " + std::to_string(outcome.placed + 1) +
-                     " of " + std::to_string(radii.size()) + " (radius " + num(radii[outcome.placed]) + ") found no free place in " +
-                     std::to_string(options.maxAttemptsPerParticle) + " attempts; placed " + std::to_string(outcome.placed) + " particles after " +
-                     std::to_string(outcome.attempts) + " attempts in all; " + fractionReport(placedVolume, wantedVolume, tileVolume));
+    return exhausted("tiled: the periodic tile (edge " + num(edge) + ") cannot hold the request: " + failureReport(outcome, radii, options.maxAttemptsPerParticle) +
+                     "; " + fractionReport(outcome.placedVolume, wantedVolume, tileVolume));
   }
 
   // 2. Copies at bounds.min + (i, j, k) edge, kept where inside the region and clear of Avoid.
