@@ -86,7 +86,7 @@ bool Loader::parseSide(const Fields& f, bool& inside) {
   return true;
 }
 
-bool Loader::parseOpenings(const Fields& f, Keys names, std::vector<bool>& open) {
+bool Loader::parseOpenings(const Fields& f, Keys names, std::string_view what, std::vector<bool>& open) {
   const Entry* e = f.find("open");
   if (!e) return true;
   const std::string path = f.child("open");
@@ -105,7 +105,7 @@ bool Loader::parseOpenings(const Fields& f, Keys names, std::vector<bool>& open)
     }
     const auto it = std::find(names.begin(), names.end(), name);
     if (it == names.end()) {
-      badValue(at(path, j), unknownName("opening", name, names, "Choices"), locOf(item, e->loc));
+      badValue(at(path, j), unknownName(what, name, names, "Choices"), locOf(item, e->loc));
       ok = false;
     } else {
       open[static_cast<std::size_t>(it - names.begin())] = true;
@@ -131,7 +131,7 @@ std::optional<TriMesh> Loader::parseBox(const Fields& f) {
   }
   ok &= parseTessellation(f, tess) && parseSide(f, inside);
   std::vector<bool> open(kBoxFaces.size(), false);
-  if (!parseOpenings(f, kBoxFaces, open)) ok = false;
+  if (!parseOpenings(f, kBoxFaces, "face", open)) ok = false;
   if (std::all_of(open.begin(), open.end(), [](bool b) { return b; })) {
     badValue(f.child("open"), "all six faces are open: the box would have no walls", f.find("open")->loc);
     ok = false;
@@ -153,7 +153,7 @@ std::optional<TriMesh> Loader::parseCylinder(const Fields& f) {
   ok &= positive(f, "height", spec.height, true);
   ok &= parseTessellation(f, tess) && parseSide(f, inside);
   std::vector<bool> open(2, false);
-  ok &= parseOpenings(f, kCapNames, open);
+  ok &= parseOpenings(f, kCapNames, "cap", open);
   if (!ok) return std::nullopt;
   spec.openBottom = open[0];
   spec.openTop = open[1];
@@ -173,7 +173,7 @@ std::optional<TriMesh> Loader::parseCone(const Fields& f) {
   ok &= positive(f, "height", spec.height, true);
   ok &= parseTessellation(f, tess) && parseSide(f, inside);
   std::vector<bool> open(2, false);
-  ok &= parseOpenings(f, kCapNames, open);
+  ok &= parseOpenings(f, kCapNames, "cap", open);
   if (ok && spec.bottomRadius == 0 && spec.topRadius == 0) {
     badValue(f.path, "bottom_radius and top_radius are both 0: at least one must be > 0", f.loc);
     ok = false;
@@ -197,7 +197,7 @@ std::optional<TriMesh> Loader::parseHopper(const Fields& f) {
   if (f.find("cylinder_height")) ok &= positive(f, "cylinder_height", spec.cylinderHeight, false, true);
   ok &= parseTessellation(f, tess);
   std::vector<bool> open = {true, true};  // a hopper is open at the orifice and the top unless told otherwise
-  ok &= parseOpenings(f, kHopperOpenings, open);
+  ok &= parseOpenings(f, kHopperOpenings, "opening", open);
   if (ok && !(spec.orificeRadius < spec.topRadius)) {
     badValue(f.child("orifice_radius"), num(spec.orificeRadius) + " must be < top_radius " + num(spec.topRadius) +
                                             " (the cone narrows down to the orifice)",

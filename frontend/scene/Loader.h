@@ -150,7 +150,7 @@ class Loader {
   bool parseTessellation(const Fields& f, Tessellation& t);
   bool parseSide(const Fields& f, bool& inside);
   // `key: [name, ...]` naming openings among `names`; false after reporting an error.
-  bool parseOpenings(const Fields& f, Keys names, std::vector<bool>& open);
+  bool parseOpenings(const Fields& f, Keys names, std::string_view what, std::vector<bool>& open);
   // A required or optional number that must be > 0 (>= 0 with allowZero); false after reporting.
   bool positive(const Fields& f, std::string_view key, double& out, bool required, bool allowZero = false);
   bool unitAxis(const Fields& f, std::string_view key, Vec3d& axis);

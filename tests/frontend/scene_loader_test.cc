@@ -175,7 +175,17 @@ TEST(SceneLoader, FullSceneRoundTrip) {
   EXPECT_EQ(sheet.vertices.size(), 4u);
   ASSERT_EQ(sheet.triangles.size(), 2u);
   EXPECT_EQ(sheet.triangles[1][1], 3u);
-  EXPECT_EQ(sheet.surface, (std::vector<std::int32_t>{0, 1}));
+  // Scene-wide surface numbers: the plane is 0, the box's six faces 1..6 (open ones keep their number), the sheet's
+  // local surfaces 0 and 1 become 7 and 8.
+  EXPECT_EQ(sheet.surface, (std::vector<std::int32_t>{7, 8}));
+  EXPECT_EQ(c.planes[0].surface, 0);
+  ASSERT_EQ(c.surfaceNames.size(), 9u);
+  EXPECT_EQ(c.surfaceNames[0], "floor");
+  EXPECT_EQ(c.surfaceNames[1], "bin/bottom");
+  EXPECT_EQ(c.surfaceNames[6], "bin/back");
+  EXPECT_EQ(c.surfaceNames[7], "mesh2/surface0");
+  ASSERT_EQ(r.value().surfaces.size(), 9u);
+  EXPECT_EQ(r.value().surfaces[1].wall, "bin");
   EXPECT_FALSE(sheet.motion.moves());
 
   const auto& s = c.sim;
@@ -569,7 +579,7 @@ TEST(SceneLoader, BoxAndMeshErrors) {
                                                   "    motion: {velocity: [1, 0, 0]}\n"));
   ASSERT_FALSE(r.isOk());
   const std::string m = r.status().message();
-  EXPECT_HAS(m, "geometry[0].box.open[1]: unknown face 'rigth'; did you mean 'right'? Faces: bottom, top, left, right, front, back");
+  EXPECT_HAS(m, "geometry[0].box.open[1]: unknown face 'rigth'; did you mean 'right'? Choices: bottom, top, left, right, front, back");
   EXPECT_HAS(m, "line 12, column 19: geometry[1].mesh.triangles[0]: triangle [0, 1, 2] is degenerate (zero area)");
   EXPECT_HAS(m, "geometry[1].mesh.triangles[1]: triangle [0, 1, 5] refers to a vertex outside [0, 3)");
   EXPECT_HAS(m, "geometry[1].mesh.triangles[2]: corner 1: expected a vertex index >= 0, got '-1'");
