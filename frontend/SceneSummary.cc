@@ -1,0 +1,78 @@
+#include "frontend/SceneSummary.h"
+
+#include <algorithm>
+#include <numbers>
+
+#include "compute/particles/ParticleFields.h"
+#include "compute/sim/Simulation.h"
+#include "compute/sim/TimeStep.h"
+
+namespace pflow::frontend {
+
+namespace {
+
+// Device bytes per particle: every field of the table (slot fields times their initial slot count), the reorder
+// scratch (one copy of the largest field), cell key and permutation, and neighbour rows of about 16 candidates of
+// an index and a history slot each, plus the wall-candidate rows. An estimate: slots and rows grow on demand.
+double bytesPerParticle(const compute::SimulationSettings& sim) {
+  double bytes = 0, largest = 0;
+  for (const auto& f : compute::kFieldTable) {
+    const double slots = f.multiplicity == compute::Multiplicity::kContactSlots ? sim.historySlots
+                         : f.multiplicity == compute::Multiplicity::kWallSlots  ? sim.wallHistorySlots
+                                                                                : 1;
+    bytes += double(f.elementBytes) * slots;
+    largest = std::max(largest, double(f.elementBytes) * slots);
+  }
+  const double cellSort = 4 + 4 + 4;                           // key, permutation, position copy index
+  const double neighbours = 16 * (sizeof(pflow::Index) + 1) + 4;  // candidates, slot bytes, count
+  const double walls = 8 * sizeof(pflow::Index) + 4 + 4;     // wall candidates, count, plane mask
+  return bytes + largest + cellSort + neighbours + walls;
+}
+
+}  // namespace
+
+Result<SceneSummary> summarize(const LoadedScene& scene) {
+  const compute::RunConfig& c = scene.config;
+  SceneSummary s;
+  const auto& p = c.particles;
+  s.particles = p.size();
+  if (!p.radius.empty()) {
+    s.minRadius = *std::min_element(p.radius.begin(), p.radius.end());
+    s.maxRadius = *std::max_element(p.radius.begin(), p.radius.end());
+  }
+  for (double r : p.radius) s.solidVolume += 4.0 / 3.0 * std::numbers::pi * r * r * r;
+  for (const auto& info : scene.sets)
+    s.sets.push_back({info, info.regionVolume > 0 ? info.solidVolume / info.regionVolume : 0.0});
+  s.planes = c.planes.size();
+  s.meshes = c.meshes.size();
+  for (const auto& m : c.meshes) s.triangles += m.triangles.size();
+  s.surfaces = scene.surfaces;
+
+  auto ts = compute::chooseTimeStep(c);
+  if (!ts) return ts.status();
+  s.rayleighTime = ts.value().rayleighTime;
+  s.dt = ts.value().dt;
+  s.dtReason = ts.value().reason;
+  s.warnings = ts.value().warnings;
+  s.steps = std::llround(c.sim.duration / s.dt);
+
+  auto setup = compute::prepareEngineSetup(c);
+  if (!setup) return setup.status();
+  const auto& g = setup.value().grid;
+  s.cells = {g.nx, g.ny, g.nz};
+  s.cellSize = g.cellSize;
+  s.skin = setup.value().skin;
+  s.domain = {g.lo, g.lo + Vec3d{g.nx * g.cellSize, g.ny * g.cellSize, g.nz * g.cellSize}};
+  if (c.sim.domain) s.domain = *c.sim.domain;
+  const Vec3d e = s.domain.hi - s.domain.lo;
+  const double volume = e.x * e.y * e.z;
+  s.domainSolidFraction = volume > 0 ? s.solidVolume / volume : 0;
+
+  s.bytesPerParticle = bytesPerParticle(c.sim);
+  const double cellBytes = 4.0 * (double(g.nx) * g.ny * g.nz + 1);
+  const double triangleBytes = double(s.triangles) * (3 * sizeof(Vec3d) * 2 + 4 * 4);  // vertices (rest + moved), ids
+  s.memoryBytes = s.bytesPerParticle * double(s.particles) + cellBytes + triangleBytes;
+  return s;
+}
+
+}  // namespace pflow::frontend

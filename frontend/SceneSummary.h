@@ -1,0 +1,41 @@
+// What `pflow validate` (and the frontend service's ValidateScene) reports about a loaded scene: counts, sizes,
+// solid fractions, triangles per surface, the time step and why, and a memory estimate.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "common/Status.h"
+#include "frontend/SceneLoader.h"
+
+namespace pflow::frontend {
+
+struct SceneSummary {
+  std::size_t particles = 0;
+  double minRadius = 0, maxRadius = 0;  // [m]
+  double solidVolume = 0;               // [m^3]
+  struct Set {
+    ParticleSetInfo info;
+    double solidFraction = 0;  // of its region; 0 without a region
+  };
+  std::vector<Set> sets;
+  std::size_t planes = 0, meshes = 0, triangles = 0;
+  std::vector<SurfaceInfo> surfaces;
+  compute::Aabb domain;          // [m], as given or derived
+  double domainSolidFraction = 0;
+  std::array<int, 3> cells{0, 0, 0};
+  double cellSize = 0;           // [m]
+  double skin = 0;               // [m]
+  double rayleighTime = 0;       // [s]
+  double dt = 0;                 // [s]
+  std::string dtReason;
+  std::vector<std::string> warnings;
+  std::int64_t steps = 0;        // to simulation.duration
+  double bytesPerParticle = 0;   // estimate of device memory per particle at the initial slot counts
+  double memoryBytes = 0;        // estimate for the whole run on one device
+};
+
+Result<SceneSummary> summarize(const LoadedScene& scene);
+
+}  // namespace pflow::frontend
