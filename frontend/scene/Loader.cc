@@ -404,9 +404,85 @@ void Loader::appendValidation(const ErrorList& found) {
   }
 }
 
+namespace {
+
+constexpr int kMaxNesting = 64;
+
+// Deepest nesting of flow collections ([..], {..}) and compact block sequences (`- - -`) in the text, so that
+// pathological input is refused before the YAML parser recurses into it. Quotes and comments are skipped.
+int textNesting(const std::string& text, int& line) {
+  int depth = 0, deepest = 0, dashes = 0, currentLine = 1;
+  char quote = 0;
+  bool comment = false, lineStart = true;
+  line = 0;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '\n') {
+      ++currentLine;
+      comment = false;
+      lineStart = true;
+      dashes = 0;
+      if (quote == '\'') quote = 0;  // unterminated single quote: let the parser report it
+      continue;
+    }
+    if (comment) continue;
+    if (quote) {
+      if (c == quote) quote = 0;
+      else if (quote == '"' && c == '\\') ++i;
+      continue;
+    }
+    if (c == '#' && (i == 0 || text[i - 1] == ' ' || text[i - 1] == '\t' || text[i - 1] == '\n')) {
+      comment = true;
+      continue;
+    }
+    if (c == '"' || c == '\'') quote = c;
+    if (c == '[' || c == '{') ++depth;
+    if ((c == ']' || c == '}') && depth > 0) --depth;
+    if (lineStart && c == '-' && (i + 1 == text.size() || text[i + 1] == ' ')) ++dashes;
+    else if (c != ' ' && c != '\t') lineStart = false;
+    if (depth + dashes > deepest) {
+      deepest = depth + dashes;
+      line = currentLine;
+    }
+  }
+  return deepest;
+}
+
+}  // namespace
+
+// Refuses aliases that refer to a node containing them (a cycle) and nesting deeper than kMaxNesting.
+void Loader::checkStructure(const YAML::Node& node, const std::string& path, std::vector<YAML::Node>& ancestors) {
+  if (!node.IsMap() && !node.IsSequence()) return;
+  for (const YAML::Node& a : ancestors) {
+    if (a.is(node)) {
+      badValue(path, "a cyclic alias: this node contains itself (an alias '*' refers to an anchor '&' around it)", locOf(node));
+      return;
+    }
+  }
+  if (ancestors.size() >= std::size_t(kMaxNesting)) {
+    badValue(path, "nested deeper than " + std::to_string(kMaxNesting) + " levels", locOf(node));
+    return;
+  }
+  ancestors.push_back(node);
+  if (node.IsMap()) {
+    for (auto it = node.begin(); it != node.end(); ++it) {
+      const YAML::Node key = it->first;
+      const std::string name = key.IsScalar() ? key.Scalar() : "?";
+      checkStructure(it->second, path.empty() ? name : path + "." + name, ancestors);
+    }
+  } else {
+    for (std::size_t i = 0; i < node.size(); ++i) checkStructure(node[i], at(path, i), ancestors);
+  }
+  ancestors.pop_back();
+}
+
 Result<LoadedScene> Loader::run(const std::string& yaml, const std::string& sourceName) {
   try {
     YAML::Node root;
+    if (int line = 0; textNesting(yaml, line) > kMaxNesting) {
+      error("", "the file is nested deeper than " + std::to_string(kMaxNesting) + " levels (brackets or '- ' items)", {line, 1});
+      return m_errors.toStatus(sourceName);
+    }
     try {
       root = YAML::Load(yaml);
     } catch (const YAML::ParserException& ex) {
@@ -417,6 +493,9 @@ Result<LoadedScene> Loader::run(const std::string& yaml, const std::string& sour
       error("", "the scene is empty; expected a mapping with keys " + joinNames(kTopKeys), {1, 1});
       return m_errors.toStatus(sourceName);
     }
+    std::vector<YAML::Node> ancestors;
+    checkStructure(root, "", ancestors);
+    if (!m_errors.empty()) return m_errors.toStatus(sourceName);
     const auto top = mapping(root, "", {1, 1}, kTopKeys);
     if (!top) return m_errors.toStatus(sourceName);
     parseMaterials(*top);

@@ -140,6 +140,7 @@ class Loader {
   int materialRef(const Fields& f, std::string_view key);
   int materialByName(const YAML::Node& n, const std::string& path, Loc loc);
 
+  void checkStructure(const YAML::Node& node, const std::string& path, std::vector<YAML::Node>& ancestors);
   void parseMaterials(const Fields& top);
   void parsePairs(const Fields& top);
   void parseSimulation(const Fields& top);
