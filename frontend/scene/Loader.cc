@@ -259,6 +259,14 @@ void Loader::parseSimulation(const Fields& top) {
   get(*f, "wall_history_slots", s.wallHistorySlots);
   get(*f, "threads", s.threads);
   get(*f, "seed", s.seed);
+  // Physics switches: model no more than the scene needs. Off = the coefficient is zero for every material and
+  // pair, so the kernels skip that part (rolling resistance) or cap it at zero (friction).
+  if (const Entry* p = f->find("physics")) {
+    if (const auto pf = mapping(p->value, "simulation.physics", p->loc, kPhysicsKeys)) {
+      if (const Entry* fr = pf->find("friction")) read(fr->value, pf->child("friction"), fr->loc, m_friction);
+      if (const Entry* rr = pf->find("rolling_resistance")) read(rr->value, pf->child("rolling_resistance"), rr->loc, m_rollingResistance);
+    }
+  }
 }
 
 // `key: {min: [..], max: [..]}`; checks min < max per axis. True when both corners were read and are ordered.
@@ -504,6 +512,14 @@ Result<LoadedScene> Loader::run(const std::string& yaml, const std::string& sour
     parseGeometry(*top);    // before particles: they keep clear of walls and may fill a closed wall
     parseParticles(*top);
     parseOutput(*top);
+    for (auto& m : m_config.materials) {
+      if (!m_friction) m.friction = 0;
+      if (!m_rollingResistance) m.rollingFriction = 0;
+    }
+    for (auto& pr : m_config.pairs) {
+      if (!m_friction && pr.friction) pr.friction = 0.0;
+      if (!m_rollingResistance && pr.rollingFriction) pr.rollingFriction = 0.0;
+    }
     appendValidation(m_config.validate());
   } catch (const YAML::Exception& ex) {
     error("", "YAML error: " + ex.msg, locOf(ex.mark));

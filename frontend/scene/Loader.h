@@ -64,7 +64,8 @@ constexpr std::string_view kCapNames[] = {"bottom", "top"};
 constexpr std::string_view kHopperOpenings[] = {"orifice", "top"};
 constexpr std::string_view kMotionKeys[] = {"velocity", "angular_velocity", "axis", "axis_point", "start_time"};
 constexpr std::string_view kSimulationKeys[] = {"gravity", "duration", "dt", "dt_fraction", "skin", "snapshot_interval",
-                                                "domain", "precision", "history_slots", "wall_history_slots", "threads", "seed"};
+                                                "domain", "precision", "history_slots", "wall_history_slots", "threads", "seed", "physics"};
+constexpr std::string_view kPhysicsKeys[] = {"friction", "rolling_resistance"};
 constexpr std::string_view kOutputKeys[] = {"file", "fields"};
 constexpr std::string_view kPrecisions[] = {"double", "float"};
 // Box faces; the index is the face's surface number.
@@ -190,6 +191,7 @@ class Loader {
   std::vector<std::string> m_outputFields;
   std::vector<SurfaceInfo> m_surfaces;
   std::vector<ParticleSetInfo> m_setInfo;
+  bool m_friction = true, m_rollingResistance = true;  // simulation.physics switches
   std::vector<std::string> m_badPaths;
   std::unordered_map<std::string, Loc> m_marks;  // YAML path -> where its value starts
   std::vector<PathMap> m_pathMaps;

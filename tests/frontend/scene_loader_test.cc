@@ -589,3 +589,24 @@ TEST(SceneLoader, BoxAndMeshErrors) {
 
 }  // namespace
 }  // namespace pflow::frontend
+
+namespace pflow::frontend {
+namespace {
+TEST(SceneLoader, PhysicsSwitchesZeroTheCoefficients) {
+  const std::string yaml =
+      "materials:\n  - {name: a, youngs_modulus: 1e7, poisson_ratio: 0.3, density: 2500, restitution: 0.5, friction: 0.5, rolling_friction: 0.1}\n"
+      "pairs:\n  - {materials: [a, a], friction: 0.3, rolling_friction: 0.2}\n"
+      "simulation: {duration: 0.1, physics: {friction: false, rolling_resistance: false}}\n";
+  const auto r = loadSceneFromString(yaml);
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->config.materials[0].friction, 0.0);
+  EXPECT_EQ(r->config.materials[0].rollingFriction, 0.0);
+  EXPECT_EQ(*r->config.pairs[0].friction, 0.0);
+  EXPECT_EQ(*r->config.pairs[0].rollingFriction, 0.0);
+  const auto typo = loadSceneFromString("materials:\n  - {name: a, youngs_modulus: 1e7, poisson_ratio: 0.3, density: 2500, restitution: 0.5, friction: 0.5}\n"
+                                        "simulation: {duration: 0.1, physics: {rolling: false}}\n");
+  ASSERT_FALSE(typo.isOk());
+  EXPECT_NE(typo.status().message().find("simulation.physics.rolling: unknown key 'rolling'"), std::string::npos) << typo.status().message();
+}
+}  // namespace
+}  // namespace pflow::frontend
