@@ -15,6 +15,9 @@ const char* statusCodeName(StatusCode code) {
     case StatusCode::kIo: return "IO";
     case StatusCode::kNumerical: return "NUMERICAL";
     case StatusCode::kUnavailable: return "UNAVAILABLE";
+    case StatusCode::kAlreadyExists: return "ALREADY_EXISTS";
+    case StatusCode::kCancelled: return "CANCELLED";
+    case StatusCode::kDeadlineExceeded: return "DEADLINE_EXCEEDED";
   }
   return "UNKNOWN";
 }

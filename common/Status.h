@@ -7,7 +7,20 @@
 
 namespace pflow {
 
-enum class StatusCode { kOk = 0, kInvalidArgument, kNotFound, kFailedPrecondition, kResourceExhausted, kInternal, kIo, kNumerical, kUnavailable };
+enum class StatusCode {
+  kOk = 0,
+  kInvalidArgument,
+  kNotFound,
+  kFailedPrecondition,
+  kResourceExhausted,
+  kInternal,
+  kIo,
+  kNumerical,
+  kUnavailable,
+  kAlreadyExists,
+  kCancelled,
+  kDeadlineExceeded,
+};
 
 const char* statusCodeName(StatusCode code);
 
@@ -31,6 +44,11 @@ inline Status invalidArgument(std::string m) { return {StatusCode::kInvalidArgum
 inline Status ioError(std::string m) { return {StatusCode::kIo, std::move(m)}; }
 inline Status internalError(std::string m) { return {StatusCode::kInternal, std::move(m)}; }
 inline Status numericalError(std::string m) { return {StatusCode::kNumerical, std::move(m)}; }
+inline Status notFound(std::string m) { return {StatusCode::kNotFound, std::move(m)}; }
+inline Status failedPrecondition(std::string m) { return {StatusCode::kFailedPrecondition, std::move(m)}; }
+inline Status resourceExhausted(std::string m) { return {StatusCode::kResourceExhausted, std::move(m)}; }
+inline Status unavailable(std::string m) { return {StatusCode::kUnavailable, std::move(m)}; }
+inline Status alreadyExists(std::string m) { return {StatusCode::kAlreadyExists, std::move(m)}; }
 
 // A value or an error.
 template <class T>

@@ -13,7 +13,7 @@ generator=()
 command -v ninja >/dev/null && generator=(-G Ninja)
 if [[ ! -f build-fuzz/CMakeCache.txt ]]; then
   CC=clang CXX=clang++ cmake -S . -B build-fuzz "${generator[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-    -DPFLOW_BUILD_FUZZ=ON -DPFLOW_BUILD_TESTS=OFF -DPFLOW_BUILD_BENCH=OFF -DPFLOW_ENABLE_CUDA=OFF >/dev/null
+    -DPFLOW_BUILD_FUZZ=ON -DPFLOW_BUILD_TESTS=OFF -DPFLOW_BUILD_BENCH=OFF -DPFLOW_ENABLE_CUDA=OFF -DPFLOW_BUILD_SERVICES=OFF >/dev/null
 fi
 cmake --build build-fuzz -j "${PFLOW_JOBS:-$(nproc)}" --target scene_loader_fuzz
 corpus=build-fuzz/corpus

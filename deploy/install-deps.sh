@@ -15,6 +15,8 @@ packages=(
   python3 python3-h5py python3-numpy python3-matplotlib   # pictures and file checks
   lammps                            # the reference code the benchmark compares with
   clang                             # libFuzzer for the scene-loader fuzz target (deploy/fuzz.sh)
+  libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler   # services
+  libsqlite3-dev sqlite3            # the manager's job store
 )
 
 missing=()
