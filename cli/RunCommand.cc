@@ -25,6 +25,11 @@ int exitCodeFor(const Status& s) {
     case StatusCode::kNotFound:
     case StatusCode::kFailedPrecondition: return kExitInvalid;
     case StatusCode::kIo: return kExitIo;
+    case StatusCode::kUnavailable:
+    case StatusCode::kDeadlineExceeded: return kExitUnavailable;
+    case StatusCode::kResourceExhausted: return kExitRefused;
+    case StatusCode::kCancelled: return kExitCancelled;
+    case StatusCode::kAlreadyExists: return kExitInvalid;
     default: return kExitSimulation;
   }
 }
@@ -158,36 +163,8 @@ int validateScene(const std::string& scenePath, bool json) {
   }
   const frontend::SceneSummary& s = summary.value();
   if (json) {
-    nlohmann::json sets = nlohmann::json::array(), surfaces = nlohmann::json::array();
-    for (const auto& set : s.sets)
-      sets.push_back({{"name", set.info.name}, {"method", set.info.method}, {"count", set.info.count},
-                      {"radius_min_m", set.info.minRadius}, {"radius_max_m", set.info.maxRadius},
-                      {"solid_volume_m3", set.info.solidVolume}, {"region_volume_m3", set.info.regionVolume},
-                      {"solid_fraction", set.solidFraction}});
-    for (const auto& f : s.surfaces)
-      surfaces.push_back({{"id", f.id}, {"name", f.name}, {"wall", f.wall}, {"triangles", f.triangles}, {"area_m2", f.area}});
-    const nlohmann::json j{{"valid", true},
-                           {"particles", s.particles},
-                           {"radius_min_m", s.minRadius},
-                           {"radius_max_m", s.maxRadius},
-                           {"solid_volume_m3", s.solidVolume},
-                           {"sets", sets},
-                           {"planes", s.planes},
-                           {"meshes", s.meshes},
-                           {"triangles", s.triangles},
-                           {"surfaces", surfaces},
-                           {"domain_m", {{s.domain.lo.x, s.domain.lo.y, s.domain.lo.z}, {s.domain.hi.x, s.domain.hi.y, s.domain.hi.z}}},
-                           {"solid_fraction_of_domain", s.domainSolidFraction},
-                           {"cells", s.cells},
-                           {"cell_size_m", s.cellSize},
-                           {"skin_m", s.skin},
-                           {"rayleigh_time_s", s.rayleighTime},
-                           {"dt_s", s.dt},
-                           {"dt_reason", s.dtReason},
-                           {"warnings", s.warnings},
-                           {"steps", s.steps},
-                           {"bytes_per_particle", s.bytesPerParticle},
-                           {"memory_estimate_bytes", s.memoryBytes}};
+    nlohmann::json j = nlohmann::json::parse(frontend::toJson(s));
+    j["valid"] = true;
     std::printf("%s\n", j.dump().c_str());
     return kExitOk;
   }

@@ -32,7 +32,9 @@ struct RunSummary {
 
 // Exit codes: 0 ok, 1 invalid scene or options, 2 I/O failure, 3 the simulation failed (e.g. went
 // non-finite: the message names the particle, step and quantity).
-enum ExitCode { kExitOk = 0, kExitInvalid = 1, kExitIo = 2, kExitSimulation = 3 };
+// Cluster commands add: 4 a service is unreachable, 5 refused (too few free devices with --no-wait), 6 the watched
+// job was cancelled (a failed job gives 3).
+enum ExitCode { kExitOk = 0, kExitInvalid = 1, kExitIo = 2, kExitSimulation = 3, kExitUnavailable = 4, kExitRefused = 5, kExitCancelled = 6 };
 
 Result<RunSummary> runScene(const RunOptions& options);
 int exitCodeFor(const Status& s);

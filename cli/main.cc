@@ -1,9 +1,12 @@
-// pflow: the command-line client. This build has the in-process commands (run, build, validate); the
-// cluster commands (submit, jobs, nodes, cancel, watch, fetch) come with the services.
+// pflow: the command-line client. In-process commands (run, build, validate) and, in builds with the services,
+// cluster commands (submit, jobs, job, nodes, cancel, watch, fetch) that talk to the manager and the back-end.
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
 #include "cli/RunCommand.h"
+#ifdef PFLOW_HAVE_SERVICES
+#include "cli/ClusterCommands.h"
+#endif
 #include "common/Log.h"
 
 int main(int argc, char** argv) {
@@ -36,8 +39,63 @@ int main(int argc, char** argv) {
   valCmd->add_option("scene", validatePath, "scene file (YAML)")->required()->check(CLI::ExistingFile);
   valCmd->add_flag("--json", validateJson, "print the result as JSON");
 
+#ifdef PFLOW_HAVE_SERVICES
+  pflow::cli::Endpoints endpoints;
+  app.add_option("--manager", endpoints.manager, "manager host:port (else $PFLOW_MANAGER, the config file, 127.0.0.1:50051)");
+  app.add_option("--backend", endpoints.backend, "back-end host:port (else $PFLOW_BACKEND, the config file, 127.0.0.1:50053)");
+  bool qjson = false, allJobs = false;
+  std::string jobId;
+  pflow::cli::SubmitOptions submit;
+  auto* submitCmd = app.add_subcommand("submit", "submit a scene as a job to the manager");
+  submitCmd->add_option("scene", submit.scenePath, "scene file (YAML)")->required()->check(CLI::ExistingFile);
+  submitCmd->add_option("--name", submit.name, "job name (default: the scene's file name)");
+  submitCmd->add_flag("--wait,!--no-wait", submit.wait, "queue when too few devices are free (default), or refuse");
+  submitCmd->add_option("--max-devices", submit.maxDevices, "at most this many devices (0: as the particle count deserves)");
+  submitCmd->add_flag("--watch", submit.watch, "then watch the job to its end");
+  submitCmd->add_flag("--json", qjson, "print JSON");
+  auto* jobsCmd = app.add_subcommand("jobs", "list jobs (active ones; --all for every job)");
+  jobsCmd->add_flag("--all", allJobs, "include finished jobs");
+  jobsCmd->add_flag("--json", qjson, "print JSON");
+  auto* jobCmd = app.add_subcommand("job", "show one job");
+  jobCmd->add_option("id", jobId, "job id")->required();
+  jobCmd->add_flag("--json", qjson, "print JSON");
+  auto* nodesCmd = app.add_subcommand("nodes", "list nodes and their devices (state, memory, load, job)");
+  nodesCmd->add_flag("--json", qjson, "print JSON");
+  auto* cancelCmd = app.add_subcommand("cancel", "cancel a job");
+  cancelCmd->add_option("id", jobId, "job id")->required();
+  cancelCmd->add_flag("--json", qjson, "print JSON");
+  auto* watchCmd = app.add_subcommand("watch", "follow a job's progress until it ends");
+  watchCmd->add_option("id", jobId, "job id")->required();
+  watchCmd->add_flag("--json", qjson, "print one JSON object per event");
+  pflow::cli::FetchOptions fetch;
+  bool fetchLast = false, noGrid = false;
+  std::int64_t fetchStep = -1;
+  auto* fetchCmd = app.add_subcommand("fetch", "download a job's snapshot from the back-end into an HDF5 file (+ .xmf)");
+  fetchCmd->add_option("id", fetch.jobId, "job id")->required();
+  auto* stepOpt = fetchCmd->add_option("--step", fetchStep, "the snapshot at this step");
+  fetchCmd->add_flag("--last", fetchLast, "the last snapshot (default)")->excludes(stepOpt);
+  fetchCmd->add_option("-o,--output", fetch.output, "output HDF5 file")->required();
+  fetchCmd->add_option("--fields", fetch.fields, "particle fields (default: all)");
+  fetchCmd->add_flag("--no-grid", noGrid, "leave out the grid fields");
+  fetchCmd->add_flag("--json", qjson, "print JSON");
+#endif
+
   CLI11_PARSE(app, argc, argv);
   pflow::log::init("pflow", logLevel);
+#ifdef PFLOW_HAVE_SERVICES
+  endpoints.resolve();
+  if (*submitCmd) return pflow::cli::submitJob(endpoints, submit, qjson);
+  if (*jobsCmd) return pflow::cli::listJobs(endpoints, allJobs, qjson);
+  if (*jobCmd) return pflow::cli::showJob(endpoints, jobId, qjson);
+  if (*nodesCmd) return pflow::cli::listNodes(endpoints, qjson);
+  if (*cancelCmd) return pflow::cli::cancelJob(endpoints, jobId, qjson);
+  if (*watchCmd) return pflow::cli::watchJob(endpoints, jobId, qjson);
+  if (*fetchCmd) {
+    if (fetchStep >= 0) fetch.step = fetchStep;
+    fetch.grid = !noGrid;
+    return pflow::cli::fetchSnapshot(endpoints, fetch, qjson);
+  }
+#endif
 
   if (*valCmd) return pflow::cli::validateScene(validatePath, validateJson);
 

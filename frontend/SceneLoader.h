@@ -39,6 +39,7 @@ struct LoadedScene {
   std::vector<std::string> outputFields;  // output.fields; empty = every snapshot field
   std::vector<SurfaceInfo> surfaces;      // by surface number
   std::vector<ParticleSetInfo> sets;
+  std::vector<std::string> files;         // files the scene refers to (meshes, CSV), as written, relative to it
 };
 
 // Where relative file names point, and limits that protect a process (a service, a fuzzer) from scenes that would

@@ -1,6 +1,7 @@
 #include "frontend/SceneSummary.h"
 
 #include <algorithm>
+#include <nlohmann/json.hpp>
 #include <numbers>
 
 #include "compute/particles/ParticleFields.h"
@@ -73,6 +74,39 @@ Result<SceneSummary> summarize(const LoadedScene& scene) {
   const double triangleBytes = double(s.triangles) * (3 * sizeof(Vec3d) * 2 + 4 * 4);  // vertices (rest + moved), ids
   s.memoryBytes = s.bytesPerParticle * double(s.particles) + cellBytes + triangleBytes;
   return s;
+}
+
+std::string toJson(const SceneSummary& s) {
+    nlohmann::json sets = nlohmann::json::array(), surfaces = nlohmann::json::array();
+    for (const auto& set : s.sets)
+      sets.push_back({{"name", set.info.name}, {"method", set.info.method}, {"count", set.info.count},
+                      {"radius_min_m", set.info.minRadius}, {"radius_max_m", set.info.maxRadius},
+                      {"solid_volume_m3", set.info.solidVolume}, {"region_volume_m3", set.info.regionVolume},
+                      {"solid_fraction", set.solidFraction}});
+    for (const auto& f : s.surfaces)
+      surfaces.push_back({{"id", f.id}, {"name", f.name}, {"wall", f.wall}, {"triangles", f.triangles}, {"area_m2", f.area}});
+    const nlohmann::json j{                          {"particles", s.particles},
+                          {"radius_min_m", s.minRadius},
+                          {"radius_max_m", s.maxRadius},
+                          {"solid_volume_m3", s.solidVolume},
+                          {"sets", sets},
+                          {"planes", s.planes},
+                          {"meshes", s.meshes},
+                          {"triangles", s.triangles},
+                          {"surfaces", surfaces},
+                          {"domain_m", {{s.domain.lo.x, s.domain.lo.y, s.domain.lo.z}, {s.domain.hi.x, s.domain.hi.y, s.domain.hi.z}}},
+                          {"solid_fraction_of_domain", s.domainSolidFraction},
+                          {"cells", s.cells},
+                          {"cell_size_m", s.cellSize},
+                          {"skin_m", s.skin},
+                          {"rayleigh_time_s", s.rayleighTime},
+                          {"dt_s", s.dt},
+                          {"dt_reason", s.dtReason},
+                          {"warnings", s.warnings},
+                          {"steps", s.steps},
+                          {"bytes_per_particle", s.bytesPerParticle},
+                          {"memory_estimate_bytes", s.memoryBytes}};
+  return j.dump();
 }
 
 }  // namespace pflow::frontend

@@ -38,4 +38,7 @@ struct SceneSummary {
 
 Result<SceneSummary> summarize(const LoadedScene& scene);
 
+// One JSON object (SI units in the key names: radius_min_m, dt_s, ...), as `pflow validate --json` prints it.
+std::string toJson(const SceneSummary& summary);
+
 }  // namespace pflow::frontend

@@ -248,6 +248,7 @@ std::optional<TriMesh> Loader::parseMesh(const Fields& f) {
   if (file) {
     std::string name;
     if (!read(file->value, f.child("file"), file->loc, name)) return std::nullopt;
+    m_files.push_back(name);
     auto loaded = readMeshFile(resolvePath(name));
     if (!loaded) {
       badValue(f.child("file"), loaded.status().message(), file->loc);

@@ -538,6 +538,7 @@ Result<LoadedScene> Loader::run(const std::string& yaml, const std::string& sour
   scene.outputFields = std::move(m_outputFields);
   scene.surfaces = std::move(m_surfaces);
   scene.sets = std::move(m_setInfo);
+  scene.files = std::move(m_files);
   return scene;
 }
 

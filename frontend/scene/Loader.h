@@ -191,6 +191,7 @@ class Loader {
   std::vector<std::string> m_outputFields;
   std::vector<SurfaceInfo> m_surfaces;
   std::vector<ParticleSetInfo> m_setInfo;
+  std::vector<std::string> m_files;  // files the scene refers to, as written
   bool m_friction = true, m_rollingResistance = true;  // simulation.physics switches
   std::vector<std::string> m_badPaths;
   std::unordered_map<std::string, Loc> m_marks;  // YAML path -> where its value starts

@@ -226,6 +226,7 @@ bool Loader::parseParticleList(const Fields& f, Particles& out, std::vector<Vec3
   if (file) {
     std::string name;
     if (!read(file->value, f.child("file"), file->loc, name)) return false;
+    m_files.push_back(name);
     auto csv = readParticleCsv(resolvePath(name));
     if (!csv) {
       badValue(f.child("file"), csv.status().message(), file->loc);

@@ -1,0 +1,307 @@
+#include "cli/ClusterCommands.h"
+
+#include <unistd.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "cli/RunCommand.h"
+#include "common/rpc/Rpc.h"
+#include "frontend/SceneLoader.h"
+#include "pflow/manager/v1/manager_service.grpc.pb.h"
+
+namespace pflow::cli {
+
+namespace fs = std::filesystem;
+namespace mv1 = pflow::manager::v1;
+using nlohmann::json;
+
+namespace {
+
+std::string configValue(const std::string& key) {
+  std::string path;
+  if (const char* p = std::getenv("PFLOW_CONFIG")) path = p;
+  else if (const char* home = std::getenv("HOME")) path = std::string(home) + "/.config/pflow/config.yaml";
+  if (path.empty() || !fs::exists(path)) return {};
+  try {
+    const YAML::Node n = YAML::LoadFile(path);
+    if (n[key] && n[key].IsScalar()) return n[key].Scalar();
+  } catch (const YAML::Exception& ex) {
+    std::fprintf(stderr, "pflow: ignoring %s: %s\n", path.c_str(), ex.what());
+  }
+  return {};
+}
+
+std::string resolveOne(const std::string& flag, const char* env, const std::string& key, const char* fallback) {
+  if (!flag.empty()) return flag;
+  if (const char* v = std::getenv(env); v && *v) return v;
+  if (std::string c = configValue(key); !c.empty()) return c;
+  return fallback;
+}
+
+int report(const grpc::Status& s, const std::string& what, const std::string& address) {
+  Status st = rpc::fromGrpc(s, what);
+  if (s.error_code() == grpc::StatusCode::UNAVAILABLE || s.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED)
+    st = Status(st.code(), what + ": cannot reach " + address + " (" + s.error_message() +
+                               "); is the service running? Set the address with --manager/--backend, PFLOW_MANAGER/PFLOW_BACKEND or "
+                               "~/.config/pflow/config.yaml");
+  std::fprintf(stderr, "pflow: %s\n", st.message().c_str());
+  return exitCodeFor(st);
+}
+
+std::unique_ptr<mv1::ManagerService::Stub> manager(const Endpoints& e) {
+  return mv1::ManagerService::NewStub(rpc::makeChannel(e.manager));
+}
+
+const char* stateName(mv1::JobState s) {
+  switch (s) {
+    case mv1::JOB_STATE_QUEUED: return "queued";
+    case mv1::JOB_STATE_STARTING: return "starting";
+    case mv1::JOB_STATE_RUNNING: return "running";
+    case mv1::JOB_STATE_SUCCEEDED: return "succeeded";
+    case mv1::JOB_STATE_FAILED: return "failed";
+    case mv1::JOB_STATE_CANCELLING: return "cancelling";
+    case mv1::JOB_STATE_CANCELLED: return "cancelled";
+    default: return "unknown";
+  }
+}
+
+bool finished(mv1::JobState s) {
+  return s == mv1::JOB_STATE_SUCCEEDED || s == mv1::JOB_STATE_FAILED || s == mv1::JOB_STATE_CANCELLED;
+}
+
+std::string devicesText(const mv1::Job& j) {
+  std::string out;
+  for (const auto& d : j.devices()) {
+    if (!out.empty()) out += ",";
+    out += d.node() + ":" + (d.kind() == common::v1::DEVICE_KIND_GPU ? "gpu" : "cpu") + std::to_string(d.index());
+  }
+  return out.empty() ? "-" : out;
+}
+
+std::string duration(double s) {
+  if (!(s > 0)) return "-";
+  char buf[32];
+  if (s < 120) std::snprintf(buf, sizeof buf, "%.0fs", s);
+  else if (s < 7200) std::snprintf(buf, sizeof buf, "%.1fmin", s / 60);
+  else std::snprintf(buf, sizeof buf, "%.1fh", s / 3600);
+  return buf;
+}
+
+json toJson(const mv1::Job& j) {
+  const auto& p = j.progress();
+  json devices = json::array();
+  for (const auto& d : j.devices())
+    devices.push_back({{"node", d.node()}, {"index", d.index()}, {"kind", d.kind() == common::v1::DEVICE_KIND_GPU ? "gpu" : "cpu"}});
+  return {{"id", j.id()},
+          {"name", j.name()},
+          {"state", stateName(j.state())},
+          {"reason", j.reason()},
+          {"particles", j.particles()},
+          {"devices", devices},
+          {"model_uri", j.model_uri()},
+          {"submitted_at", j.submitted_at()},
+          {"started_at", j.started_at()},
+          {"finished_at", j.finished_at()},
+          {"exit_code", j.exit_code()},
+          {"progress",
+           {{"step", p.step()},
+            {"total_steps", p.total_steps()},
+            {"time_s", p.time()},
+            {"duration_s", p.duration()},
+            {"particle_steps_per_s", p.particle_steps_per_second()},
+            {"eta_s", p.eta_seconds()}}}};
+}
+
+double percent(const mv1::Job& j) {
+  const auto& p = j.progress();
+  return p.total_steps() > 0 ? 100.0 * double(p.step()) / double(p.total_steps()) : 0.0;
+}
+
+int exitForFinalState(const mv1::Job& j) {
+  switch (j.state()) {
+    case mv1::JOB_STATE_SUCCEEDED: return kExitOk;
+    case mv1::JOB_STATE_CANCELLED: return kExitCancelled;
+    default: return kExitSimulation;
+  }
+}
+
+void printJob(const mv1::Job& j) {
+  std::printf("job %s (%s): %s%s%s\n", j.id().c_str(), j.name().c_str(), stateName(j.state()), j.reason().empty() ? "" : ": ",
+              j.reason().c_str());
+  std::printf("  particles  %llu on %s\n", (unsigned long long)j.particles(), devicesText(j).c_str());
+  const auto& p = j.progress();
+  std::printf("  progress   step %lld / %lld (%.1f%%), t = %.4g / %.4g s, %.3g particle-steps/s, ETA %s\n", (long long)p.step(),
+              (long long)p.total_steps(), percent(j), p.time(), p.duration(), p.particle_steps_per_second(), duration(p.eta_seconds()).c_str());
+  std::printf("  model      %s\n", j.model_uri().c_str());
+}
+
+}  // namespace
+
+void Endpoints::resolve() {
+  manager = resolveOne(manager, "PFLOW_MANAGER", "manager", "127.0.0.1:50051");
+  backend = resolveOne(backend, "PFLOW_BACKEND", "backend", "127.0.0.1:50053");
+}
+
+int submitJob(const Endpoints& e, const SubmitOptions& o, bool json) {
+  // Validate here first: the user sees every error with line and column before anything is sent.
+  auto scene = frontend::loadScene(o.scenePath);
+  if (!scene) {
+    std::fprintf(stderr, "%s\n", scene.status().message().c_str());
+    return exitCodeFor(scene.status());
+  }
+  mv1::SubmitJobRequest req;
+  std::ifstream in(o.scenePath, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  req.set_scene_yaml(text.str());
+  req.set_scene_name(fs::path(o.scenePath).filename().string());
+  req.set_name(o.name.empty() ? fs::path(o.scenePath).stem().string() : o.name);
+  req.set_wait(o.wait);
+  req.set_max_devices(o.maxDevices);
+  const fs::path dir = fs::path(o.scenePath).parent_path();
+  for (const std::string& f : scene.value().files) {
+    std::ifstream fin(dir / f, std::ios::binary);
+    std::stringstream bytes;
+    bytes << fin.rdbuf();
+    if (!fin) {
+      std::fprintf(stderr, "pflow: cannot read '%s', which the scene refers to\n", (dir / f).string().c_str());
+      return kExitIo;
+    }
+    auto* a = req.add_files();
+    a->set_path(f);
+    a->set_content(bytes.str());
+  }
+  mv1::SubmitJobResponse resp;
+  auto ctx = rpc::contextWithDeadline(120);  // the manager builds the model (particle generation) before answering
+  if (grpc::Status s = manager(e)->SubmitJob(ctx.get(), req, &resp); !s.ok()) return report(s, "submit", e.manager);
+  if (json && !o.watch) std::printf("%s\n", toJson(resp.job()).dump().c_str());
+  else if (!json) std::printf("submitted job %s (%s): %s, %llu particles\n", resp.job().id().c_str(), resp.job().name().c_str(),
+                              stateName(resp.job().state()), (unsigned long long)resp.job().particles());
+  if (o.watch) return watchJob(e, resp.job().id(), json);
+  return kExitOk;
+}
+
+int listJobs(const Endpoints& e, bool all, bool json) {
+  mv1::ListJobsRequest req;
+  req.set_active_only(!all);
+  mv1::ListJobsResponse resp;
+  auto ctx = rpc::contextWithDeadline();
+  if (grpc::Status s = manager(e)->ListJobs(ctx.get(), req, &resp); !s.ok()) return report(s, "jobs", e.manager);
+  if (json) {
+    nlohmann::json out = nlohmann::json::array();
+    for (const auto& j : resp.jobs()) out.push_back(toJson(j));
+    std::printf("%s\n", out.dump().c_str());
+    return kExitOk;
+  }
+  std::printf("%-18s %-16s %-10s %10s %-22s %7s %10s %8s\n", "ID", "NAME", "STATE", "PARTICLES", "DEVICES", "DONE", "RATE", "ETA");
+  for (const auto& j : resp.jobs())
+    std::printf("%-18s %-16s %-10s %10llu %-22s %6.1f%% %10.3g %8s\n", j.id().c_str(), j.name().substr(0, 16).c_str(), stateName(j.state()),
+                (unsigned long long)j.particles(), devicesText(j).substr(0, 22).c_str(), percent(j), j.progress().particle_steps_per_second(),
+                finished(j.state()) ? "-" : duration(j.progress().eta_seconds()).c_str());
+  if (resp.jobs().empty()) std::printf("(no %sjobs)\n", all ? "" : "active ");
+  return kExitOk;
+}
+
+int showJob(const Endpoints& e, const std::string& id, bool json) {
+  mv1::GetJobRequest req;
+  req.set_id(id);
+  mv1::Job job;
+  auto ctx = rpc::contextWithDeadline();
+  if (grpc::Status s = manager(e)->GetJob(ctx.get(), req, &job); !s.ok()) return report(s, "job " + id, e.manager);
+  if (json) std::printf("%s\n", toJson(job).dump().c_str());
+  else printJob(job);
+  return kExitOk;
+}
+
+int listNodes(const Endpoints& e, bool json) {
+  mv1::ListNodesResponse resp;
+  auto ctx = rpc::contextWithDeadline();
+  if (grpc::Status s = manager(e)->ListNodes(ctx.get(), mv1::ListNodesRequest(), &resp); !s.ok()) return report(s, "nodes", e.manager);
+  auto stateOf = [](mv1::DeviceState st) { return st == mv1::DEVICE_STATE_FREE ? "free" : st == mv1::DEVICE_STATE_BUSY ? "busy" : st == mv1::DEVICE_STATE_LOST ? "lost" : "?"; };
+  if (json) {
+    nlohmann::json out = nlohmann::json::array();
+    for (const auto& n : resp.nodes()) {
+      nlohmann::json devs = nlohmann::json::array();
+      for (const auto& d : n.devices())
+        devs.push_back({{"index", d.ref().index()}, {"kind", d.ref().kind() == common::v1::DEVICE_KIND_GPU ? "gpu" : "cpu"}, {"name", d.name()},
+                        {"state", stateOf(d.state())}, {"job", d.job_id()}, {"memory_total_bytes", d.memory_total_bytes()},
+                        {"memory_used_bytes", d.memory_used_bytes()}, {"utilization", d.utilization()}, {"temperature_c", d.temperature_c()}});
+      out.push_back({{"node", n.name()}, {"agent", n.agent_address()}, {"lost", n.lost()}, {"last_heartbeat", n.last_heartbeat()}, {"devices", devs}});
+    }
+    std::printf("%s\n", out.dump().c_str());
+    return kExitOk;
+  }
+  std::printf("%-14s %-8s %-30s %-6s %17s %6s %6s %s\n", "NODE", "DEVICE", "NAME", "STATE", "MEMORY USED/TOTAL", "LOAD", "TEMP", "JOB");
+  for (const auto& n : resp.nodes())
+    for (const auto& d : n.devices()) {
+      char mem[32], temp[16];
+      std::snprintf(mem, sizeof mem, "%.1f/%.1f GiB", double(d.memory_used_bytes()) / (1 << 30), double(d.memory_total_bytes()) / (1 << 30));
+      std::snprintf(temp, sizeof temp, d.temperature_c() > 0 ? "%.0fC" : "-", d.temperature_c());
+      const std::string dev = std::string(d.ref().kind() == common::v1::DEVICE_KIND_GPU ? "gpu" : "cpu") + std::to_string(d.ref().index());
+      std::printf("%-14s %-8s %-30s %-6s %17s %5.0f%% %6s %s\n", n.name().c_str(), dev.c_str(), d.name().substr(0, 30).c_str(),
+                  n.lost() ? "lost" : stateOf(d.state()), mem, 100 * d.utilization(), temp, d.job_id().empty() ? "-" : d.job_id().c_str());
+    }
+  if (resp.nodes().empty()) std::printf("(no nodes: start a pflow-agent)\n");
+  return kExitOk;
+}
+
+int cancelJob(const Endpoints& e, const std::string& id, bool json) {
+  mv1::CancelJobRequest req;
+  req.set_id(id);
+  mv1::Job job;
+  auto ctx = rpc::contextWithDeadline();
+  if (grpc::Status s = manager(e)->CancelJob(ctx.get(), req, &job); !s.ok()) return report(s, "cancel " + id, e.manager);
+  if (json) std::printf("%s\n", toJson(job).dump().c_str());
+  else std::printf("job %s: %s\n", job.id().c_str(), stateName(job.state()));
+  return kExitOk;
+}
+
+int watchJob(const Endpoints& e, const std::string& id, bool json) {
+  mv1::WatchJobRequest req;
+  req.set_id(id);
+  grpc::ClientContext ctx;  // no deadline: a watch lasts as long as the job (the stream ends with it)
+  auto stub = manager(e);
+  auto reader = stub->WatchJob(&ctx, req);
+  mv1::JobEvent ev;
+  const bool tty = ::isatty(fileno(stdout));
+  mv1::Job last;
+  bool any = false;
+  while (reader->Read(&ev)) {
+    any = true;
+    last = ev.job();
+    if (json) {
+      auto j = toJson(last);
+      j["message"] = ev.message();
+      std::printf("%s\n", j.dump().c_str());
+      std::fflush(stdout);
+      continue;
+    }
+    const double pc = percent(last);
+    const int width = 30, filled = int(std::lround(pc / 100 * width));
+    std::string bar(std::size_t(std::clamp(filled, 0, width)), '#');
+    bar.resize(width, '.');
+    std::printf("%s%-10s [%s] %5.1f%%  t = %.4g s  %.3g particle-steps/s  ETA %s%s", tty ? "\r" : "", stateName(last.state()), bar.c_str(), pc,
+                last.progress().time(), last.progress().particle_steps_per_second(), duration(last.progress().eta_seconds()).c_str(),
+                tty ? "   " : "\n");
+    std::fflush(stdout);
+  }
+  const grpc::Status s = reader->Finish();
+  if (!json && tty) std::printf("\n");
+  if (!s.ok()) return report(s, "watch " + id, e.manager);
+  if (!any) return kExitOk;
+  if (!json) {
+    std::printf("job %s %s", last.id().c_str(), stateName(last.state()));
+    if (!last.reason().empty()) std::printf(": %s", last.reason().c_str());
+    std::printf("\n");
+  }
+  return exitForFinalState(last);
+}
+
+}  // namespace pflow::cli

@@ -1,0 +1,45 @@
+// The cluster commands of `pflow`: submit, jobs, job, nodes, cancel, watch, fetch. They talk to the manager (jobs,
+// nodes) and the back-end (fetch) over gRPC; addresses come from a flag, then PFLOW_MANAGER / PFLOW_BACKEND, then
+// the config file ($PFLOW_CONFIG, else ~/.config/pflow/config.yaml: `manager: host:port`, `backend: host:port`),
+// then 127.0.0.1:50051 / 127.0.0.1:50053.
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace pflow::cli {
+
+struct Endpoints {
+  std::string manager;  // flag value; empty = resolve
+  std::string backend;
+  void resolve();
+};
+
+struct SubmitOptions {
+  std::string scenePath;
+  std::string name;
+  bool wait = true;       // queue when devices are short (--wait), or refuse (--no-wait)
+  int maxDevices = 0;
+  bool watch = false;     // then watch it to the end
+};
+
+struct FetchOptions {
+  std::string jobId;
+  std::optional<std::int64_t> step;  // unset = the last
+  std::string output;
+  std::vector<std::string> fields;
+  bool grid = true;
+  bool geometry = true;
+};
+
+// Each prints its result (a table or, with json, one JSON object) and returns the process exit code.
+int submitJob(const Endpoints& e, const SubmitOptions& o, bool json);
+int listJobs(const Endpoints& e, bool all, bool json);
+int showJob(const Endpoints& e, const std::string& id, bool json);
+int listNodes(const Endpoints& e, bool json);
+int cancelJob(const Endpoints& e, const std::string& id, bool json);
+int watchJob(const Endpoints& e, const std::string& id, bool json);
+int fetchSnapshot(const Endpoints& e, const FetchOptions& o, bool json);
+
+}  // namespace pflow::cli

@@ -1,0 +1,22 @@
+// Where a worker's snapshots go: the back-end service (normal) or a local HDF5 file (standalone runs, tests).
+#pragma once
+#include <memory>
+#include <string>
+
+#include "common/Status.h"
+#include "compute/particles/ParticleSnapshot.h"
+
+namespace pflow::worker {
+
+class SnapshotSink {
+ public:
+  virtual ~SnapshotSink() = default;
+  virtual Status writeGeometry(const compute::GeometrySnapshot& geometry) = 0;
+  virtual Status write(const compute::ParticleSnapshot& snapshot) = 0;
+  virtual Status close() = 0;
+};
+
+Result<std::unique_ptr<SnapshotSink>> makeFileSink(const std::string& h5Path);
+Result<std::unique_ptr<SnapshotSink>> makeBackendSink(const std::string& address, const std::string& jobId);
+
+}  // namespace pflow::worker

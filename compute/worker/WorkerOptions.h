@@ -1,0 +1,32 @@
+// The compute worker's command line, as the node agent builds it (manager/agent/README.md):
+//   pflow-worker --job-id ID --model DIR --manager HOST:PORT --backend HOST:PORT --devices node:kind:index,...
+// One MPI rank per leased device; rank r uses the r-th entry of --devices.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "common/Status.h"
+
+namespace pflow::worker {
+
+struct LeasedDevice {
+  std::string node;
+  std::string kind;  // "gpu" or "cpu"
+  int index = 0;
+};
+
+struct WorkerOptions {
+  std::string jobId;
+  std::string modelDir;          // the built model: scene.yaml and its files
+  std::string managerAddress;    // empty: no progress reports (standalone)
+  std::string backendAddress;    // empty: snapshots to --output instead
+  std::string output;            // local HDF5 file when no back-end is given
+  std::vector<LeasedDevice> devices;
+  double progressInterval = 1.0;  // [s] wall clock between progress reports
+  int threads = 0;               // OpenMP threads per rank; 0 = all cores / ranks on this node
+};
+
+// "node:gpu:0,node:cpu:1" -> devices; errors name the entry.
+Result<std::vector<LeasedDevice>> parseDevices(const std::string& list);
+
+}  // namespace pflow::worker

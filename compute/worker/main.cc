@@ -1,0 +1,209 @@
+// pflow-worker: the MPI compute program the node agent starts for a job.
+//
+// Rank 0 loads the built model, runs the step loop, reports progress to the manager (whose answer carries a
+// cancel request), and sends snapshots to the back-end. Until the domain decomposition lands (the MPI issue),
+// ranks > 0 hold their device and wait for rank 0's final word without spinning; rank 0 broadcasts it at the step
+// boundary where the run ends, is cancelled or fails, so every rank stops together.
+//
+// Exit codes: 0 finished (or cancelled: the manager knows it asked), 1 bad options or model, 2 I/O (back-end or
+// files), 3 the simulation failed (the message names particle, step and quantity). The last line on stderr is the
+// reason the agent reports.
+#include <mpi.h>
+
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <thread>
+
+#include "common/Log.h"
+#include "common/rpc/Rpc.h"
+#include "compute/sim/Simulation.h"
+#include "compute/worker/SnapshotSinks.h"
+#include "compute/worker/WorkerOptions.h"
+#include "frontend/SceneLoader.h"
+#include "pflow/manager/v1/node_registry.grpc.pb.h"
+
+namespace {
+
+using namespace pflow;
+
+enum Word : int { kFinished = 0, kCancelled = 1, kFailed = 2 };
+
+// Ranks > 0: wait for rank 0's final word with a non-blocking broadcast, sleeping between tests.
+int waitForRankZero() {
+  int word = kFailed;
+  MPI_Request req;
+  MPI_Ibcast(&word, 1, MPI_INT, 0, MPI_COMM_WORLD, &req);
+  int done = 0;
+  while (!done) {
+    MPI_Test(&req, &done, MPI_STATUS_IGNORE);
+    if (!done) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return word;
+}
+
+void tellOtherRanks(int word) {
+  MPI_Request req;
+  MPI_Ibcast(&word, 1, MPI_INT, 0, MPI_COMM_WORLD, &req);
+  MPI_Wait(&req, MPI_STATUS_IGNORE);
+}
+
+class ProgressReporter {
+ public:
+  ProgressReporter(const std::string& address, std::string jobId) : m_jobId(std::move(jobId)) {
+    if (!address.empty()) m_stub = manager::v1::NodeRegistry::NewStub(rpc::makeChannel(address));
+  }
+  // Reports; true when the manager asks to cancel. A manager that does not answer is logged, not fatal.
+  bool report(const compute::Simulation& sim, std::int64_t totalSteps, double duration, double rate, const std::string& message) {
+    if (!m_stub) return false;
+    manager::v1::ReportProgressRequest req;
+    req.set_job_id(m_jobId);
+    auto* p = req.mutable_progress();
+    p->set_step(sim.stepCount());
+    p->set_total_steps(totalSteps);
+    p->set_time(sim.time());
+    p->set_duration(duration);
+    p->set_particle_steps_per_second(rate);
+    p->set_eta_seconds(rate > 0 ? double(totalSteps - sim.stepCount()) * double(sim.numParticles()) / rate : 0);
+    req.set_message(message);
+    manager::v1::ReportProgressResponse resp;
+    auto ctx = rpc::contextWithDeadline(5);
+    const grpc::Status s = m_stub->ReportProgress(ctx.get(), req, &resp);
+    if (!s.ok()) {
+      if (!m_warned) spdlog::warn("progress report to the manager failed: {} (the run goes on)", s.error_message());
+      m_warned = true;
+      return false;
+    }
+    m_warned = false;
+    return resp.cancel();
+  }
+
+ private:
+  std::string m_jobId;
+  std::unique_ptr<manager::v1::NodeRegistry::Stub> m_stub;
+  bool m_warned = false;
+};
+
+int fail(int code, const std::string& message) {
+  spdlog::error("{}", message);
+  std::fprintf(stderr, "%s\n", message.c_str());  // the agent reports the last stderr line
+  return code;
+}
+
+int runRankZero(const worker::WorkerOptions& o, int ranks) {
+  auto scene = frontend::loadScene((std::filesystem::path(o.modelDir) / "scene.yaml").string());
+  if (!scene) return fail(1, "cannot load the model: " + scene.status().message());
+  compute::RunConfig cfg = scene.value().config;
+  if (o.threads > 0) cfg.sim.threads = o.threads;
+  const worker::LeasedDevice& device = o.devices.front();
+  compute::SimulationOptions so;  // the CUDA executor plugs in with the GPU issue; until then every rank runs on CPU cores
+  auto created = compute::Simulation::create(cfg, so);
+  if (!created) return fail(created.status().code() == StatusCode::kInvalidArgument ? 1 : 3, created.status().message());
+  compute::Simulation& sim = *created.value();
+  const std::string executorNote = sim.executorDescription() + " (device " + device.node + ":" + device.kind + ":" +
+                                   std::to_string(device.index) + (device.kind == "gpu" ? ", CUDA executor not in this build" : "") +
+                                   "; " + std::to_string(ranks) + " rank(s))";
+  spdlog::info("job {}: {} particles, executor {}", o.jobId, sim.numParticles(), executorNote);
+
+  auto sink = o.backendAddress.empty() ? worker::makeFileSink(o.output) : worker::makeBackendSink(o.backendAddress, o.jobId);
+  if (!sink) return fail(2, sink.status().message());
+  const auto& fields = scene.value().outputFields;
+  auto write = [&]() -> Status {
+    auto t = sim.timers().time(compute::Phase::kOutput);
+    compute::ParticleSnapshot snap = sim.snapshot();
+    if (!fields.empty())
+      std::erase_if(snap.arrays, [&](const compute::SnapshotArray& a) { return std::find(fields.begin(), fields.end(), a.name) == fields.end(); });
+    return sink.value()->write(snap);
+  };
+  if (Status s = sink.value()->writeGeometry(sim.geometry()); !s.isOk()) return fail(2, s.message());
+  if (Status s = write(); !s.isOk()) return fail(2, s.message());
+
+  const double duration = cfg.sim.duration, interval = cfg.sim.snapshotInterval;
+  const auto totalSteps = std::int64_t(std::llround(duration / sim.dt()));
+  const auto perSnapshot = interval > 0 ? std::max<std::int64_t>(1, std::llround(interval / sim.dt())) : totalSteps;
+  ProgressReporter progress(o.managerAddress, o.jobId);
+  const auto start = std::chrono::steady_clock::now();
+  auto lastReport = start - std::chrono::hours(1);
+  bool cancelled = false;
+  auto observer = [&](const compute::Simulation& s) -> Status {
+    if (s.stepCount() % perSnapshot == 0 || s.stepCount() == totalSteps)
+      if (Status st = write(); !st.isOk()) return st;
+    const auto now = std::chrono::steady_clock::now();
+    if (std::chrono::duration<double>(now - lastReport).count() >= o.progressInterval) {
+      lastReport = now;
+      const double wall = std::chrono::duration<double>(now - start).count();
+      const double rate = wall > 0 ? double(s.numParticles()) * double(s.stepCount()) / wall : 0;
+      if (progress.report(s, totalSteps, duration, rate, executorNote)) {
+        cancelled = true;
+        return Status(StatusCode::kCancelled, "cancelled at step " + std::to_string(s.stepCount()));
+      }
+    }
+    return Status::ok();
+  };
+  Status run = sim.runUntil(duration, observer);
+  if (cancelled) {
+    spdlog::info("job {} cancelled at step {} (t = {} s)", o.jobId, sim.stepCount(), sim.time());
+    if (Status s = sink.value()->close(); !s.isOk()) spdlog::warn("{}", s.message());
+    return -1;  // tells main: cancelled
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  progress.report(sim, totalSteps, duration, wall > 0 ? double(sim.numParticles()) * double(sim.stepCount()) / wall : 0, "finished");
+  if (Status s = sink.value()->close(); !s.isOk() && run.isOk()) run = s;
+  spdlog::info("{}", sim.timers().report());
+  if (!run.isOk()) return fail(run.code() == StatusCode::kIo || run.code() == StatusCode::kUnavailable ? 2 : 3, run.message());
+  spdlog::info("job {} finished: {} steps in {:.1f} s", o.jobId, sim.stepCount(), wall);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int provided = 0;
+  MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
+  int rank = 0, size = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+
+  CLI::App app{"pflow-worker: the MPI compute program of a pflow job"};
+  worker::WorkerOptions o;
+  std::string devices, logLevel = "info";
+  app.add_option("--job-id", o.jobId, "job id")->required();
+  app.add_option("--model", o.modelDir, "built model folder (scene.yaml and its files)")->required();
+  app.add_option("--manager", o.managerAddress, "manager host:port for progress reports and cancel");
+  app.add_option("--backend", o.backendAddress, "back-end host:port for snapshots");
+  app.add_option("--output", o.output, "local HDF5 file for snapshots when no back-end is given");
+  app.add_option("--devices", devices, "leased devices in rank order: node:gpu|cpu:index,...")->required();
+  app.add_option("--progress-interval", o.progressInterval, "seconds between progress reports")->capture_default_str();
+  app.add_option("--threads", o.threads, "OpenMP threads per rank (0: all)");
+  app.add_option("--log-level", logLevel, "trace, debug, info, warn, error")->capture_default_str();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    MPI_Finalize();
+    return code == 0 ? 0 : 1;
+  }
+  pflow::log::init("worker." + std::to_string(rank), logLevel);
+
+  int code = 0;
+  auto parsed = worker::parseDevices(devices);
+  if (!parsed) code = fail(1, parsed.status().message());
+  else if (int(parsed.value().size()) != size)
+    code = fail(1, "--devices lists " + std::to_string(parsed.value().size()) + " device(s) for " + std::to_string(size) + " rank(s)");
+  else if (o.backendAddress.empty() && o.output.empty()) code = fail(1, "give --backend or --output for the snapshots");
+  else o.devices = parsed.value();
+
+  if (rank == 0) {
+    if (code == 0) code = runRankZero(o, size);
+    tellOtherRanks(code == 0 ? kFinished : code < 0 ? kCancelled : kFailed);
+    if (code < 0) code = 0;  // cancelled: a clean stop
+  } else {
+    const int word = waitForRankZero();
+    if (code == 0 && word == kFailed) code = 1;
+  }
+  MPI_Finalize();
+  return code;
+}

@@ -1,0 +1,31 @@
+#include "frontend/service/InitialState.h"
+
+#include <algorithm>
+#include <filesystem>
+
+#include "backend/store/SnapshotFile.h"
+#include "compute/sim/Simulation.h"
+
+namespace pflow::frontend {
+
+Status writeInitialState(const LoadedScene& scene, const std::string& h5Path) {
+  compute::SimulationOptions options;
+  auto sim = compute::Simulation::create(scene.config, options);
+  if (!sim) return sim.status();
+  if (const auto parent = std::filesystem::path(h5Path).parent_path(); !parent.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(parent, ec);
+    if (ec) return ioError("cannot create the folder '" + parent.string() + "': " + ec.message());
+  }
+  auto writer = backend::SnapshotWriter::create(h5Path);
+  if (!writer) return writer.status();
+  if (Status s = writer.value()->writeGeometry(sim.value()->geometry()); !s.isOk()) return s;
+  compute::ParticleSnapshot snap = sim.value()->snapshot();
+  const auto& fields = scene.outputFields;
+  if (!fields.empty())
+    std::erase_if(snap.arrays, [&](const compute::SnapshotArray& a) { return std::find(fields.begin(), fields.end(), a.name) == fields.end(); });
+  if (Status s = writer.value()->writeSnapshot(snap); !s.isOk()) return s;
+  return writer.value()->close();
+}
+
+}  // namespace pflow::frontend
