@@ -141,15 +141,31 @@ std::string lastErrorLine(const std::string& logPath, long long fromOffset) {
   std::string text(static_cast<std::size_t>(size - start), '\0');
   in.seekg(start);
   in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  // Open MPI frames its own notices between rulers of dashes ("Primary job terminated normally, but 1 process
+  // returned a non-zero exit code. Per user-direction, the job has been aborted."): the worker's words come first.
   std::istringstream lines(text);
-  std::string line, lastText, lastError;
+  std::string line, errorOutside, textOutside, noticed, errorInside, textInside;
+  bool inBox = false;
   while (std::getline(lines, line)) {
     line = trim(line);
+    if (line.size() >= 20 && isRuler(line)) {
+      inBox = !inBox;
+      continue;
+    }
     if (line.empty() || isRuler(line)) continue;
-    lastText = line;
-    if (mentionsError(line)) lastError = line;
+    if (inBox) {
+      textInside = line;
+      if (line.rfind("mpirun noticed", 0) == 0) noticed = line;
+      if (mentionsError(line)) errorInside = line;
+    } else {
+      textOutside = line;
+      if (mentionsError(line)) errorOutside = line;
+    }
   }
-  return shorten(lastError.empty() ? lastText : lastError);
+  for (const std::string* pick : {&errorOutside, &noticed, &textOutside, &errorInside, &textInside}) {
+    if (!pick->empty()) return shorten(*pick);
+  }
+  return "";
 }
 
 // --- processes ---------------------------------------------------------------------------------------------------------

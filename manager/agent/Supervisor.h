@@ -69,8 +69,9 @@ std::vector<std::string> workerCommand(const Lease& lease, const std::vector<Dev
 LaunchPlan planLaunch(const Lease& lease, const LaunchConfig& config, const std::string& localNode);
 
 // The line of a worker's log that best explains a failure: the last line mentioning an error (error, fatal, abort,
-// exception, failed, what()), else the last line with any text (rulers of dashes skipped); "" for an empty log.
-// Reads at most the last 64 KiB after byte `fromOffset`.
+// exception, failed, what()) outside Open MPI's notices (framed by rulers of dashes); else mpirun's "mpirun noticed
+// that process rank R ... exited on signal N" line; else the last line with any text, outside notices first.
+// "" for an empty log. Reads at most the last 64 KiB after byte `fromOffset`.
 std::string lastErrorLine(const std::string& logPath, long long fromOffset = 0);
 
 // How a worker ended.

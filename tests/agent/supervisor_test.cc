@@ -132,6 +132,32 @@ TEST(LastErrorLine, PrefersErrorsSkipsRulersAndStartsAtOffset) {
   EXPECT_EQ(lastErrorLine(dir / "missing.log"), "");
 }
 
+// What mpirun 4.1 prints when a rank fails (captured on this machine).
+constexpr const char* kRuler = "--------------------------------------------------------------------------\n";
+
+TEST(LastErrorLine, WorkerErrorBeatsMpirunNotices) {
+  TempDir dir;
+  const std::string log = dir / "x.log";
+  testing::writeFile(log, std::string("step 1 rank 0\nerror: particle 17 left the domain\nstep 1 rank 1\n") + kRuler +
+                              "Primary job  terminated normally, but 1 process returned\n"
+                              "a non-zero exit code. Per user-direction, the job has been aborted.\n" +
+                              kRuler + kRuler +
+                              "mpirun detected that one or more processes exited with non-zero status, thus causing\n"
+                              "the job to be terminated. The first process to do so was:\n\n"
+                              "  Process name: [[815,1],1]\n  Exit code:    3\n" + kRuler);
+  EXPECT_EQ(lastErrorLine(log), "error: particle 17 left the domain");
+}
+
+TEST(LastErrorLine, MpirunNoticeOfASignal) {
+  TempDir dir;
+  const std::string log = dir / "x.log";
+  testing::writeFile(log, std::string(kRuler) + "Primary job  terminated normally, but 1 process returned\n"
+                              "a non-zero exit code. Per user-direction, the job has been aborted.\n" + kRuler + kRuler +
+                              "mpirun noticed that process rank 1 with PID 0 on node vm exited on signal 11 (Segmentation fault).\n" +
+                              kRuler);
+  EXPECT_EQ(lastErrorLine(log), "mpirun noticed that process rank 1 with PID 0 on node vm exited on signal 11 (Segmentation fault).");
+}
+
 // A supervisor whose exits are collected for the test.
 class SupervisorTest : public ::testing::Test {
  protected:
