@@ -49,7 +49,7 @@ int main(int argc, char** argv) {
   double grace = 10;
   app.add_option("--node", node, "this node's name (as the manager and leases call it)")->capture_default_str();
   app.add_option("--listen", listen, "HOST:PORT of the AgentService (port 0: any free port)")->capture_default_str();
-  app.add_option("--advertise", advertise, "HOST:PORT the manager should call (default: the bound listen address)");
+  app.add_option("--advertise", advertise, "HOST:PORT the manager should call (default: the bound listen address; host name:port for a wildcard)");
   app.add_option("--manager", manager, "HOST:PORT of the manager's NodeRegistry (none: standalone, no heartbeats)");
   app.add_option("--workdir", workdir, "folder for worker logs and hostfiles (default: $TMPDIR/pflow-agent-NODE)");
   app.add_option("--worker", worker, "the compute worker program")->capture_default_str();
@@ -115,7 +115,13 @@ int main(int argc, char** argv) {
     spdlog::error("{}", server.status().toString());
     return 1;
   }
-  theAgent.setAdvertiseAddress(advertise.empty() ? server.value()->address() : advertise);
+  if (advertise.empty()) {
+    // A wildcard listen address cannot be called back: advertise the host name with the bound port.
+    const std::string host = rpc::hostOf(server.value()->address());
+    const bool wildcard = host == "0.0.0.0" || host == "[::]" || host == "::" || host.empty();
+    advertise = wildcard ? hostName() + ":" + std::to_string(server.value()->port()) : server.value()->address();
+  }
+  theAgent.setAdvertiseAddress(advertise);
   spdlog::info("node {}: listening on {} (advertised as {}), manager {}, workdir {}, worker {}", node,
                server.value()->address(), theAgent.options().advertiseAddress, manager.empty() ? "none" : manager,
                workdir, worker);

@@ -1,7 +1,11 @@
 // The multi-node rehearsal on one machine (label mpi): Open MPI with a two-node hostfile through
 // deploy/local/pflow-rsh, then two real pflow-agent processes (node-a on 127.0.0.1, node-b on 127.0.0.2)
 // heartbeating to a fake manager, and a job placed across both. Skipped when mpirun is absent.
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -27,6 +31,18 @@ using testing::waitUntil;
 const std::string kRsh = std::string(PFLOW_SOURCE_DIR) + "/deploy/local/pflow-rsh";
 
 bool haveMpirun() { return std::system("command -v mpirun >/dev/null 2>&1") == 0; }
+
+// Linux routes all of 127/8 to lo; some sandboxes only have 127.0.0.1. Then node-b shares it (another port).
+std::string secondLoopback() {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_port = 0;
+  ::inet_pton(AF_INET, "127.0.0.2", &a.sin_addr);
+  const bool ok = fd >= 0 && ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
+  if (fd >= 0) ::close(fd);
+  return ok ? "127.0.0.2" : "127.0.0.1";
+}
 
 std::string run(const std::string& command, int* rc) {
   std::string out;
@@ -77,7 +93,7 @@ class TwoAgents : public ::testing::Test {
                                     "case $job in fail*) [ $r = 1 ] && { echo \"error: rank 1 cannot read the model\" >&2; exit 3; };; esac\n"
                                     "exit 0");
     startAgent("node-a", "127.0.0.1:0");
-    startAgent("node-b", "127.0.0.2:0");
+    startAgent("node-b", secondLoopback() + ":0");
     ASSERT_TRUE(m_manager.waitFor(
         [&] { return m_manager.heartbeatCount["node-a"] > 0 && m_manager.heartbeatCount["node-b"] > 0; }, 20))
         << testing::readFile(m_dir / "agent-node-a.log") << testing::readFile(m_dir / "agent-node-b.log");
@@ -151,7 +167,7 @@ class TwoAgents : public ::testing::Test {
 TEST_F(TwoAgents, JobAcrossBothNodes) {
   // Both agents report their CPU slot from their own address.
   EXPECT_EQ(rpc::hostOf(m_manager.latestOf("node-a").agent_address()), "127.0.0.1");
-  EXPECT_EQ(rpc::hostOf(m_manager.latestOf("node-b").agent_address()), "127.0.0.2");
+  EXPECT_EQ(rpc::hostOf(m_manager.latestOf("node-b").agent_address()), secondLoopback());
   ASSERT_EQ(m_manager.latestOf("node-b").devices_size(), 1);
   EXPECT_EQ(m_manager.latestOf("node-b").devices(0).ref().node(), "node-b");
 
