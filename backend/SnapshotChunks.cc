@@ -320,4 +320,42 @@ Status ChunkAssembler::checkComplete() const {
   return m_geometry.checkComplete();
 }
 
+Status snapshotChunks(const std::string& jobId, const compute::ParticleSnapshot& s,
+                      const compute::GeometrySnapshot* geometryOrNull, const ChunkSink& sink) {
+  auto send = [&](Section section) {
+    return [&, section](ArrayPiece&& p) {
+      return sink(Chunk{jobId, s.step, s.time, std::uint64_t(s.n), section, std::move(p), std::nullopt});
+    };
+  };
+  for (const auto& a : s.arrays)
+    if (Status st = particlePieces(a, s.n, send(Section::kParticles)); !st) return st;
+  if (geometryOrNull != nullptr) return geometryPieces(*geometryOrNull, send(Section::kGeometry));
+  return Status::ok();
+}
+
+Status SnapshotFileSink::add(const Chunk& chunk) {
+  if (!m_assembler) {
+    auto a = ChunkAssembler::create(m_output + ".part", chunk);
+    if (!a) return a.status();
+    m_assembler = std::move(a.value());
+  }
+  return m_assembler->add(chunk);
+}
+
+Status SnapshotFileSink::finish() {
+  if (!m_assembler) return invalidArgument(m_output + ": no snapshot data arrived");
+  if (Status st = m_assembler->checkComplete(); !st) return st;
+  auto writer = SnapshotWriter::create(m_output);
+  if (!writer) return writer.status();
+  if (!m_assembler->geometry().empty()) {
+    auto g = m_assembler->geometry().take();
+    if (!g) return g.status();
+    if (Status st = writer.value()->writeGeometry(g.value()); !st) return st;
+  }
+  if (Status st = writer.value()->commit(m_assembler->staging(), nullptr); !st) return st;
+  if (Status st = writer.value()->close(); !st) return st;
+  m_assembler.reset();
+  return Status::ok();
+}
+
 }  // namespace pflow::backend

@@ -72,6 +72,11 @@ Status particlePieces(const compute::SnapshotArray& array, std::size_t n, const 
 // Cuts every non-empty geometry array into pieces.
 Status geometryPieces(const compute::GeometrySnapshot& geometry, const PieceSink& sink);
 
+using ChunkSink = std::function<Status(Chunk&&)>;
+// The whole chunk stream of a snapshot (particle arrays, then the geometry if given), as a writer sends it.
+Status snapshotChunks(const std::string& jobId, const compute::ParticleSnapshot& snapshot,
+                      const compute::GeometrySnapshot* geometryOrNull, const ChunkSink& sink);
+
 // Collects geometry pieces into a GeometrySnapshot (held in memory, at most kMaxGeometryBytes).
 class GeometryAssembler {
  public:
@@ -114,6 +119,20 @@ class ChunkAssembler {
   double m_time = 0;
   std::uint64_t m_n = 0;
   std::uint64_t m_bytes = 0;
+};
+
+// Writes one streamed snapshot into a new local snapshot file (created or truncated; + .xmf) in the store's layout,
+// through a scratch file `<output>.part` that finish() or the destructor removes. Grid chunks are stored as sent.
+class SnapshotFileSink {
+ public:
+  explicit SnapshotFileSink(std::string outputH5) : m_output(std::move(outputH5)) {}
+  Status add(const Chunk& chunk);
+  // INVALID_ARGUMENT if nothing arrived or an array is incomplete; otherwise writes the file.
+  Status finish();
+
+ private:
+  std::string m_output;
+  std::unique_ptr<ChunkAssembler> m_assembler;
 };
 
 }  // namespace pflow::backend
