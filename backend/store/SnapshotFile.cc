@@ -665,6 +665,251 @@ class XdmfBuilder {
   std::ostringstream m_os;
 };
 
+
+// --- partial reads, N-d datasets, grids (the back-end's additions) ----------------------------------------------
+
+constexpr const char* kGridGroupName = "grid";
+
+std::string shapeText(const std::vector<std::uint64_t>& shape) {
+  std::string s = "(";
+  for (std::size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
+  return s + ")";
+}
+
+bool validArrayName(const std::string& name) {
+  return !name.empty() && name.find('/') == std::string::npos && name != "." && name != "..";
+}
+
+// Attribute of `count` values (a 1-D simple dataspace).
+Status writeVectorAttr(hid_t obj, const char* name, hid_t fileType, hid_t memType, const void* values,
+                       std::size_t count, const std::string& file, const std::string& where) {
+  const hsize_t dims[1] = {count};
+  Hid space = spaceHid(H5Screate_simple(1, dims, nullptr));
+  Hid attr = attributeHid(H5Acreate2(obj, name, fileType, space.get(), H5P_DEFAULT, H5P_DEFAULT));
+  if (!attr.valid() || H5Awrite(attr.get(), memType, values) < 0 || attr.reset() < 0)
+    return h5Error(file, "cannot write attribute '" + std::string(name) + "' of '" + where + "'");
+  return Status::ok();
+}
+
+Status readVectorAttr(hid_t obj, const char* name, hid_t memType, void* values, std::size_t count,
+                      const std::string& file, const std::string& where) {
+  const std::string what = "attribute '" + std::string(name) + "' of '" + where + "'";
+  const htri_t exists = H5Aexists(obj, name);
+  if (exists < 0) return h5Error(file, "cannot look up " + what);
+  if (exists == 0) return invalidArgument(file + ": '" + where + "' has no attribute '" + name + "'");
+  Hid attr = attributeHid(H5Aopen(obj, name, H5P_DEFAULT));
+  if (!attr.valid()) return h5Error(file, "cannot open " + what);
+  Hid space = spaceHid(H5Aget_space(attr.get()));
+  if (!space.valid() || H5Sget_simple_extent_npoints(space.get()) != static_cast<hssize_t>(count))
+    return invalidArgument(file + ": " + what + " does not hold " + std::to_string(count) + " values");
+  if (H5Aread(attr.get(), memType, values) < 0) return h5Error(file, "cannot read " + what);
+  return Status::ok();
+}
+
+// An empty dataset of `shape` (contiguous, no fill, no timestamps) with its `unit`.
+Result<Hid> createNdDataset(hid_t loc, const std::string& name, hid_t fileType, const std::vector<std::uint64_t>& shape,
+                            const std::string& unit, const std::string& file, const std::string& where) {
+  const std::string what = "'" + where + "/" + name + "'";
+  std::vector<hsize_t> dims(shape.begin(), shape.end());
+  Hid space = spaceHid(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr));
+  Hid dcpl = plistHid(H5Pcreate(H5P_DATASET_CREATE));
+  if (!space.valid() || !dcpl.valid() || H5Pset_fill_time(dcpl.get(), H5D_FILL_TIME_NEVER) < 0 ||
+      H5Pset_obj_track_times(dcpl.get(), false) < 0)
+    return h5Error(file, "cannot prepare dataset " + what);
+  Hid dset = datasetHid(H5Dcreate2(loc, name.c_str(), fileType, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT));
+  if (!dset.valid()) return h5Error(file, "cannot create dataset " + what);
+  if (Status st = writeStringAttr(dset.get(), "unit", unit, file, where + "/" + name); !st) return st;
+  return dset;
+}
+
+// The hyperslab of rows [first, first + count) of a dataset of `dims` (all of every other dimension).
+Status selectRows(hid_t fileSpace, const std::vector<hsize_t>& dims, std::uint64_t first, std::uint64_t count,
+                  Hid& memSpace) {
+  std::vector<hsize_t> start(dims.size(), 0), cnt(dims);
+  start[0] = first;
+  cnt[0] = count;
+  if (H5Sselect_hyperslab(fileSpace, H5S_SELECT_SET, start.data(), nullptr, cnt.data(), nullptr) < 0)
+    return internalError("cannot select rows");
+  memSpace = spaceHid(H5Screate_simple(static_cast<int>(cnt.size()), cnt.data(), nullptr));
+  if (!memSpace.valid()) return internalError("cannot make a memory space");
+  return Status::ok();
+}
+
+Status writeRows(hid_t dset, const std::vector<std::uint64_t>& shape, std::uint64_t first, std::uint64_t count,
+                 hid_t memType, const void* data, const std::string& file, const std::string& what) {
+  if (count == 0) return Status::ok();
+  std::vector<hsize_t> dims(shape.begin(), shape.end());
+  Hid fileSpace = spaceHid(H5Dget_space(dset));
+  Hid memSpace;
+  if (!fileSpace.valid() || !selectRows(fileSpace.get(), dims, first, count, memSpace) ||
+      H5Dwrite(dset, memType, memSpace.get(), fileSpace.get(), H5P_DEFAULT, data) < 0)
+    return h5Error(file, "cannot write rows of " + what);
+  return Status::ok();
+}
+
+// Reads rows [first, first + count) of an open dataset into `out` as `memType`.
+Status readRowsOf(hid_t dset, std::uint64_t first, std::uint64_t count, hid_t memType, void* out,
+                  const std::string& file, const std::string& what) {
+  auto dims = datasetDims(dset, file, what);
+  if (!dims) return dims.status();
+  if (dims->empty()) return invalidArgument(file + ": " + what + " is a scalar");
+  if (first > (*dims)[0] || count > (*dims)[0] - first)
+    return invalidArgument(file + ": rows [" + std::to_string(first) + ", " + std::to_string(first + count) +
+                           ") are beyond the " + std::to_string((*dims)[0]) + " rows of " + what);
+  if (count == 0) return Status::ok();
+  Hid fileSpace = spaceHid(H5Dget_space(dset));
+  Hid memSpace;
+  if (!fileSpace.valid() || !selectRows(fileSpace.get(), dims.value(), first, count, memSpace) ||
+      H5Dread(dset, memType, memSpace.get(), fileSpace.get(), H5P_DEFAULT, out) < 0)
+    return h5Error(file, "cannot read rows of " + what);
+  return Status::ok();
+}
+
+// Type, shape and unit of dataset `name` of `group`.
+Result<ArrayMeta> datasetMeta(hid_t group, const std::string& name, const std::string& file, const std::string& where) {
+  const std::string what = "'" + where + "/" + name + "'";
+  Hid dset = datasetHid(H5Dopen2(group, name.c_str(), H5P_DEFAULT));
+  if (!dset.valid()) return h5Error(file, "cannot open dataset " + what);
+  Hid dtype = typeHid(H5Dget_type(dset.get()));
+  if (!dtype.valid()) return h5Error(file, "cannot read the type of " + what);
+  const auto type = scalarTypeOf(dtype.get());
+  if (!type) return invalidArgument(file + ": dataset " + what + " has an unsupported element type");
+  auto dims = datasetDims(dset.get(), file, what);
+  if (!dims) return dims.status();
+  ArrayMeta meta;
+  meta.name = name;
+  meta.type = *type;
+  meta.shape.assign(dims->begin(), dims->end());
+  const htri_t hasUnit = H5Aexists(dset.get(), "unit");
+  if (hasUnit < 0) return h5Error(file, "cannot look up the unit of " + what);
+  if (hasUnit > 0) {
+    auto unit = readStringAttr(dset.get(), "unit", file, where + "/" + name);
+    if (!unit) return unit.status();
+    meta.unit = std::move(unit.value());
+  }
+  return meta;
+}
+
+Status writeGridAttrs(hid_t group, const GridSpec& spec, const std::string& file, const std::string& where) {
+  const double origin[3] = {spec.origin.x, spec.origin.y, spec.origin.z};
+  if (Status st = writeVectorAttr(group, "origin", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, origin, 3, file, where); !st)
+    return st;
+  if (Status st = writeScalarAttr(group, "cell_size", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, spec.cellSize, file, where);
+      !st)
+    return st;
+  return writeVectorAttr(group, "cells", H5T_STD_U32LE, H5T_NATIVE_UINT32, spec.cells.data(), 3, file, where);
+}
+
+Result<GridMeta> readGridMeta(hid_t stepGroup, const std::string& file, const std::string& stepWhere) {
+  const std::string where = stepWhere + "/" + kGridGroupName;
+  Hid group = groupHid(H5Gopen2(stepGroup, kGridGroupName, H5P_DEFAULT));
+  if (!group.valid()) return h5Error(file, "cannot open '" + where + "'");
+  GridMeta meta;
+  double origin[3];
+  if (Status st = readVectorAttr(group.get(), "origin", H5T_NATIVE_DOUBLE, origin, 3, file, where); !st) return st;
+  meta.spec.origin = {origin[0], origin[1], origin[2]};
+  auto h = readScalarAttr<double>(group.get(), "cell_size", H5T_NATIVE_DOUBLE, file, where);
+  if (!h) return h.status();
+  meta.spec.cellSize = h.value();
+  if (Status st = readVectorAttr(group.get(), "cells", H5T_NATIVE_UINT32, meta.spec.cells.data(), 3, file, where); !st)
+    return st;
+  auto names = linkNames(group.get(), file, where);
+  if (!names) return names.status();
+  for (const auto& name : names.value()) {
+    auto array = datasetMeta(group.get(), name, file, where);
+    if (!array) return array.status();
+    meta.arrays.push_back(std::move(array.value()));
+  }
+  return meta;
+}
+
+// Attributes, particle arrays (rank 1 or 2, n rows) and grid of /snapshots/<step>.
+Result<StepMeta> readStepMeta(hid_t file, const std::string& path, std::int64_t step) {
+  const std::string where = stepGroupPath(step);
+  Hid group = groupHid(H5Gopen2(file, where.c_str(), H5P_DEFAULT));
+  if (!group.valid()) return h5Error(path, "cannot open '" + where + "'");
+  StepMeta meta;
+  meta.step = step;
+  auto time = readScalarAttr<double>(group.get(), "time", H5T_NATIVE_DOUBLE, path, where);
+  if (!time) return time.status();
+  meta.time = time.value();
+  auto n = readScalarAttr<std::uint64_t>(group.get(), "n", H5T_NATIVE_UINT64, path, where);
+  if (!n) return n.status();
+  meta.n = n.value();
+  auto names = linkNames(group.get(), path, where);
+  if (!names) return names.status();
+  for (const auto& name : names.value()) {
+    Hid object = objectHid(H5Oopen(group.get(), name.c_str(), H5P_DEFAULT));
+    if (!object.valid()) return h5Error(path, "cannot open '" + where + "/" + name + "'");
+    const H5I_type_t kind = H5Iget_type(object.get());
+    object.reset();
+    if (kind == H5I_GROUP && name == kGridGroupName) {
+      auto grid = readGridMeta(group.get(), path, where);
+      if (!grid) return grid.status();
+      meta.grid = std::move(grid.value());
+      continue;
+    }
+    if (kind != H5I_DATASET) continue;
+    auto array = datasetMeta(group.get(), name, path, where);
+    if (!array) return array.status();
+    const auto& s = array->shape;
+    if (s.empty() || s.size() > 2 || s[0] != meta.n)
+      return invalidArgument(path + ": dataset '" + where + "/" + name + "' has shape " + shapeText(s) +
+                             ", expected (n) or (n, components) with n = " + std::to_string(meta.n));
+    meta.arrays.push_back(std::move(array.value()));
+  }
+  return meta;
+}
+
+// Writes /snapshots/<step>/grid from computed fields.
+Status writeGridGroup(hid_t stepGroup, const GridFields& g, const std::string& file, const std::string& stepWhere) {
+  if (Status st = validateGridSpec(g.spec); !st) return {st.code(), file + ": " + st.message()};
+  const std::size_t cells = g.spec.cellCount();
+  if (g.solidFraction.size() != cells || g.meanVelocity.size() != 3 * cells || g.granularTemperature.size() != cells)
+    return invalidArgument(file + ": grid field arrays do not match the grid's " + std::to_string(cells) + " cells");
+  const std::string where = stepWhere + "/" + kGridGroupName;
+  auto group = createGroup(stepGroup, kGridGroupName, true, file);
+  if (!group) return group.status();
+  if (Status st = writeGridAttrs(group->get(), g.spec, file, where); !st) return st;
+  const std::vector<std::uint64_t> shape = {g.spec.cells[0], g.spec.cells[1], g.spec.cells[2]};
+  const std::vector<std::uint64_t> shape3 = {g.spec.cells[0], g.spec.cells[1], g.spec.cells[2], 3};
+  struct Field {
+    const char* name;
+    const std::vector<std::uint64_t>& shape;
+    const char* unit;
+    const std::vector<double>& data;
+  };
+  const Field fields[] = {{kSolidFractionName, shape, "", g.solidFraction},
+                          {kMeanVelocityName, shape3, "m/s", g.meanVelocity},
+                          {kGranularTemperatureName, shape, "m^2/s^2", g.granularTemperature}};
+  for (const auto& f : fields) {
+    auto dset = createNdDataset(group->get(), f.name, H5T_IEEE_F64LE, f.shape, f.unit, file, where);
+    if (!dset) return dset.status();
+    if (Status st = writeRows(dset->get(), f.shape, 0, f.shape[0], H5T_NATIVE_DOUBLE, f.data.data(), file,
+                              "'" + where + "/" + f.name + "'");
+        !st)
+      return st;
+    if (dset->reset() < 0) return h5Error(file, "cannot close '" + where + "/" + f.name + "'");
+  }
+  return Status::ok();
+}
+
+// Checks the root attributes of an open file: a pflow snapshot file of a version this build reads.
+Status checkFormat(hid_t root, const std::string& path) {
+  const htri_t hasFormat = H5Aexists(root, "format");
+  if (hasFormat < 0) return h5Error(path, "cannot read the root attributes");
+  if (hasFormat == 0) return invalidArgument(path + ": not a pflow snapshot file (no root attribute 'format')");
+  auto format = readStringAttr(root, "format", path, "/");
+  if (!format) return format.status();
+  if (format.value() != kSnapshotFormat)
+    return invalidArgument(path + ": not a pflow snapshot file (format is '" + format.value() + "')");
+  auto version = readScalarAttr<std::int64_t>(root, "format_version", H5T_NATIVE_INT64, path, "/");
+  if (!version) return version.status();
+  if (version.value() < 1 || version.value() > kSnapshotFormatVersion)
+    return invalidArgument(path + ": unsupported format_version " + std::to_string(version.value()));
+  return Status::ok();
+}
+
 }  // namespace
 
 std::string xdmfPathFor(const std::string& h5Path) { return fs::path(h5Path).replace_extension(".xmf").string(); }
@@ -1093,6 +1338,442 @@ Result<compute::GeometrySnapshot> SnapshotReader::readGeometry() const {
     return st;
   if (Status st = readOptionalStrings(g, "surface_names", geo.surfaceNames, p, where); !st) return st;
   return geo;
+}
+
+
+// ================================================================================================================
+// Metadata
+
+std::uint64_t ArrayMeta::rowElements() const {
+  std::uint64_t e = 1;
+  for (std::size_t i = 1; i < shape.size(); ++i) e *= shape[i];
+  return e;
+}
+
+const ArrayMeta* StepMeta::find(const std::string& name) const {
+  for (const auto& a : arrays)
+    if (a.name == name) return &a;
+  return nullptr;
+}
+
+// ================================================================================================================
+// SnapshotStaging
+
+struct SnapshotStaging::Impl {
+  std::string path;
+  Hid file;
+  Hid particles;  // group "particles"
+  Hid grid;       // group "grid", once a grid piece came
+  StepMeta meta;
+  struct Staged {
+    std::uint64_t next = 0;  // rows written
+    Hid dset;
+  };
+  std::map<std::string, Staged> particleArrays, gridArrays;
+  std::uint64_t bytes = 0;
+
+  ~Impl() {
+    std::lock_guard lock(hdf5Mutex());
+    particleArrays.clear();
+    gridArrays.clear();
+    particles.reset();
+    grid.reset();
+    file.reset();
+    std::error_code ec;
+    if (!path.empty()) fs::remove(path, ec);
+  }
+
+  Status write(bool isGrid, const ArrayMeta& a, std::uint64_t first, std::uint64_t rows, const void* data,
+               std::size_t size) {
+    const std::string what = std::string(isGrid ? "grid" : "particle") + " array '" + a.name + "'";
+    if (!validArrayName(a.name)) return invalidArgument(what + ": not a valid array name");
+    if (!isGrid && a.name == kGridGroupName) return invalidArgument(what + ": the name 'grid' is reserved");
+    if (compute::scalarBytesOf(a.type) == 0) return invalidArgument(what + ": unknown scalar type");
+    if (isGrid) {
+      const auto& c = meta.grid->spec.cells;
+      const bool ok = (a.shape.size() == 3 || (a.shape.size() == 4 && a.shape[3] == 3)) && a.shape[0] == c[0] &&
+                      a.shape[1] == c[1] && a.shape[2] == c[2];
+      if (!ok)
+        return invalidArgument(what + ": shape " + shapeText(a.shape) + " does not match the grid's cells (" +
+                               std::to_string(c[0]) + ", " + std::to_string(c[1]) + ", " + std::to_string(c[2]) +
+                               ") or (..., 3)");
+    } else {
+      if (a.shape.empty() || a.shape.size() > 2 || a.shape[0] != meta.n ||
+          (a.shape.size() == 2 && (a.shape[1] < 1 || a.shape[1] > 4096)))
+        return invalidArgument(what + ": shape " + shapeText(a.shape) +
+                               " is not (n) or (n, components <= 4096) with n = " + std::to_string(meta.n));
+    }
+    auto& arrays = isGrid ? gridArrays : particleArrays;
+    auto& metas = isGrid ? meta.grid->arrays : meta.arrays;
+    auto it = arrays.find(a.name);
+    const ArrayMeta* known = nullptr;
+    if (it != arrays.end()) {
+      for (const auto& m : metas)
+        if (m.name == a.name) known = &m;
+      if (known->type != a.type || known->shape != a.shape || known->unit != a.unit)
+        return invalidArgument(what + ": a piece declares " + compute::scalarName(a.type) + " " + shapeText(a.shape) +
+                               " [" + a.unit + "] but earlier pieces declared " + compute::scalarName(known->type) +
+                               " " + shapeText(known->shape) + " [" + known->unit + "]");
+    }
+    const std::uint64_t next = it != arrays.end() ? it->second.next : 0;
+    if (first != next)
+      return invalidArgument(what + ": piece starts at row " + std::to_string(first) + ", expected row " +
+                             std::to_string(next) + " (pieces of an array must come in order, without gaps)");
+    if (rows > a.shape[0] - first)
+      return invalidArgument(what + ": rows [" + std::to_string(first) + ", " + std::to_string(first + rows) +
+                             ") exceed its " + std::to_string(a.shape[0]) + " rows");
+    const std::uint64_t expected = rows * a.rowBytes();
+    if (size != expected)
+      return invalidArgument(what + ": piece of " + std::to_string(rows) + " rows has " + std::to_string(size) +
+                             " bytes, expected " + std::to_string(expected));
+    if (it == arrays.end()) {
+      if (isGrid && !grid.valid()) {
+        auto g = createGroup(file.get(), kGridGroupName, true, path);
+        if (!g) return g.status();
+        grid = std::move(g.value());
+        if (Status st = writeGridAttrs(grid.get(), meta.grid->spec, path, "/grid"); !st) return st;
+      }
+      auto dset = createNdDataset(isGrid ? grid.get() : particles.get(), a.name, fileTypeOf(a.type), a.shape, a.unit,
+                                  path, isGrid ? "/grid" : "/particles");
+      if (!dset) return dset.status();
+      it = arrays.emplace(a.name, Staged{0, std::move(dset.value())}).first;
+      metas.push_back(a);
+    }
+    if (Status st = writeRows(it->second.dset.get(), a.shape, first, rows, memTypeOf(a.type), data, path, what); !st)
+      return st;
+    it->second.next = first + rows;
+    bytes += size;
+    return Status::ok();
+  }
+};
+
+SnapshotStaging::SnapshotStaging(std::unique_ptr<Impl> impl) : m_impl(std::move(impl)) {}
+SnapshotStaging::~SnapshotStaging() = default;
+
+Result<std::unique_ptr<SnapshotStaging>> SnapshotStaging::create(const std::string& scratchPath, std::int64_t step,
+                                                                 double time, std::uint64_t n) {
+  std::lock_guard lock(hdf5Mutex());
+  quietHdf5();
+  if (!std::isfinite(time)) return invalidArgument("snapshot step " + std::to_string(step) + ": time is not finite");
+  if (n > std::numeric_limits<std::uint32_t>::max())
+    return invalidArgument("snapshot step " + std::to_string(step) + ": n = " + std::to_string(n) +
+                           " exceeds the supported 4294967295 particles");
+  auto impl = std::make_unique<Impl>();
+  auto fapl = makeFileAccess(scratchPath);
+  if (!fapl) return fapl.status();
+  impl->file = fileHid(H5Fcreate(scratchPath.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl->get()));
+  if (!impl->file.valid()) return h5Error(scratchPath, "cannot create the staging file");
+  impl->path = scratchPath;  // from here on the destructor removes it
+  auto group = createGroup(impl->file.get(), "particles", true, scratchPath);
+  if (!group) return group.status();
+  impl->particles = std::move(group.value());
+  impl->meta.step = step;
+  impl->meta.time = time;
+  impl->meta.n = n;
+  return std::unique_ptr<SnapshotStaging>(new SnapshotStaging(std::move(impl)));
+}
+
+Status SnapshotStaging::writeParticleRows(const ArrayMeta& meta, std::uint64_t firstRow, std::uint64_t rows,
+                                          const void* data, std::size_t bytes) {
+  std::lock_guard lock(hdf5Mutex());
+  quietHdf5();
+  return m_impl->write(false, meta, firstRow, rows, data, bytes);
+}
+
+Status SnapshotStaging::writeGridRows(const GridSpec& spec, const ArrayMeta& meta, std::uint64_t firstRow,
+                                      std::uint64_t rows, const void* data, std::size_t bytes) {
+  std::lock_guard lock(hdf5Mutex());
+  quietHdf5();
+  Impl& d = *m_impl;
+  if (Status st = validateGridSpec(spec); !st) return st;
+  if (!d.meta.grid) {
+    d.meta.grid = GridMeta{spec, {}};
+  } else {
+    const GridSpec& g = d.meta.grid->spec;
+    if (g.cells != spec.cells || g.cellSize != spec.cellSize || g.origin.x != spec.origin.x ||
+        g.origin.y != spec.origin.y || g.origin.z != spec.origin.z)
+      return invalidArgument("grid array '" + meta.name + "': its grid differs from the grid of earlier pieces");
+  }
+  return d.write(true, meta, firstRow, rows, data, bytes);
+}
+
+Status SnapshotStaging::checkComplete() const {
+  const Impl& d = *m_impl;
+  auto check = [](const std::vector<ArrayMeta>& metas, const std::map<std::string, Impl::Staged>& arrays,
+                  const char* kind) -> Status {
+    for (const auto& m : metas) {
+      const auto next = arrays.at(m.name).next;
+      if (next != m.rows())
+        return invalidArgument(std::string(kind) + " array '" + m.name + "' is incomplete: " + std::to_string(next) +
+                               " of " + std::to_string(m.rows()) + " rows arrived");
+    }
+    return Status::ok();
+  };
+  if (Status st = check(d.meta.arrays, d.particleArrays, "particle"); !st) return st;
+  if (d.meta.grid) return check(d.meta.grid->arrays, d.gridArrays, "grid");
+  return Status::ok();
+}
+
+Status SnapshotStaging::readParticleRowsF64(const std::string& name, std::uint64_t firstRow, std::uint64_t rows,
+                                            std::vector<double>& out) const {
+  std::lock_guard lock(hdf5Mutex());
+  quietHdf5();
+  const Impl& d = *m_impl;
+  auto it = d.particleArrays.find(name);
+  if (it == d.particleArrays.end()) return notFound("no staged particle array '" + name + "'");
+  const ArrayMeta* meta = d.meta.find(name);
+  out.resize(rows * meta->rowElements());
+  return readRowsOf(it->second.dset.get(), firstRow, rows, H5T_NATIVE_DOUBLE, out.data(), d.path,
+                    "staged array '" + name + "'");
+}
+
+const StepMeta& SnapshotStaging::meta() const { return m_impl->meta; }
+std::uint64_t SnapshotStaging::bytes() const { return m_impl->bytes; }
+
+// ================================================================================================================
+// SnapshotWriter: appending, grids, staged commits
+
+Result<std::unique_ptr<SnapshotWriter>> SnapshotWriter::openOrCreate(const std::string& h5Path) {
+  std::error_code ec;
+  if (!fs::exists(h5Path, ec)) return create(h5Path);
+  std::lock_guard lock(hdf5Mutex());
+  quietHdf5();
+  if (fs::path(h5Path).extension() == ".xmf")
+    return invalidArgument(h5Path + ": the snapshot file must not use the sidecar's extension .xmf");
+  if (!fs::is_regular_file(h5Path, ec)) return invalidArgument(h5Path + ": not a regular file");
+  const htri_t isHdf5 = H5Fis_hdf5(h5Path.c_str());
+  if (isHdf5 <= 0) return invalidArgument(h5Path + ": not an HDF5 file");
+  auto impl = std::make_unique<Impl>();
+  impl->path = h5Path;
+  impl->xdmfPath = xdmfPathFor(h5Path);
+  impl->h5Name = fs::path(h5Path).filename().string();
+  auto fapl = makeFileAccess(h5Path);
+  if (!fapl) return fapl.status();
+  impl->file = fileHid(H5Fopen(h5Path.c_str(), H5F_ACC_RDWR, fapl->get()));
+  if (!impl->file.valid()) return h5Error(h5Path, "cannot open the snapshot file for writing");
+  const hid_t root = impl->file.get();
+  if (Status st = checkFormat(root, h5Path); !st) return st;
+
+  const htri_t hasSnapshots = H5Lexists(root, "snapshots", H5P_DEFAULT);
+  if (hasSnapshots < 0) return h5Error(h5Path, "cannot look up '/snapshots'");
+  if (hasSnapshots == 0) {
+    auto snapshots = createGroup(root, kSnapshotsGroup, false, h5Path);
+    if (!snapshots) return snapshots.status();
+  } else {
+    Hid group = groupHid(H5Gopen2(root, kSnapshotsGroup, H5P_DEFAULT));
+    if (!group.valid()) return h5Error(h5Path, "cannot open '/snapshots'");
+    auto names = linkNames(group.get(), h5Path, kSnapshotsGroup);
+    if (!names) return names.status();
+    for (const auto& name : names.value()) {
+      const auto step = parseStep(name);
+      if (!step) continue;
+      auto meta = readStepMeta(root, h5Path, *step);
+      if (!meta) return meta.status();
+      GridInfo info{*step, meta->time, static_cast<std::size_t>(meta->n), {}};
+      for (const auto& a : meta->arrays)
+        info.arrays.push_back({a.name, a.type, a.shape.size() == 2 ? static_cast<int>(a.shape[1]) : 1});
+      impl->grids.emplace(*step, std::move(info));
+    }
+  }
+  const htri_t hasGeometry = H5Lexists(root, "geometry", H5P_DEFAULT);
+  if (hasGeometry < 0) return h5Error(h5Path, "cannot look up '/geometry'");
+  if (hasGeometry > 0) {
+    Hid group = groupHid(H5Gopen2(root, kGeometryGroup, H5P_DEFAULT));
+    if (!group.valid()) return h5Error(h5Path, "cannot open '/geometry'");
+    GeometryInfo info;
+    auto rowsOf = [&](const char* name) -> std::size_t {
+      if (H5Lexists(group.get(), name, H5P_DEFAULT) <= 0) return 0;
+      auto meta = datasetMeta(group.get(), name, h5Path, kGeometryGroup);
+      return meta ? static_cast<std::size_t>(meta->rows()) : 0;
+    };
+    info.vertices = rowsOf("vertices");
+    info.triangles = rowsOf("triangles");
+    info.mesh = rowsOf("triangle_mesh") > 0;
+    info.surface = rowsOf("triangle_surface") > 0;
+    info.material = rowsOf("triangle_material") > 0;
+    impl->geometry = info;
+  }
+  if (H5Lexists(root, "xdmf", H5P_DEFAULT) > 0 && H5Lexists(root, kIndexDataset, H5P_DEFAULT) > 0) {
+    Hid dset = datasetHid(H5Dopen2(root, kIndexDataset, H5P_DEFAULT));
+    auto dims = datasetDims(dset.get(), h5Path, kIndexDataset);
+    if (!dims) return dims.status();
+    impl->indexSize = dims->empty() ? 0 : (*dims)[0];
+  }
+  hdf5Detail();
+  if (Status st = impl->writeXdmf(); !st) return st;
+  return std::unique_ptr<SnapshotWriter>(new SnapshotWriter(std::move(impl)));
+}
+
+bool SnapshotWriter::hasStep(std::int64_t step) const {
+  std::lock_guard lock(hdf5Mutex());
+  return m_impl->grids.count(step) != 0;
+}
+
+bool SnapshotWriter::hasGeometry() const {
+  std::lock_guard lock(hdf5Mutex());
+  return m_impl->geometry.has_value();
+}
+
+std::vector<std::int64_t> SnapshotWriter::steps() const {
+  std::lock_guard lock(hdf5Mutex());
+  std::vector<std::int64_t> out;
+  for (const auto& [step, info] : m_impl->grids) out.push_back(step);
+  return out;
+}
+
+Status SnapshotWriter::writeGrid(std::int64_t step, const GridFields& grid) {
+  std::lock_guard lock(hdf5Mutex());
+  quietHdf5();
+  Impl& d = *m_impl;
+  if (Status st = d.checkOpen(); !st) return st;
+  if (d.grids.count(step) == 0) return notFound(d.path + ": no snapshot for step " + std::to_string(step));
+  const std::string where = stepGroupPath(step);
+  Hid group = groupHid(H5Gopen2(d.file.get(), where.c_str(), H5P_DEFAULT));
+  if (!group.valid()) return h5Error(d.path, "cannot open '" + where + "'");
+  const htri_t exists = H5Lexists(group.get(), kGridGroupName, H5P_DEFAULT);
+  if (exists < 0) return h5Error(d.path, "cannot look up '" + where + "/grid'");
+  if (exists > 0) return alreadyExists(d.path + ": snapshot step " + std::to_string(step) + " already has a grid");
+  Status st = writeGridGroup(group.get(), grid, d.path, where);
+  if (!st) {
+    H5Ldelete(group.get(), kGridGroupName, H5P_DEFAULT);
+    hdf5Detail();
+    return st;
+  }
+  group.reset();
+  return d.flushFile();
+}
+
+Status SnapshotWriter::commit(const SnapshotStaging& staged, const GridFields* grid) {
+  std::lock_guard lock(hdf5Mutex());
+  quietHdf5();
+  Impl& d = *m_impl;
+  const SnapshotStaging::Impl& s = *staged.m_impl;
+  const StepMeta& m = s.meta;
+  const std::string stepText = "snapshot step " + std::to_string(m.step);
+  if (Status st = d.checkOpen(); !st) return st;
+  if (d.grids.count(m.step) != 0) return alreadyExists(d.path + ": " + stepText + " is already stored");
+  if (Status st = staged.checkComplete(); !st) return {st.code(), stepText + ": " + st.message()};
+  const ArrayMeta* position = m.find(kPositionName);
+  if (position == nullptr) return invalidArgument(stepText + ": no 'position' array (the XDMF sidecar needs it)");
+  if (position->shape.size() != 2 || position->shape[1] != 3 ||
+      (position->type != ScalarType::kF64 && position->type != ScalarType::kF32))
+    return invalidArgument(stepText + ": 'position' must have 3 components of f64 or f32");
+
+  const std::string where = stepGroupPath(m.step);
+  auto group = createGroup(d.file.get(), where, true, d.path);
+  if (!group) return group.status();
+  auto fill = [&]() -> Status {
+    const hid_t g = group->get();
+    if (Status st = writeScalarAttr(g, "time", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, m.time, d.path, where); !st)
+      return st;
+    if (Status st = writeScalarAttr(g, "step", H5T_STD_I64LE, H5T_NATIVE_INT64, m.step, d.path, where); !st) return st;
+    if (Status st = writeScalarAttr(g, "n", H5T_STD_U64LE, H5T_NATIVE_UINT64, m.n, d.path, where); !st) return st;
+    for (const auto& a : m.arrays)
+      if (H5Ocopy(s.particles.get(), a.name.c_str(), g, a.name.c_str(), H5P_DEFAULT, H5P_DEFAULT) < 0)
+        return h5Error(d.path, "cannot copy staged array '" + a.name + "' into '" + where + "'");
+    if (grid != nullptr) return writeGridGroup(g, *grid, d.path, where);
+    if (m.grid && s.grid.valid() &&
+        H5Ocopy(s.file.get(), kGridGroupName, g, kGridGroupName, H5P_DEFAULT, H5P_DEFAULT) < 0)
+      return h5Error(d.path, "cannot copy the staged grid into '" + where + "'");
+    return Status::ok();
+  };
+  Status st = fill();
+  group->reset();
+  if (st) st = d.ensureIndex(static_cast<std::size_t>(m.n));
+  if (!st) {
+    H5Ldelete(d.file.get(), where.c_str(), H5P_DEFAULT);  // leave no half-written step behind
+    hdf5Detail();
+    return st;
+  }
+  GridInfo info{m.step, m.time, static_cast<std::size_t>(m.n), {}};
+  for (const auto& a : m.arrays)
+    info.arrays.push_back({a.name, a.type, a.shape.size() == 2 ? static_cast<int>(a.shape[1]) : 1});
+  d.grids.emplace(m.step, std::move(info));
+  if (Status fl = d.flushFile(); !fl) return fl;
+  return d.writeXdmf();
+}
+
+// ================================================================================================================
+// SnapshotReader: metadata and partial reads
+
+Result<StepMeta> SnapshotReader::meta(std::int64_t step) const {
+  std::lock_guard lock(hdf5Mutex());
+  quietHdf5();
+  const Impl& d = *m_impl;
+  if (!std::binary_search(d.steps.begin(), d.steps.end(), step))
+    return notFound(d.path + ": no snapshot for step " + std::to_string(step));
+  return readStepMeta(d.file.get(), d.path, step);
+}
+
+namespace {
+Status readRowsAt(hid_t file, const std::string& path, const std::string& groupPath, const std::string& name,
+                  std::uint64_t first, std::uint64_t count, std::string& out) {
+  const std::string what = "'" + groupPath + "/" + name + "'";
+  if (!validArrayName(name)) return invalidArgument(path + ": '" + name + "' is not an array name");
+  const htri_t exists = H5Lexists(file, (groupPath + "/" + name).c_str(), H5P_DEFAULT);
+  if (exists <= 0) {
+    hdf5Detail();
+    return notFound(path + ": no array " + what);
+  }
+  Hid dset = datasetHid(H5Dopen2(file, (groupPath + "/" + name).c_str(), H5P_DEFAULT));
+  if (!dset.valid()) return h5Error(path, "cannot open " + what);
+  Hid dtype = typeHid(H5Dget_type(dset.get()));
+  const auto type = dtype.valid() ? scalarTypeOf(dtype.get()) : std::nullopt;
+  if (!type) return invalidArgument(path + ": " + what + " has an unsupported element type");
+  auto dims = datasetDims(dset.get(), path, what);
+  if (!dims) return dims.status();
+  std::uint64_t rowBytes = compute::scalarBytesOf(*type);
+  for (std::size_t i = 1; i < dims->size(); ++i) rowBytes *= (*dims)[i];
+  if (dims->empty() || first > (*dims)[0] || count > (*dims)[0] - first)
+    return invalidArgument(path + ": rows [" + std::to_string(first) + ", " + std::to_string(first + count) +
+                           ") are beyond the " + std::to_string(dims->empty() ? 0 : (*dims)[0]) + " rows of " + what);
+  out.resize(count * rowBytes);
+  return readRowsOf(dset.get(), first, count, memTypeOf(*type), out.data(), path, what);
+}
+}  // namespace
+
+Status SnapshotReader::readRows(std::int64_t step, const std::string& name, std::uint64_t first, std::uint64_t count,
+                                std::string& out) const {
+  std::lock_guard lock(hdf5Mutex());
+  quietHdf5();
+  const Impl& d = *m_impl;
+  if (!std::binary_search(d.steps.begin(), d.steps.end(), step))
+    return notFound(d.path + ": no snapshot for step " + std::to_string(step));
+  if (name == kGridGroupName) return notFound(d.path + ": 'grid' is not a particle array");
+  return readRowsAt(d.file.get(), d.path, stepGroupPath(step), name, first, count, out);
+}
+
+Status SnapshotReader::readGridRows(std::int64_t step, const std::string& name, std::uint64_t first,
+                                    std::uint64_t count, std::string& out) const {
+  std::lock_guard lock(hdf5Mutex());
+  quietHdf5();
+  const Impl& d = *m_impl;
+  if (!std::binary_search(d.steps.begin(), d.steps.end(), step))
+    return notFound(d.path + ": no snapshot for step " + std::to_string(step));
+  return readRowsAt(d.file.get(), d.path, stepGroupPath(step) + "/" + kGridGroupName, name, first, count, out);
+}
+
+Result<GridFields> SnapshotReader::readGrid(std::int64_t step) const {
+  auto m = meta(step);
+  if (!m) return m.status();
+  if (!m->grid) return notFound(m_impl->path + ": snapshot step " + std::to_string(step) + " has no grid");
+  GridFields g;
+  g.spec = m->grid->spec;
+  if (Status st = validateGridSpec(g.spec); !st) return Status(st.code(), m_impl->path + ": " + st.message());
+  std::string bytes;
+  auto load = [&](const char* name, std::vector<double>& out, std::size_t per) -> Status {
+    const std::uint64_t rows = g.spec.cells[0];
+    if (Status st = readGridRows(step, name, 0, rows, bytes); !st) return st;
+    if (bytes.size() != g.spec.cellCount() * per * sizeof(double))
+      return invalidArgument(m_impl->path + ": grid array '" + name + "' does not match its grid");
+    out.resize(g.spec.cellCount() * per);
+    std::memcpy(out.data(), bytes.data(), bytes.size());
+    return Status::ok();
+  };
+  if (Status st = load(kSolidFractionName, g.solidFraction, 1); !st) return st;
+  if (Status st = load(kMeanVelocityName, g.meanVelocity, 3); !st) return st;
+  if (Status st = load(kGranularTemperatureName, g.granularTemperature, 1); !st) return st;
+  return g;
 }
 
 }  // namespace pflow::backend

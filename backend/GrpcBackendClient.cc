@@ -1,0 +1,99 @@
+// BackendClient over gRPC (sync stubs; flow control by the blocking Write/Read; a deadline on every call).
+#include <grpcpp/grpcpp.h>
+
+#include "backend/BackendClient.h"
+#include "backend/ChunkProto.h"
+#include "common/rpc/Rpc.h"
+#include "pflow/backend/v1/snapshot_service.grpc.pb.h"
+
+namespace pflow::backend {
+namespace {
+
+class GrpcBackendClient final : public BackendClient {
+ public:
+  GrpcBackendClient(std::shared_ptr<grpc::Channel> channel, BackendClientOptions options)
+      : m_channel(std::move(channel)), m_stub(v1::SnapshotService::NewStub(m_channel)), m_options(options) {}
+
+  Status writeSnapshot(const std::string& jobId, const compute::ParticleSnapshot& snapshot,
+                       const compute::GeometrySnapshot* geometryOrNull) override {
+    auto context = rpc::contextWithDeadline(m_options.bulkDeadlineSeconds);
+    v1::WriteSnapshotResponse response;
+    auto writer = m_stub->WriteSnapshot(context.get(), &response);
+    v1::SnapshotChunk message;
+    bool broken = false;
+    Status local = snapshotChunks(jobId, snapshot, geometryOrNull, [&](Chunk&& c) {
+      chunkToProto(std::move(c), &message);
+      if (!writer->Write(message)) {
+        broken = true;  // the server ended the call: its status says why
+        return Status(StatusCode::kCancelled, "stream closed");
+      }
+      return Status::ok();
+    });
+    if (!local && !broken) {
+      context->TryCancel();  // the server aborts the ingest
+      writer->Finish();
+      return local;
+    }
+    if (!broken) writer->WritesDone();
+    return rpc::fromGrpc(writer->Finish(), "WriteSnapshot job '" + jobId + "' step " + std::to_string(snapshot.step));
+  }
+
+  Result<std::vector<SnapshotInfo>> list(const std::string& jobId) override {
+    auto context = rpc::contextWithDeadline(m_options.controlDeadlineSeconds);
+    v1::ListSnapshotsRequest request;
+    request.set_job_id(jobId);
+    v1::ListSnapshotsResponse response;
+    if (Status st = rpc::fromGrpc(m_stub->ListSnapshots(context.get(), request, &response), "ListSnapshots"); !st)
+      return st;
+    std::vector<SnapshotInfo> out;
+    for (const auto& s : response.snapshots()) out.push_back({s.step(), s.time(), s.particles(), false});
+    return out;
+  }
+
+  Status fetch(const std::string& jobId, std::optional<std::int64_t> step, const std::string& outputH5,
+               std::vector<std::string> fields, bool includeGrid, bool includeGeometry) override {
+    auto context = rpc::contextWithDeadline(m_options.bulkDeadlineSeconds);
+    v1::ReadSnapshotRequest request;
+    request.set_job_id(jobId);
+    if (step) request.set_step(*step);
+    else request.set_last(true);
+    for (auto& f : fields) request.add_fields(std::move(f));
+    request.set_include_grid(includeGrid);
+    request.set_include_geometry(includeGeometry);
+    auto reader = m_stub->ReadSnapshot(context.get(), request);
+    SnapshotFileSink sink(outputH5);
+    v1::SnapshotChunk message;
+    Status local;
+    while (reader->Read(&message)) {
+      auto chunk = chunkFromProto(std::move(message));
+      if (chunk) local = sink.add(chunk.value());
+      else local = chunk.status();
+      if (!local) {
+        context->TryCancel();
+        break;
+      }
+    }
+    const grpc::Status remote = reader->Finish();
+    if (!local) return local;
+    if (Status st = rpc::fromGrpc(remote, "ReadSnapshot job '" + jobId + "'"); !st) return st;
+    return sink.finish();
+  }
+
+ private:
+  std::shared_ptr<grpc::Channel> m_channel;
+  std::unique_ptr<v1::SnapshotService::Stub> m_stub;
+  BackendClientOptions m_options;
+};
+
+}  // namespace
+
+std::unique_ptr<BackendClient> makeGrpcBackendClient(std::shared_ptr<grpc::Channel> channel,
+                                                     BackendClientOptions options) {
+  return std::make_unique<GrpcBackendClient>(std::move(channel), options);
+}
+
+std::unique_ptr<BackendClient> makeGrpcBackendClient(const std::string& address, BackendClientOptions options) {
+  return makeGrpcBackendClient(rpc::makeChannel(address), options);
+}
+
+}  // namespace pflow::backend

@@ -1,0 +1,220 @@
+// SnapshotService adapter. See SnapshotService.h.
+#include "backend/SnapshotService.h"
+
+#include <spdlog/spdlog.h>
+
+#include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "backend/ChunkProto.h"
+#include "common/rpc/Rpc.h"
+
+namespace pflow::backend {
+
+// A fixed pool of threads running posted tasks in order of posting.
+class Executor {
+ public:
+  explicit Executor(int threads) {
+    for (int i = 0; i < std::max(1, threads); ++i) m_threads.emplace_back([this] { run(); });
+  }
+  ~Executor() {
+    {
+      std::lock_guard lock(m_mutex);
+      m_stop = true;
+    }
+    m_cv.notify_all();
+    for (auto& t : m_threads) t.join();
+  }
+  void post(std::function<void()> task) {
+    {
+      std::lock_guard lock(m_mutex);
+      m_tasks.push_back(std::move(task));
+    }
+    m_cv.notify_one();
+  }
+
+ private:
+  void run() {
+    for (;;) {
+      std::function<void()> task;
+      {
+        std::unique_lock lock(m_mutex);
+        m_cv.wait(lock, [this] { return m_stop || !m_tasks.empty(); });
+        if (m_tasks.empty()) return;  // stopping, and nothing left to run
+        task = std::move(m_tasks.front());
+        m_tasks.pop_front();
+      }
+      task();
+    }
+  }
+  std::mutex m_mutex;
+  std::condition_variable m_cv;
+  std::deque<std::function<void()>> m_tasks;
+  std::vector<std::thread> m_threads;
+  bool m_stop = false;
+};
+
+namespace {
+
+// WriteSnapshot. Exactly one operation is outstanding at a time (a read, or a task on the executor), so Finish is
+// called once, by whichever completes last; OnDone deletes the reactor.
+class SnapshotIngest final : public grpc::ServerReadReactor<v1::SnapshotChunk> {
+ public:
+  SnapshotIngest(SnapshotStore& store, Executor& executor, grpc::CallbackServerContext* context,
+                 v1::WriteSnapshotResponse* response)
+      : m_store(store), m_executor(executor), m_context(context), m_response(response) {
+    StartRead(&m_chunk);
+  }
+
+  void OnReadDone(bool ok) override {
+    if (ok) {
+      m_executor.post([this] { append(); });
+    } else {
+      m_executor.post([this] { commit(); });  // half-close (or a broken stream: see commit)
+    }
+  }
+  void OnCancel() override { m_cancelled = true; }
+  void OnDone() override { delete this; }
+
+ private:
+  void append() {
+    if (m_cancelled) return finish({StatusCode::kCancelled, "cancelled"});
+    auto chunk = chunkFromProto(std::move(m_chunk));
+    if (!chunk) return finish(chunk.status());
+    if (!m_ingest) {
+      auto ingest = m_store.beginSnapshot(chunk->jobId, chunk->step, chunk->time, chunk->particles);
+      if (!ingest) return finish(ingest.status());
+      m_ingest = std::move(ingest.value());
+    }
+    if (Status st = m_ingest->appendChunk(chunk.value()); !st) return finish(st);
+    StartRead(&m_chunk);
+  }
+
+  void commit() {
+    // A broken stream also ends reads with !ok; it is cancelled by the time this task runs.
+    if (m_cancelled || m_context->IsCancelled()) return finish({StatusCode::kCancelled, "stream cancelled"});
+    if (!m_ingest) return finish(invalidArgument("the stream held no chunks"));
+    auto result = m_ingest->commit();
+    if (!result) return finish(result.status());
+    m_response->set_job_id(result->jobId);
+    m_response->set_step(result->step);
+    m_response->set_bytes(result->bytes);
+    spdlog::info("job '{}' step {}: stored {} bytes{}", result->jobId, result->step, result->bytes,
+                 result->grid ? " with grid fields" : "");
+    finish(Status::ok());
+  }
+
+  void finish(const Status& st) {
+    if (m_ingest) m_ingest->abort();  // no-op after a commit
+    m_ingest.reset();
+    if (!st && st.code() != StatusCode::kCancelled) spdlog::warn("WriteSnapshot: {}", st.toString());
+    Finish(rpc::toGrpc(st));  // the last thing: OnDone may run at once
+  }
+
+  SnapshotStore& m_store;
+  Executor& m_executor;
+  grpc::CallbackServerContext* m_context;
+  v1::WriteSnapshotResponse* m_response;
+  v1::SnapshotChunk m_chunk;
+  std::unique_ptr<SnapshotStore::Ingest> m_ingest;
+  std::atomic<bool> m_cancelled{false};
+};
+
+// ReadSnapshot: open on the executor, then alternately read one chunk (executor) and write it (gRPC).
+class SnapshotStreamer final : public grpc::ServerWriteReactor<v1::SnapshotChunk> {
+ public:
+  SnapshotStreamer(SnapshotStore& store, Executor& executor, const v1::ReadSnapshotRequest& request)
+      : m_store(store), m_executor(executor) {
+    m_request.step = request.which_case() == v1::ReadSnapshotRequest::kStep ? std::optional(request.step())
+                                                                             : std::nullopt;  // last
+    m_request.fields.assign(request.fields().begin(), request.fields().end());
+    m_request.includeGrid = request.include_grid();
+    m_request.includeGeometry = request.include_geometry();
+    m_jobId = request.job_id();
+    m_executor.post([this] { open(); });
+  }
+
+  void OnWriteDone(bool ok) override {
+    if (!ok) return finish({StatusCode::kCancelled, "the client went away"});
+    m_executor.post([this] { produce(); });
+  }
+  void OnCancel() override { m_cancelled = true; }
+  void OnDone() override { delete this; }
+
+ private:
+  void open() {
+    auto cursor = m_store.openRead(m_jobId, m_request);
+    if (!cursor) return finish(cursor.status());
+    m_cursor = std::move(cursor.value());
+    produce();
+  }
+
+  void produce() {
+    if (m_cancelled) return finish({StatusCode::kCancelled, "cancelled"});
+    auto chunk = m_cursor->next();
+    if (!chunk) return finish(chunk.status());
+    if (!chunk->has_value()) return finish(Status::ok());
+    chunkToProto(std::move(**chunk), &m_message);
+    StartWrite(&m_message);
+  }
+
+  void finish(const Status& st) {
+    if (!st && st.code() != StatusCode::kCancelled) spdlog::warn("ReadSnapshot: {}", st.toString());
+    m_cursor.reset();
+    Finish(rpc::toGrpc(st));
+  }
+
+  SnapshotStore& m_store;
+  Executor& m_executor;
+  std::string m_jobId;
+  ReadRequest m_request;
+  std::unique_ptr<SnapshotCursor> m_cursor;
+  v1::SnapshotChunk m_message;
+  std::atomic<bool> m_cancelled{false};
+};
+
+}  // namespace
+
+SnapshotService::SnapshotService(SnapshotStore& store, int workers)
+    : m_store(store), m_executor(std::make_unique<Executor>(workers)) {}
+
+SnapshotService::~SnapshotService() = default;
+
+grpc::ServerReadReactor<v1::SnapshotChunk>* SnapshotService::WriteSnapshot(grpc::CallbackServerContext* context,
+                                                                          v1::WriteSnapshotResponse* response) {
+  return new SnapshotIngest(m_store, *m_executor, context, response);
+}
+
+grpc::ServerUnaryReactor* SnapshotService::ListSnapshots(grpc::CallbackServerContext* context,
+                                                         const v1::ListSnapshotsRequest* request,
+                                                         v1::ListSnapshotsResponse* response) {
+  auto* reactor = context->DefaultReactor();
+  m_executor->post([this, reactor, request, response] {
+    auto listing = m_store.list(request->job_id());
+    if (!listing) {
+      reactor->Finish(rpc::toGrpc(listing.status()));
+      return;
+    }
+    response->set_file(listing->file);
+    for (const auto& s : listing->snapshots) {
+      auto* info = response->add_snapshots();
+      info->set_step(s.step);
+      info->set_time(s.time);
+      info->set_particles(s.particles);
+    }
+    reactor->Finish(grpc::Status::OK);
+  });
+  return reactor;
+}
+
+grpc::ServerWriteReactor<v1::SnapshotChunk>* SnapshotService::ReadSnapshot(grpc::CallbackServerContext*,
+                                                                          const v1::ReadSnapshotRequest* request) {
+  return new SnapshotStreamer(m_store, *m_executor, *request);
+}
+
+}  // namespace pflow::backend

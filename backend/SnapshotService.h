@@ -1,0 +1,37 @@
+// The SnapshotService gRPC adapter on the callback API: translates proto <-> domain and calls SnapshotStore.
+//  * WriteSnapshot: SnapshotIngest (ServerReadReactor): each chunk is appended on the executor, then the next read
+//    starts; the client's half-close commits; a cancelled or failed stream aborts (no partial snapshot).
+//  * ReadSnapshot: SnapshotStreamer (ServerWriteReactor): reads the next chunk (<= 1 MiB, on the executor) only
+//    after the previous write completed, so a stream holds one chunk in memory whatever the snapshot's size.
+//  * ListSnapshots: unary (DefaultReactor).
+// Reactions never block: HDF5 work runs on a small executor owned by the service (which must outlive the server).
+#pragma once
+#include <grpcpp/grpcpp.h>
+
+#include <memory>
+
+#include "backend/SnapshotStore.h"
+#include "pflow/backend/v1/snapshot_service.grpc.pb.h"
+
+namespace pflow::backend {
+
+class Executor;
+
+class SnapshotService final : public v1::SnapshotService::CallbackService {
+ public:
+  explicit SnapshotService(SnapshotStore& store, int workers = 2);
+  ~SnapshotService() override;
+
+  grpc::ServerReadReactor<v1::SnapshotChunk>* WriteSnapshot(grpc::CallbackServerContext* context,
+                                                           v1::WriteSnapshotResponse* response) override;
+  grpc::ServerUnaryReactor* ListSnapshots(grpc::CallbackServerContext* context, const v1::ListSnapshotsRequest* request,
+                                          v1::ListSnapshotsResponse* response) override;
+  grpc::ServerWriteReactor<v1::SnapshotChunk>* ReadSnapshot(grpc::CallbackServerContext* context,
+                                                           const v1::ReadSnapshotRequest* request) override;
+
+ private:
+  SnapshotStore& m_store;
+  std::unique_ptr<Executor> m_executor;
+};
+
+}  // namespace pflow::backend

@@ -1,0 +1,426 @@
+// The back-end's snapshot store. See SnapshotStore.h.
+#include "backend/SnapshotStore.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <filesystem>
+#include <limits>
+
+namespace pflow::backend {
+namespace {
+
+namespace fs = std::filesystem;
+using compute::ScalarType;
+
+constexpr const char* kIngestDir = ".ingest";
+constexpr std::uint64_t kGridBlockRows = 65536;
+
+bool isFloat(const ArrayMeta* a) { return a != nullptr && (a->type == ScalarType::kF64 || a->type == ScalarType::kF32); }
+
+bool hasShape(const ArrayMeta* a, std::uint64_t n, int components) {
+  if (a == nullptr || a->shape.empty() || a->shape[0] != n) return false;
+  if (components == 1) return a->shape.size() == 1 || (a->shape.size() == 2 && a->shape[1] == 1);
+  return a->shape.size() == 2 && a->shape[1] == std::uint64_t(components);
+}
+
+std::string stepsText(const std::vector<std::int64_t>& steps) {
+  if (steps.empty()) return "it has no snapshots";
+  return "it has " + std::to_string(steps.size()) + " snapshot(s), steps " + std::to_string(steps.front()) + " to " +
+         std::to_string(steps.back());
+}
+
+class FileCursor final : public SnapshotCursor {
+ public:
+  struct Item {
+    Section section;
+    ArrayMeta array;
+  };
+
+  FileCursor(std::string jobId, std::unique_ptr<SnapshotReader> reader, StepMeta meta, std::vector<Item> items,
+             bool geometry)
+      : m_jobId(std::move(jobId)),
+        m_reader(std::move(reader)),
+        m_meta(std::move(meta)),
+        m_items(std::move(items)),
+        m_geometry(geometry) {}
+
+  const StepMeta& meta() const override { return m_meta; }
+
+  Result<std::optional<Chunk>> next() override {
+    while (m_item < m_items.size()) {
+      const Item& it = m_items[m_item];
+      const std::uint64_t rows = it.array.rows();
+      if (rows == 0 || m_row < rows) {
+        const std::uint64_t count = std::min(rowsPerPiece(it.array.rowBytes()), rows - m_row);
+        Chunk c = header(it.section);
+        ArrayPiece& p = c.array;
+        p.name = it.array.name;
+        p.dtype = *dtypeOf(it.array.type);
+        p.shape = it.array.shape;
+        p.firstRow = m_row;
+        p.rows = count;
+        p.unit = it.array.unit;
+        Status st = it.section == Section::kGrid
+                        ? m_reader->readGridRows(m_meta.step, it.array.name, m_row, count, p.data)
+                        : m_reader->readRows(m_meta.step, it.array.name, m_row, count, p.data);
+        if (!st) return st;
+        if (it.section == Section::kGrid) c.grid = m_meta.grid->spec;
+        m_row += count;
+        if (m_row >= rows) {
+          ++m_item;
+          m_row = 0;
+        }
+        return std::optional<Chunk>(std::move(c));
+      }
+      ++m_item;
+      m_row = 0;
+    }
+    if (m_geometry) {
+      m_geometry = false;
+      auto geo = m_reader->readGeometry();
+      if (!geo) return geo.status();
+      if (Status st = geometryPieces(geo.value(), [&](ArrayPiece&& p) {
+            m_pieces.push_back(std::move(p));
+            return Status::ok();
+          });
+          !st)
+        return st;
+    }
+    if (!m_pieces.empty()) {
+      Chunk c = header(Section::kGeometry);
+      c.array = std::move(m_pieces.front());
+      m_pieces.pop_front();
+      return std::optional<Chunk>(std::move(c));
+    }
+    return std::optional<Chunk>();
+  }
+
+ private:
+  Chunk header(Section section) const {
+    Chunk c;
+    c.jobId = m_jobId;
+    c.step = m_meta.step;
+    c.time = m_meta.time;
+    c.particles = m_meta.n;
+    c.section = section;
+    return c;
+  }
+
+  std::string m_jobId;
+  std::unique_ptr<SnapshotReader> m_reader;
+  StepMeta m_meta;
+  std::vector<Item> m_items;
+  bool m_geometry;
+  std::deque<ArrayPiece> m_pieces;  // geometry, cut once it is reached
+  std::size_t m_item = 0;
+  std::uint64_t m_row = 0;
+};
+
+}  // namespace
+
+Status validateJobId(const std::string& jobId) {
+  if (jobId.empty()) return invalidArgument("job id is empty");
+  if (jobId.size() > 128) return invalidArgument("job id is longer than 128 characters");
+  if (jobId.front() == '.') return invalidArgument("job id '" + jobId + "' starts with '.'");
+  for (char c : jobId) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' ||
+                    c == '_' || c == '-';
+    if (!ok)
+      return invalidArgument("job id '" + jobId + "' has a character other than letters, digits, '.', '_' and '-'");
+  }
+  return Status::ok();
+}
+
+Result<std::unique_ptr<SnapshotStore>> SnapshotStore::open(const StoreOptions& options) {
+  if (options.dataDir.empty()) return invalidArgument("data directory is empty");
+  if (!std::isfinite(options.gridCellSize) || options.gridCellSize < 0)
+    return invalidArgument("grid cell size must be >= 0 m (0 = 4 x the largest particle radius)");
+  std::error_code ec;
+  const fs::path scratch = fs::path(options.dataDir) / kIngestDir;
+  fs::create_directories(scratch, ec);
+  if (ec) return ioError(scratch.string() + ": cannot create: " + ec.message());
+  std::size_t removed = 0;
+  for (const auto& entry : fs::directory_iterator(scratch, ec)) {
+    std::error_code rm;
+    if (fs::remove(entry.path(), rm)) ++removed;
+  }
+  if (removed > 0) spdlog::info("removed {} scratch file(s) of unfinished ingests in {}", removed, scratch.string());
+  return std::unique_ptr<SnapshotStore>(new SnapshotStore(options));
+}
+
+SnapshotStore::~SnapshotStore() = default;
+
+std::string SnapshotStore::jobFile(const std::string& jobId) const {
+  return (fs::path(m_options.dataDir) / (jobId + ".h5")).string();
+}
+
+Result<std::shared_ptr<SnapshotStore::Job>> SnapshotStore::job(const std::string& jobId, JobMode mode,
+                                                               std::unique_lock<std::mutex>& lock) {
+  if (Status st = validateJobId(jobId); !st) return st;
+  const std::string path = jobFile(jobId);
+  std::shared_ptr<Job> j;
+  {
+    std::lock_guard guard(m_mutex);
+    auto it = m_jobs.find(jobId);
+    if (it == m_jobs.end()) {
+      std::error_code ec;
+      if (mode == JobMode::kExisting && !fs::exists(path, ec))
+        return notFound("unknown job '" + jobId + "': no snapshots stored");
+      it = m_jobs.emplace(jobId, std::make_shared<Job>()).first;
+    }
+    j = it->second;
+  }
+  lock = std::unique_lock(j->mutex);
+  if (!j->writer) {
+    std::error_code ec;
+    if (mode != JobMode::kCreate && !fs::exists(path, ec)) return j;  // known (an ingest runs) but nothing stored
+    auto writer = SnapshotWriter::openOrCreate(path);
+    if (!writer) return writer.status();
+    j->writer = std::move(writer.value());
+  }
+  return j;
+}
+
+void SnapshotStore::release(const std::string& jobId, std::int64_t step) {
+  std::shared_ptr<Job> j;
+  {
+    std::lock_guard guard(m_mutex);
+    auto it = m_jobs.find(jobId);
+    if (it == m_jobs.end()) return;
+    j = it->second;
+  }
+  std::lock_guard lock(j->mutex);
+  j->receiving.erase(step);
+}
+
+Result<std::unique_ptr<SnapshotStore::Ingest>> SnapshotStore::beginSnapshot(const std::string& jobId,
+                                                                           std::int64_t step, double time,
+                                                                           std::uint64_t particles) {
+  if (!std::isfinite(time)) return invalidArgument("snapshot step " + std::to_string(step) + ": time is not finite");
+  if (particles > std::numeric_limits<std::uint32_t>::max())
+    return invalidArgument("snapshot step " + std::to_string(step) + ": " + std::to_string(particles) +
+                           " particles exceed the supported 4294967295");
+  std::unique_lock<std::mutex> lock;
+  auto j = job(jobId, JobMode::kReserve, lock);
+  if (!j) return j.status();
+  Job& jb = *j.value();
+  if (jb.writer && jb.writer->hasStep(step))
+    return alreadyExists("job '" + jobId + "' already has a snapshot for step " + std::to_string(step));
+  if (jb.receiving.count(step) != 0)
+    return alreadyExists("job '" + jobId + "': step " + std::to_string(step) + " is being written by another stream");
+  std::uint64_t serial;
+  {
+    std::lock_guard guard(m_mutex);
+    serial = ++m_serial;
+  }
+  const std::string scratch = (fs::path(m_options.dataDir) / kIngestDir /
+                               (jobId + "." + std::to_string(step) + "." + std::to_string(serial) + ".h5"))
+                                  .string();
+  Chunk first;
+  first.jobId = jobId;
+  first.step = step;
+  first.time = time;
+  first.particles = particles;
+  auto assembler = ChunkAssembler::create(scratch, first);
+  if (!assembler) return assembler.status();
+  jb.receiving.insert(step);
+  auto ingest = std::unique_ptr<Ingest>(new Ingest());
+  ingest->m_store = this;
+  ingest->m_assembler = std::move(assembler.value());
+  ingest->m_jobId = jobId;
+  ingest->m_step = step;
+  return ingest;
+}
+
+SnapshotStore::Ingest::~Ingest() { abort(); }
+
+std::uint64_t SnapshotStore::Ingest::bytes() const { return m_assembler ? m_assembler->bytes() : 0; }
+
+Status SnapshotStore::Ingest::appendChunk(const Chunk& chunk) {
+  if (m_done) return failedPrecondition("the ingest of step " + std::to_string(m_step) + " is finished");
+  Status st = m_assembler->add(chunk);
+  if (!st)
+    return {st.code(), "job '" + m_jobId + "' step " + std::to_string(m_step) + ": " + st.message()};
+  return Status::ok();
+}
+
+void SnapshotStore::Ingest::abort() {
+  if (m_done) return;
+  m_done = true;
+  m_assembler.reset();  // removes the scratch file
+  m_store->release(m_jobId, m_step);
+}
+
+Result<CommitResult> SnapshotStore::Ingest::commit() {
+  if (m_done) return failedPrecondition("the ingest of step " + std::to_string(m_step) + " is finished");
+  const std::string where = "job '" + m_jobId + "' step " + std::to_string(m_step) + ": ";
+  auto fail = [&](const Status& st) -> Status {
+    abort();
+    return {st.code(), where + st.message()};
+  };
+  if (Status st = m_assembler->checkComplete(); !st) return fail(st);
+  auto grid = m_store->computeGrid(m_assembler->staging());
+  if (!grid) return fail(grid.status());
+  std::optional<compute::GeometrySnapshot> geometry;
+  if (!m_assembler->geometry().empty()) {
+    auto g = m_assembler->geometry().take();
+    if (!g) return fail(g.status());
+    geometry = std::move(g.value());
+  }
+  CommitResult result;
+  result.jobId = m_jobId;
+  result.step = m_step;
+  result.bytes = m_assembler->bytes();
+  if (grid.value()) result.grid = grid.value()->spec;
+  Status stored = [&]() -> Status {  // under the job's lock, which abort() takes too
+    std::unique_lock<std::mutex> lock;
+    auto j = m_store->job(m_jobId, JobMode::kCreate, lock);
+    if (!j) return j.status();
+    SnapshotWriter& writer = *j.value()->writer;
+    if (writer.hasStep(m_step)) return alreadyExists("the step is already stored");
+    if (geometry && !writer.hasGeometry()) {
+      if (Status st = writer.writeGeometry(*geometry); !st) return st;
+    }
+    const GridFields* fields = grid.value() ? &*grid.value() : nullptr;
+    return writer.commit(m_assembler->staging(), fields);
+  }();
+  if (!stored) return fail(stored);
+  abort();  // done: drop the scratch file and the reservation
+  return result;
+}
+
+Result<std::optional<GridFields>> SnapshotStore::computeGrid(SnapshotStaging& staging) const {
+  const StepMeta& m = staging.meta();
+  const ArrayMeta* position = m.find("position");
+  const ArrayMeta* velocity = m.find("velocity");
+  const ArrayMeta* radius = m.find("radius");
+  const ArrayMeta* mass = m.find("mass");
+  if (!(isFloat(position) && hasShape(position, m.n, 3) && isFloat(velocity) && hasShape(velocity, m.n, 3) &&
+        isFloat(radius) && hasShape(radius, m.n, 1))) {
+    spdlog::info("step {}: no grid fields (they need f64/f32 position (n,3), velocity (n,3) and radius (n))", m.step);
+    return std::optional<GridFields>();
+  }
+  if (m.n == 0) return std::optional<GridFields>();
+  const bool withMass = isFloat(mass) && hasShape(mass, m.n, 1);
+  std::vector<double> x, v, r, w;
+  auto load = [&](std::uint64_t first, std::uint64_t rows, bool velocities) -> Result<ParticleBlock> {
+    if (Status st = staging.readParticleRowsF64("position", first, rows, x); !st) return st;
+    if (Status st = staging.readParticleRowsF64("radius", first, rows, r); !st) return st;
+    if (velocities) {
+      if (Status st = staging.readParticleRowsF64("velocity", first, rows, v); !st) return st;
+      if (withMass) {
+        if (Status st = staging.readParticleRowsF64("mass", first, rows, w); !st) return st;
+      }
+    }
+    return ParticleBlock{rows, x.data(), v.data(), r.data(), withMass ? w.data() : nullptr};
+  };
+  ParticleBounds bounds;
+  for (std::uint64_t first = 0; first < m.n; first += kGridBlockRows) {
+    auto b = load(first, std::min(kGridBlockRows, m.n - first), false);
+    if (!b) return b.status();
+    bounds.add(b->n, b->position, b->radius);
+  }
+  auto spec = gridCovering(bounds, m_options.gridCellSize);
+  if (!spec) {
+    spdlog::warn("step {}: no grid fields: {}", m.step, spec.status().message());
+    return std::optional<GridFields>();
+  }
+  GridAccumulator acc(spec.value());
+  for (int pass = 0; pass < 2; ++pass) {
+    for (std::uint64_t first = 0; first < m.n; first += kGridBlockRows) {
+      auto b = load(first, std::min(kGridBlockRows, m.n - first), true);
+      if (!b) return b.status();
+      if (pass == 0) acc.addMoments(b.value());
+      else acc.addFluctuations(b.value());
+    }
+    if (pass == 0) acc.endMoments();
+  }
+  GridFields fields = std::move(acc).finish();
+  if (fields.skippedParticles > 0)
+    spdlog::warn("step {}: {} particle(s) with a non-finite state or radius <= 0 left out of the grid fields", m.step,
+                 fields.skippedParticles);
+  return std::optional<GridFields>(std::move(fields));
+}
+
+Result<JobListing> SnapshotStore::list(const std::string& jobId) {
+  std::unique_lock<std::mutex> lock;
+  auto j = job(jobId, JobMode::kExisting, lock);
+  if (!j) return j.status();
+  if (!j.value()->writer) return notFound("unknown job '" + jobId + "': no snapshots stored yet");
+  auto reader = SnapshotReader::open(jobFile(jobId));
+  if (!reader) return reader.status();
+  lock.unlock();
+  JobListing listing;
+  listing.file = jobFile(jobId);
+  for (std::int64_t step : reader.value()->steps()) {
+    auto meta = reader.value()->meta(step);
+    if (!meta) return meta.status();
+    listing.snapshots.push_back({step, meta->time, meta->n, meta->grid.has_value()});
+  }
+  return listing;
+}
+
+Result<std::unique_ptr<SnapshotCursor>> SnapshotStore::openRead(const std::string& jobId, const ReadRequest& request) {
+  std::unique_lock<std::mutex> lock;
+  auto j = job(jobId, JobMode::kExisting, lock);
+  if (!j) return j.status();
+  if (!j.value()->writer) return notFound("unknown job '" + jobId + "': no snapshots stored yet");
+  const std::vector<std::int64_t> steps = j.value()->writer->steps();
+  if (steps.empty()) return notFound("job '" + jobId + "' has no snapshots");
+  const std::int64_t step = request.step.value_or(steps.back());
+  if (!std::binary_search(steps.begin(), steps.end(), step))
+    return notFound("job '" + jobId + "' has no snapshot for step " + std::to_string(step) + " (" + stepsText(steps) +
+                    ")");
+  auto reader = SnapshotReader::open(jobFile(jobId));
+  if (!reader) return reader.status();
+  lock.unlock();
+  auto meta = reader.value()->meta(step);
+  if (!meta) return meta.status();
+
+  std::vector<FileCursor::Item> items;
+  if (request.fields.empty()) {
+    for (const auto& a : meta->arrays) items.push_back({Section::kParticles, a});
+  } else {
+    for (const auto& name : request.fields) {
+      const ArrayMeta* a = meta->find(name);
+      if (a == nullptr) {
+        std::string have;
+        for (const auto& b : meta->arrays) have += (have.empty() ? "" : ", ") + b.name;
+        return invalidArgument("job '" + jobId + "' step " + std::to_string(step) + " has no field '" + name +
+                               "' (it has: " + have + ")");
+      }
+      const bool dup = std::any_of(items.begin(), items.end(), [&](const auto& i) { return i.array.name == name; });
+      if (!dup) items.push_back({Section::kParticles, *a});
+    }
+  }
+  for (const auto& item : items)
+    if (!dtypeOf(item.array.type))
+      return invalidArgument("field '" + item.array.name + "' is " + compute::scalarName(item.array.type) +
+                             ", which the snapshot protocol cannot carry");
+  if (request.includeGrid && meta->grid)
+    for (const auto& a : meta->grid->arrays) {
+      if (!dtypeOf(a.type) || a.rowBytes() > kMaxChunkBytes)
+        return invalidArgument("grid array '" + a.name + "' cannot be sent in 1 MiB chunks");
+      items.push_back({Section::kGrid, a});
+    }
+  const bool geometry = request.includeGeometry && reader.value()->hasGeometry();
+  return std::unique_ptr<SnapshotCursor>(
+      new FileCursor(jobId, std::move(reader.value()), std::move(meta.value()), std::move(items), geometry));
+}
+
+Status SnapshotStore::readChunks(const std::string& jobId, const ReadRequest& request,
+                                 const std::function<Status(Chunk&&)>& sink) {
+  auto cursor = openRead(jobId, request);
+  if (!cursor) return cursor.status();
+  for (;;) {
+    auto chunk = cursor.value()->next();
+    if (!chunk) return chunk.status();
+    if (!chunk->has_value()) return Status::ok();
+    if (Status st = sink(std::move(**chunk)); !st) return st;
+  }
+}
+
+}  // namespace pflow::backend
