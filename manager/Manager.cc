@@ -489,6 +489,11 @@ void Manager::tick() {
   runActions(std::move(actions));
 }
 
+void Manager::setManagerAddress(const std::string& address) {
+  std::lock_guard lock(m_mu);
+  m_options.managerAddress = address;
+}
+
 std::vector<NodeView> Manager::nodes() const {
   std::lock_guard lock(m_mu);
   return m_inventory.snapshot();

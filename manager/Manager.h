@@ -79,7 +79,8 @@ class Manager {
   void tick();
 
   std::vector<NodeView> nodes() const;
-  const ManagerOptions& options() const { return m_options; }
+  // The address leases carry for workers (main() sets it once the server's port is known when listening on :0).
+  void setManagerAddress(const std::string& address);
 
  private:
   struct Action {

@@ -114,8 +114,10 @@ int main(int argc, char** argv) {
     spdlog::error("{}", server.status().toString());
     return 1;
   }
-  if (advertise.size() >= 2 && advertise.substr(advertise.size() - 2) == ":0")
-    spdlog::warn("--listen uses port 0: leases carry {} (set --advertise to the bound port {})", advertise, server.value()->port());
+  if (advertise.size() >= 2 && advertise.substr(advertise.size() - 2) == ":0") {  // port 0: the bound one
+    advertise = advertise.substr(0, advertise.size() - 1) + std::to_string(server.value()->port());
+    manager.value()->setManagerAddress(advertise);
+  }
   spdlog::info("listening on {} (advertised as {}); database {}; frontend {}; backend {}; {} particles per GPU, {} per CPU slot; "
                "heartbeat timeout {} s",
                server.value()->address(), advertise, dbPath, frontendAddress.empty() ? "(none)" : frontendAddress,
