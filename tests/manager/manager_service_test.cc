@@ -366,6 +366,53 @@ TEST_F(ManagerServiceTest, BadRequestsGetTheDocumentedCodes) {
   EXPECT_EQ(getJob(job.id()).state(), mv1::JOB_STATE_SUCCEEDED);
 }
 
+TEST_F(ManagerServiceTest, ConcurrentClientsDrainTheQueue) {
+  for (const char* node : {"a", "b", "c", "d"}) ASSERT_TRUE(heartbeat(node, 2).ok());
+  constexpr int kThreads = 4, kJobsPerThread = 8;
+  std::atomic<int> succeeded{0}, watchesOk{0};
+  std::vector<std::thread> threads;
+  for (int t = 0; t < kThreads; ++t) {
+    threads.emplace_back([&, t] {
+      for (int k = 0; k < kJobsPerThread; ++k) {
+        mv1::Job job;
+        if (!submit(10 + t, /*wait=*/true, &job).ok()) return;
+        auto w = watch(job.id());
+        const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+        while (getJob(job.id()).state() != mv1::JOB_STATE_RUNNING && std::chrono::steady_clock::now() < deadline)
+          std::this_thread::sleep_for(std::chrono::milliseconds(2));
+        for (int step = 1; step <= 3; ++step) progress(job.id(), step * 100, nullptr);
+        const std::string node = getJob(job.id()).devices(0).node();
+        if (k % 3 == 2) {  // some are cancelled instead
+          cancel(job.id());
+          exitJob(job.id(), 143, node);
+        } else {
+          exitJob(job.id(), 0, node);
+        }
+        if (w->waitDone() && w->status.ok()) ++watchesOk;
+        w->thread.join();
+        const auto state = getJob(job.id()).state();
+        if (state == mv1::JOB_STATE_SUCCEEDED || state == mv1::JOB_STATE_CANCELLED) ++succeeded;
+      }
+    });
+  }
+  // Agents keep heartbeating meanwhile.
+  std::atomic<bool> stop{false};
+  std::thread beats([&] {
+    while (!stop) {
+      for (const char* node : {"a", "b", "c", "d"}) heartbeat(node, 2);
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+  });
+  for (auto& th : threads) th.join();
+  stop = true;
+  beats.join();
+  EXPECT_EQ(succeeded.load(), kThreads * kJobsPerThread);
+  EXPECT_EQ(watchesOk.load(), kThreads * kJobsPerThread);
+  for (const NodeView& n : manager->nodes())
+    for (const DeviceView& d : n.devices) EXPECT_EQ(d.state, DeviceState::kFree) << d.info.key.toString() << " " << d.jobId;
+  EXPECT_TRUE(manager->list(true).empty());
+}
+
 // ---- the gRPC clients against fake servers --------------------------------------------------------------------------
 
 class FakeAgentService final : public pflow::agent::v1::AgentService::Service {
