@@ -112,7 +112,7 @@ Result<HeartbeatInfo> fromProto(const mv1::HeartbeatRequest& r) {
   for (int i = 0; i < r.devices_size(); ++i) {
     const auto& d = r.devices(i);
     DeviceInfo info;
-    info.key.node = d.ref().node();
+    info.key.node = d.ref().node().empty() ? r.node() : d.ref().node();  // the node may be left implicit
     info.key.index = d.ref().index();
     if (d.ref().kind() == cv1::DEVICE_KIND_GPU) {
       info.key.kind = DeviceKind::kGpu;

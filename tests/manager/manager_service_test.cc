@@ -299,6 +299,29 @@ TEST_F(ManagerServiceTest, ClientCancelsItsWatch) {
   EXPECT_EQ(getJob(job.id()).state(), mv1::JOB_STATE_SUCCEEDED);
 }
 
+TEST_F(ManagerServiceTest, HeartbeatDevicesMayLeaveTheirNodeImplicit) {
+  mv1::HeartbeatRequest req;
+  req.set_node("n1");
+  req.set_agent_address("n1:7000");
+  auto* d = req.add_devices();
+  d->mutable_ref()->set_index(0);
+  d->mutable_ref()->set_kind(cv1::DEVICE_KIND_CPU);
+  d->set_name("CPU slot (16 cores)");
+  mv1::HeartbeatResponse resp;
+  auto ctx = rpc::contextWithDeadline(10);
+  ASSERT_TRUE(registry->Heartbeat(ctx.get(), req, &resp).ok());
+  const auto nodes = manager->nodes();
+  ASSERT_EQ(nodes.size(), 1u);
+  ASSERT_EQ(nodes[0].devices.size(), 1u);
+  EXPECT_EQ(nodes[0].devices[0].info.key.node, "n1");
+  EXPECT_EQ(nodes[0].devices[0].info.key.kind, DeviceKind::kCpu);
+  d->mutable_ref()->set_node("other");
+  auto ctx2 = rpc::contextWithDeadline(10);
+  const auto s = registry->Heartbeat(ctx2.get(), req, &resp);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(s.error_message().find("not the heartbeat's node"), std::string::npos) << s.error_message();
+}
+
 TEST_F(ManagerServiceTest, BadRequestsGetTheDocumentedCodes) {
   using C = grpc::StatusCode;
   // No devices at all.
