@@ -78,6 +78,9 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   log::init("pflow-manager", logLevel);
+  if (options.heartbeatTimeoutSeconds < 2 * options.heartbeatIntervalSeconds)
+    spdlog::warn("--heartbeat-timeout {} s is less than two heartbeat intervals ({} s): nodes will flap between lost and back",
+                 options.heartbeatTimeoutSeconds, options.heartbeatIntervalSeconds);
 
   // SIGINT/SIGTERM are taken by sigwait below; block them before any thread starts so none of them gets them.
   sigset_t signals;
