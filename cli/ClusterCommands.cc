@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "backend/BackendClient.h"
 #include "cli/RunCommand.h"
 #include "common/rpc/Rpc.h"
 #include "frontend/SceneLoader.h"
@@ -302,6 +303,22 @@ int watchJob(const Endpoints& e, const std::string& id, bool json) {
     std::printf("\n");
   }
   return exitForFinalState(last);
+}
+
+int fetchSnapshot(const Endpoints& e, const FetchOptions& o, bool json) {
+  auto client = backend::makeGrpcBackendClient(e.backend);
+  const Status s = client->fetch(o.jobId, o.step, o.output, o.fields, o.grid, o.geometry);
+  if (!s.isOk()) {
+    std::string msg = s.message();
+    if (s.code() == StatusCode::kUnavailable || s.code() == StatusCode::kDeadlineExceeded)
+      msg = "fetch: cannot reach the back-end at " + e.backend + " (" + msg + "); set it with --backend, PFLOW_BACKEND or ~/.config/pflow/config.yaml";
+    std::fprintf(stderr, "pflow: %s\n", msg.c_str());
+    return exitCodeFor(s);
+  }
+  const std::string xmf = fs::path(o.output).replace_extension(".xmf").string();
+  if (json) std::printf("%s\n", nlohmann::json{{"job", o.jobId}, {"output", o.output}, {"xdmf", xmf}}.dump().c_str());
+  else std::printf("job %s: snapshot written to %s (open %s in ParaView)\n", o.jobId.c_str(), o.output.c_str(), xmf.c_str());
+  return kExitOk;
 }
 
 }  // namespace pflow::cli

@@ -1,5 +1,6 @@
 #include "compute/worker/SnapshotSinks.h"
 
+#include "backend/BackendClient.h"
 #include "backend/store/SnapshotFile.h"
 
 namespace pflow::worker {
@@ -17,7 +18,37 @@ class FileSink final : public SnapshotSink {
   std::unique_ptr<backend::SnapshotWriter> m_writer;
 };
 
+// Sends each snapshot to the back-end; the geometry travels with the first one.
+class BackendSink final : public SnapshotSink {
+ public:
+  BackendSink(std::unique_ptr<backend::BackendClient> c, std::string jobId) : m_client(std::move(c)), m_jobId(std::move(jobId)) {}
+  Status writeGeometry(const compute::GeometrySnapshot& g) override {
+    m_geometry = g;
+    m_geometryPending = true;
+    return Status::ok();
+  }
+  Status write(const compute::ParticleSnapshot& s) override {
+    Status st = m_client->writeSnapshot(m_jobId, s, m_geometryPending ? &m_geometry : nullptr);
+    if (st.isOk()) {
+      m_geometryPending = false;
+      m_geometry = {};
+    }
+    return st;
+  }
+  Status close() override { return Status::ok(); }
+
+ private:
+  std::unique_ptr<backend::BackendClient> m_client;
+  std::string m_jobId;
+  compute::GeometrySnapshot m_geometry;
+  bool m_geometryPending = false;
+};
+
 }  // namespace
+
+Result<std::unique_ptr<SnapshotSink>> makeBackendSink(const std::string& address, const std::string& jobId) {
+  return std::unique_ptr<SnapshotSink>(new BackendSink(backend::makeGrpcBackendClient(address), jobId));
+}
 
 Result<std::unique_ptr<SnapshotSink>> makeFileSink(const std::string& h5Path) {
   auto w = backend::SnapshotWriter::create(h5Path);

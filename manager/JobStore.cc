@@ -1,0 +1,267 @@
+#include "manager/JobStore.h"
+
+#include <sqlite3.h>
+
+#include <map>
+#include <utility>
+
+namespace pflow::manager {
+namespace {
+
+constexpr int kSchemaVersion = 1;
+
+constexpr const char* kSchema = R"sql(
+CREATE TABLE IF NOT EXISTS schema_info(version INTEGER NOT NULL);
+CREATE TABLE IF NOT EXISTS jobs(
+  seq INTEGER PRIMARY KEY,
+  id TEXT NOT NULL UNIQUE,
+  name TEXT NOT NULL,
+  state TEXT NOT NULL CHECK(state IN ('QUEUED','STARTING','RUNNING','SUCCEEDED','FAILED','CANCELLING','CANCELLED')),
+  reason TEXT NOT NULL,
+  scene_name TEXT NOT NULL,
+  model_id TEXT NOT NULL,
+  model_uri TEXT NOT NULL,
+  particles INTEGER NOT NULL,
+  memory_bytes REAL NOT NULL,
+  max_devices INTEGER NOT NULL,
+  wait INTEGER NOT NULL,
+  submitted_at REAL NOT NULL,
+  started_at REAL NOT NULL,
+  finished_at REAL NOT NULL,
+  exit_code INTEGER NOT NULL,
+  step INTEGER NOT NULL,
+  total_steps INTEGER NOT NULL,
+  sim_time REAL NOT NULL,
+  sim_duration REAL NOT NULL,
+  particle_steps_per_second REAL NOT NULL,
+  eta_seconds REAL NOT NULL,
+  progress_at REAL NOT NULL,
+  message TEXT NOT NULL);
+CREATE TABLE IF NOT EXISTS job_devices(
+  job_id TEXT NOT NULL REFERENCES jobs(id) ON DELETE CASCADE,
+  rank INTEGER NOT NULL,
+  node TEXT NOT NULL,
+  kind TEXT NOT NULL CHECK(kind IN ('GPU','CPU')),
+  device_index INTEGER NOT NULL,
+  leased INTEGER NOT NULL,
+  PRIMARY KEY(job_id, rank));
+CREATE UNIQUE INDEX IF NOT EXISTS one_live_lease_per_device ON job_devices(node, kind, device_index) WHERE leased = 1;
+)sql";
+
+// A prepared statement that finalizes itself.
+class Stmt {
+ public:
+  Stmt(sqlite3* db, const char* sql) { m_rc = sqlite3_prepare_v2(db, sql, -1, &m_s, nullptr); }
+  ~Stmt() { sqlite3_finalize(m_s); }
+  Stmt(const Stmt&) = delete;
+  Stmt& operator=(const Stmt&) = delete;
+  bool ok() const { return m_rc == SQLITE_OK; }
+  void text(int i, const std::string& v) { sqlite3_bind_text(m_s, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT); }
+  void i64(int i, std::int64_t v) { sqlite3_bind_int64(m_s, i, v); }
+  void real(int i, double v) { sqlite3_bind_double(m_s, i, v); }
+  int step() { return sqlite3_step(m_s); }
+  std::string colText(int i) const {
+    const auto* p = sqlite3_column_text(m_s, i);
+    return p ? std::string(reinterpret_cast<const char*>(p), static_cast<std::size_t>(sqlite3_column_bytes(m_s, i))) : std::string();
+  }
+  std::int64_t colI64(int i) const { return sqlite3_column_int64(m_s, i); }
+  double colReal(int i) const { return sqlite3_column_double(m_s, i); }
+
+ private:
+  sqlite3_stmt* m_s = nullptr;
+  int m_rc = SQLITE_ERROR;
+};
+
+DeviceKind kindFromText(const std::string& s) { return s == "CPU" ? DeviceKind::kCpu : DeviceKind::kGpu; }
+
+}  // namespace
+
+Result<std::unique_ptr<JobStore>> JobStore::open(const std::string& path) {
+  sqlite3* db = nullptr;
+  const int rc = sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX, nullptr);
+  if (rc != SQLITE_OK) {
+    std::string msg = db ? sqlite3_errmsg(db) : sqlite3_errstr(rc);
+    sqlite3_close(db);
+    return ioError("cannot open job database " + path + ": " + msg);
+  }
+  std::unique_ptr<JobStore> store(new JobStore(db, path));
+  sqlite3_busy_timeout(db, 5000);
+  if (path != ":memory:") {
+    if (Status s = store->exec("PRAGMA journal_mode=WAL;"); !s) return s;
+  }
+  for (const char* sql : {"PRAGMA synchronous=NORMAL;", "PRAGMA foreign_keys=ON;", kSchema})
+    if (Status s = store->exec(sql); !s) return s;
+
+  Stmt version(db, "SELECT version FROM schema_info LIMIT 1");
+  if (!version.ok()) return store->error("reading the schema version");
+  if (version.step() == SQLITE_ROW) {
+    const auto v = version.colI64(0);
+    if (v != kSchemaVersion)
+      return failedPrecondition("job database " + path + " has schema version " + std::to_string(v) + "; this manager knows " +
+                                std::to_string(kSchemaVersion));
+  } else {
+    Stmt ins(db, "INSERT INTO schema_info(version) VALUES(?1)");
+    ins.i64(1, kSchemaVersion);
+    if (!ins.ok() || ins.step() != SQLITE_DONE) return store->error("writing the schema version");
+  }
+  return store;
+}
+
+JobStore::~JobStore() { sqlite3_close(m_db); }
+
+Status JobStore::exec(const char* sql) const {
+  char* err = nullptr;
+  if (sqlite3_exec(m_db, sql, nullptr, nullptr, &err) != SQLITE_OK) {
+    std::string msg = err ? err : "unknown error";
+    sqlite3_free(err);
+    return ioError("job database " + m_path + ": " + msg);
+  }
+  return Status::ok();
+}
+
+Status JobStore::error(const std::string& what) const {
+  return ioError("job database " + m_path + ": " + what + ": " + sqlite3_errmsg(m_db));
+}
+
+Status JobStore::save(const Job& job) {
+  if (Status s = exec("BEGIN IMMEDIATE;"); !s) return s;
+  auto fail = [&](const std::string& what) {
+    Status s = error(what);
+    exec("ROLLBACK;");
+    return s;
+  };
+  {
+    Stmt st(m_db, R"sql(
+INSERT INTO jobs(seq, id, name, state, reason, scene_name, model_id, model_uri, particles, memory_bytes, max_devices, wait,
+                 submitted_at, started_at, finished_at, exit_code, step, total_steps, sim_time, sim_duration,
+                 particle_steps_per_second, eta_seconds, progress_at, message)
+VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18, ?19, ?20, ?21, ?22, ?23, ?24)
+ON CONFLICT(id) DO UPDATE SET
+  name=excluded.name, state=excluded.state, reason=excluded.reason, scene_name=excluded.scene_name,
+  model_id=excluded.model_id, model_uri=excluded.model_uri, particles=excluded.particles,
+  memory_bytes=excluded.memory_bytes, max_devices=excluded.max_devices, wait=excluded.wait,
+  submitted_at=excluded.submitted_at, started_at=excluded.started_at, finished_at=excluded.finished_at,
+  exit_code=excluded.exit_code, step=excluded.step, total_steps=excluded.total_steps, sim_time=excluded.sim_time,
+  sim_duration=excluded.sim_duration, particle_steps_per_second=excluded.particle_steps_per_second,
+  eta_seconds=excluded.eta_seconds, progress_at=excluded.progress_at, message=excluded.message
+)sql");
+    if (!st.ok()) return fail("preparing the job update");
+    st.i64(1, job.seq);
+    st.text(2, job.id);
+    st.text(3, job.name);
+    st.text(4, jobStateName(job.state));
+    st.text(5, job.reason);
+    st.text(6, job.sceneName);
+    st.text(7, job.modelId);
+    st.text(8, job.modelUri);
+    st.i64(9, static_cast<std::int64_t>(job.particles));
+    st.real(10, job.memoryBytes);
+    st.i64(11, job.maxDevices);
+    st.i64(12, job.wait ? 1 : 0);
+    st.real(13, job.submittedAt);
+    st.real(14, job.startedAt);
+    st.real(15, job.finishedAt);
+    st.i64(16, job.exitCode);
+    st.i64(17, job.progress.step);
+    st.i64(18, job.progress.totalSteps);
+    st.real(19, job.progress.time);
+    st.real(20, job.progress.duration);
+    st.real(21, job.progress.particleStepsPerSecond);
+    st.real(22, job.progress.etaSeconds);
+    st.real(23, job.progressAt);
+    st.text(24, job.message);
+    if (st.step() != SQLITE_DONE) return fail("saving job " + job.id);
+  }
+  {
+    Stmt del(m_db, "DELETE FROM job_devices WHERE job_id = ?1");
+    if (!del.ok()) return fail("preparing the device update");
+    del.text(1, job.id);
+    if (del.step() != SQLITE_DONE) return fail("clearing the devices of job " + job.id);
+  }
+  for (std::size_t rank = 0; rank < job.devices.size(); ++rank) {
+    const DeviceKey& d = job.devices[rank];
+    Stmt ins(m_db, "INSERT INTO job_devices(job_id, rank, node, kind, device_index, leased) VALUES(?1, ?2, ?3, ?4, ?5, ?6)");
+    if (!ins.ok()) return fail("preparing the device insert");
+    ins.text(1, job.id);
+    ins.i64(2, static_cast<std::int64_t>(rank));
+    ins.text(3, d.node);
+    ins.text(4, deviceKindName(d.kind));
+    ins.i64(5, d.index);
+    ins.i64(6, holdsDevices(job.state) ? 1 : 0);
+    if (ins.step() != SQLITE_DONE) return fail("saving device " + d.toString() + " of job " + job.id);
+  }
+  if (Status s = exec("COMMIT;"); !s) {
+    exec("ROLLBACK;");
+    return s;
+  }
+  return Status::ok();
+}
+
+Result<std::vector<Job>> JobStore::loadAll() const {
+  std::vector<Job> jobs;
+  std::map<std::string, std::size_t> index;
+  {
+    Stmt st(m_db, R"sql(
+SELECT seq, id, name, state, reason, scene_name, model_id, model_uri, particles, memory_bytes, max_devices, wait,
+       submitted_at, started_at, finished_at, exit_code, step, total_steps, sim_time, sim_duration,
+       particle_steps_per_second, eta_seconds, progress_at, message
+FROM jobs ORDER BY seq)sql");
+    if (!st.ok()) return error("preparing the job query");
+    int rc;
+    while ((rc = st.step()) == SQLITE_ROW) {
+      Job j;
+      j.seq = st.colI64(0);
+      j.id = st.colText(1);
+      j.name = st.colText(2);
+      const auto state = jobStateFromName(st.colText(3));
+      if (!state) return ioError("job database " + m_path + ": job " + j.id + " has unknown state '" + st.colText(3) + "'");
+      j.state = *state;
+      j.reason = st.colText(4);
+      j.sceneName = st.colText(5);
+      j.modelId = st.colText(6);
+      j.modelUri = st.colText(7);
+      j.particles = static_cast<std::uint64_t>(st.colI64(8));
+      j.memoryBytes = st.colReal(9);
+      j.maxDevices = static_cast<int>(st.colI64(10));
+      j.wait = st.colI64(11) != 0;
+      j.submittedAt = st.colReal(12);
+      j.startedAt = st.colReal(13);
+      j.finishedAt = st.colReal(14);
+      j.exitCode = static_cast<int>(st.colI64(15));
+      j.progress.step = st.colI64(16);
+      j.progress.totalSteps = st.colI64(17);
+      j.progress.time = st.colReal(18);
+      j.progress.duration = st.colReal(19);
+      j.progress.particleStepsPerSecond = st.colReal(20);
+      j.progress.etaSeconds = st.colReal(21);
+      j.progressAt = st.colReal(22);
+      j.message = st.colText(23);
+      index[j.id] = jobs.size();
+      jobs.push_back(std::move(j));
+    }
+    if (rc != SQLITE_DONE) return error("reading jobs");
+  }
+  Stmt st(m_db, "SELECT job_id, node, kind, device_index FROM job_devices ORDER BY job_id, rank");
+  if (!st.ok()) return error("preparing the device query");
+  int rc;
+  while ((rc = st.step()) == SQLITE_ROW) {
+    auto it = index.find(st.colText(0));
+    if (it == index.end()) continue;
+    jobs[it->second].devices.push_back({st.colText(1), static_cast<int>(st.colI64(3)), kindFromText(st.colText(2))});
+  }
+  if (rc != SQLITE_DONE) return error("reading job devices");
+  return jobs;
+}
+
+Result<std::vector<std::pair<DeviceKey, std::string>>> JobStore::leases() const {
+  std::vector<std::pair<DeviceKey, std::string>> out;
+  Stmt st(m_db, "SELECT node, kind, device_index, job_id FROM job_devices WHERE leased = 1 ORDER BY job_id, rank");
+  if (!st.ok()) return error("preparing the lease query");
+  int rc;
+  while ((rc = st.step()) == SQLITE_ROW)
+    out.push_back({{st.colText(0), static_cast<int>(st.colI64(2)), kindFromText(st.colText(1))}, st.colText(3)});
+  if (rc != SQLITE_DONE) return error("reading leases");
+  return out;
+}
+
+}  // namespace pflow::manager

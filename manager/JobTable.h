@@ -1,0 +1,44 @@
+// Jobs in memory and the legal state transitions. Not thread-safe: the Manager serialises access.
+//
+//   QUEUED     -> STARTING (placed), CANCELLED (cancel)
+//   STARTING   -> RUNNING (start confirmed or first progress), SUCCEEDED/FAILED (exit, start failure, node lost),
+//                 CANCELLING (cancel)
+//   RUNNING    -> SUCCEEDED, FAILED, CANCELLING
+//   CANCELLING -> CANCELLED (worker exited, node lost, start failed)
+//   SUCCEEDED, FAILED, CANCELLED: final.
+#pragma once
+#include <map>
+#include <string>
+#include <vector>
+
+#include "common/Status.h"
+#include "manager/Types.h"
+
+namespace pflow::manager {
+
+class JobTable {
+ public:
+  static bool isLegal(JobState from, JobState to);
+
+  // Applies a transition to a job value: state, reason, and the timestamps (startedAt when it leaves the queue,
+  // finishedAt when it becomes final). FAILED_PRECONDITION naming both states when the transition is illegal.
+  static Status transition(Job& job, JobState to, const std::string& reason, double now);
+
+  // Inserts or replaces a job (by id).
+  void put(Job job);
+  const Job* find(const std::string& id) const;
+  // Every job in submission order; only queued/starting/running/cancelling ones when activeOnly.
+  std::vector<Job> list(bool activeOnly) const;
+  // Queued jobs, oldest first (the FIFO).
+  std::vector<const Job*> queued() const;
+  // Jobs that hold devices (starting, running, cancelling).
+  std::vector<const Job*> holdingDevices() const;
+  std::int64_t maxSeq() const { return m_bySeq.empty() ? 0 : m_bySeq.rbegin()->first; }
+  std::size_t size() const { return m_jobs.size(); }
+
+ private:
+  std::map<std::string, Job> m_jobs;
+  std::map<std::int64_t, std::string> m_bySeq;
+};
+
+}  // namespace pflow::manager

@@ -1,0 +1,502 @@
+#include "manager/Manager.h"
+
+#include <spdlog/spdlog.h>
+
+#include <cstdio>
+#include <set>
+
+namespace pflow::manager {
+namespace {
+
+std::string jobIdFor(std::int64_t seq) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "job-%06lld", static_cast<long long>(seq));
+  return buf;
+}
+
+std::string seconds(double s) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f s", s);
+  return buf;
+}
+
+std::string describeDevices(const std::vector<DeviceKey>& devices) {
+  std::string out;
+  for (const DeviceKey& d : devices) out += (out.empty() ? "" : ", ") + d.toString();
+  return out;
+}
+
+std::set<std::string> nodesOf(const Job& job) {
+  std::set<std::string> out;
+  for (const DeviceKey& d : job.devices) out.insert(d.node);
+  return out;
+}
+
+std::string leadNode(const Job& job) { return job.devices.empty() ? std::string() : job.devices.front().node; }
+
+}  // namespace
+
+Manager::Manager(ManagerOptions options, const Clock& clock, JobStore& store, AgentClient& agents, FrontendClient& frontend)
+    : m_options(std::move(options)),
+      m_clock(clock),
+      m_store(store),
+      m_agents(agents),
+      m_frontend(frontend),
+      m_inventory(clock, m_options.heartbeatTimeoutSeconds) {}
+
+Result<std::unique_ptr<Manager>> Manager::create(ManagerOptions options, const Clock& clock, JobStore& store,
+                                                 AgentClient& agents, FrontendClient& frontend) {
+  if (!(options.heartbeatTimeoutSeconds > 0) || !(options.heartbeatIntervalSeconds > 0) || !(options.missingJobGraceSeconds > 0))
+    return invalidArgument("manager: heartbeat timeout, interval and missing-job grace must be positive");
+  if (options.thresholds.particlesPerGpu == 0 || options.thresholds.particlesPerCpuSlot == 0)
+    return invalidArgument("manager: particles per GPU and per CPU slot must be positive");
+  std::unique_ptr<Manager> m(new Manager(std::move(options), clock, store, agents, frontend));
+  auto jobs = store.loadAll();
+  if (!jobs) return jobs.status();
+  int active = 0, queued = 0;
+  for (Job& j : jobs.value()) {
+    if (holdsDevices(j.state)) {
+      if (Status s = m->m_inventory.lease(j.devices, j.id); !s) return internalError("job database " + store.path() + ": " + s.message());
+      m->m_runtime[j.id].attached = true;  // whatever the agent says at its next heartbeat decides
+      ++active;
+    } else if (j.state == JobState::kQueued) {
+      ++queued;
+    }
+    m->m_jobs.put(std::move(j));
+  }
+  m->m_loadedAt = clock.now();
+  spdlog::info("manager: loaded {} jobs from {} ({} queued, {} holding devices: they re-attach when their agents heartbeat)",
+               m->m_jobs.size(), store.path(), queued, active);
+  return m;
+}
+
+// ---- state changes -----------------------------------------------------------------------------------------------
+
+Status Manager::commitLocked(Job next, const std::string& event) {
+  if (Status s = m_store.save(next); !s) {
+    spdlog::error("manager: {}", s.toString());
+    return s;
+  }
+  if (holdsDevices(next.state)) {
+    if (Status s = m_inventory.lease(next.devices, next.id); !s) spdlog::error("manager: {}", s.message());
+  } else {
+    m_inventory.release(next.id);
+    m_runtime.erase(next.id);
+  }
+  const Job* prev = m_jobs.find(next.id);
+  if (!prev || prev->state != next.state)
+    spdlog::info("manager: {} {}{}", next.id, jobStateName(next.state), next.reason.empty() ? "" : " (" + next.reason + ")");
+  m_jobs.put(next);
+  const Job& job = *m_jobs.find(next.id);
+  const JobEvent ev{job, event};
+  for (auto it = m_watchers.begin(); it != m_watchers.end();) {
+    if (it->second.jobId == job.id) {
+      it->second.callback(ev);
+      if (isFinal(job.state)) {
+        it = m_watchers.erase(it);
+        continue;
+      }
+    }
+    ++it;
+  }
+  return Status::ok();
+}
+
+void Manager::endLocked(const Job& job, JobState to, const std::string& reason, std::optional<int> exitCode, const std::string& event) {
+  Job next = job;
+  if (Status s = JobTable::transition(next, to, reason, m_clock.now()); !s) {
+    spdlog::error("manager: {}", s.message());
+    return;
+  }
+  if (exitCode) next.exitCode = *exitCode;
+  (void)commitLocked(std::move(next), event);
+}
+
+Lease Manager::leaseFor(const Job& job) const {
+  Lease l;
+  l.jobId = job.id;
+  l.modelUri = job.modelUri;
+  l.devices = job.devices;
+  for (const std::string& node : nodesOf(job)) l.nodeHosts[node] = hostOfAddress(m_inventory.agentAddress(node));
+  l.managerAddress = m_options.managerAddress;
+  l.backendAddress = m_options.backendAddress;
+  return l;
+}
+
+void Manager::stopAction(const Job& job, Actions& actions) const {
+  const std::string lead = leadNode(job);
+  if (lead.empty() || !m_inventory.isKnown(lead) || m_inventory.isLost(lead)) return;
+  actions.push_back({Action::Kind::kStop, job.id, m_inventory.agentAddress(lead), {}});
+}
+
+void Manager::scheduleLocked(Actions& actions) {
+  std::vector<std::string> queue;
+  for (const Job* j : m_jobs.queued()) queue.push_back(j->id);
+  for (const std::string& id : queue) {
+    const Job& job = *m_jobs.find(id);
+    const Placement p = place({job.particles, job.memoryBytes, job.maxDevices}, m_inventory.snapshot(), m_options.thresholds);
+    if (p.outcome != PlacementOutcome::kPlaced) break;  // FIFO: the head of the queue waits, and so does everyone behind it
+    Job next = job;
+    (void)JobTable::transition(next, JobState::kStarting, "", m_clock.now());
+    next.reason.clear();
+    next.devices = p.devices;
+    if (!commitLocked(next, "starting on " + describeDevices(p.devices))) break;
+    m_runtime[id] = Runtime{};
+    const Job& started = *m_jobs.find(id);
+    actions.push_back({Action::Kind::kStart, id, m_inventory.agentAddress(leadNode(started)), leaseFor(started)});
+  }
+}
+
+void Manager::runActions(Actions actions) {
+  while (!actions.empty()) {
+    Action a = std::move(actions.front());
+    actions.erase(actions.begin());
+    Actions more;
+    if (a.kind == Action::Kind::kStart) {
+      const auto r = m_agents.startJob(a.address, a.lease);
+      std::lock_guard lock(m_mu);
+      applyStart(a, r, more);
+    } else {
+      const Status s = m_agents.stopJob(a.address, a.jobId);
+      std::lock_guard lock(m_mu);
+      applyStop(a, s, more);
+    }
+    for (Action& m : more) actions.push_back(std::move(m));
+  }
+}
+
+void Manager::applyStart(const Action& a, const Result<std::int64_t>& r, Actions& more) {
+  const Job* job = m_jobs.find(a.jobId);
+  if (!job) return;
+  const bool started = r.isOk() || r.status().code() == StatusCode::kAlreadyExists;
+  if (started) {
+    if (auto it = m_runtime.find(a.jobId); it != m_runtime.end()) it->second.attached = true;
+    const std::string pid = r.isOk() ? " (pid " + std::to_string(r.value()) + ")" : "";
+    if (job->state == JobState::kStarting) {
+      Job next = *job;
+      (void)JobTable::transition(next, JobState::kRunning, "", m_clock.now());
+      (void)commitLocked(next, "running on " + describeDevices(next.devices) + pid);
+    } else if (job->state == JobState::kCancelling || isFinal(job->state)) {
+      stopAction(*job, more);  // cancelled or ended while it was being started
+    }
+    return;
+  }
+  const std::string why = "the agent on node " + leadNode(*job) + " could not start the job: " + r.status().message();
+  if (job->state == JobState::kStarting) {
+    endLocked(*job, JobState::kFailed, why, std::nullopt, "failed: " + why);
+  } else if (job->state == JobState::kCancelling) {
+    endLocked(*job, JobState::kCancelled, "", std::nullopt, "cancelled before it started (" + why + ")");
+  } else {
+    return;  // running (a progress report came first) or already ended: the start answer changes nothing
+  }
+  scheduleLocked(more);
+}
+
+void Manager::applyStop(const Action& a, const Status& s, Actions& more) {
+  if (s) return;  // the exit report finishes the job
+  const Job* job = m_jobs.find(a.jobId);
+  if (!job) return;
+  if (s.code() == StatusCode::kNotFound && job->state == JobState::kCancelling) {
+    auto it = m_runtime.find(a.jobId);
+    if (it != m_runtime.end() && it->second.attached) {
+      endLocked(*job, JobState::kCancelled, "", std::nullopt, "cancelled (its agent no longer ran the worker)");
+      scheduleLocked(more);
+    }
+    return;
+  }
+  spdlog::warn("manager: stopping {} at {}: {} (retried through the agent's heartbeats)", a.jobId, a.address, s.toString());
+}
+
+// ---- jobs --------------------------------------------------------------------------------------------------------
+
+Result<Job> Manager::submit(const SubmitRequest& req) {
+  ErrorList errors;
+  if (req.sceneYaml.empty()) errors.add("scene_yaml", "is empty: send the scene's YAML text");
+  if (req.maxDevices < 0) errors.add("max_devices", "is negative (" + std::to_string(req.maxDevices) + "); 0 means no limit");
+  if (req.name.size() > 256) errors.add("name", "is longer than 256 characters");
+  std::set<std::string> paths;
+  for (std::size_t i = 0; i < req.files.size(); ++i) {
+    const std::string path = "files[" + std::to_string(i) + "].path";
+    if (req.files[i].path.empty()) errors.add(path, "is empty");
+    else if (!paths.insert(req.files[i].path).second) errors.add(path, "repeats '" + req.files[i].path + "'");
+  }
+  if (!errors.empty()) return errors.toStatus("SubmitJob");
+
+  {  // cheap refusal before an expensive build
+    std::lock_guard lock(m_mu);
+    const Placement p = place({1, 0, 0}, m_inventory.snapshot(), m_options.thresholds);
+    if (p.outcome == PlacementOutcome::kNeverFits) return failedPrecondition("job refused: " + p.reason);
+  }
+
+  auto model = m_frontend.buildScene(req.sceneYaml, req.sceneName, req.files);
+  if (!model) return model.status();
+  if (model->particles == 0) return invalidArgument("scene '" + req.sceneName + "' has no particles: nothing to simulate");
+
+  Actions actions;
+  std::string id;
+  {
+    std::lock_guard lock(m_mu);
+    const Placement p = place({model->particles, model->memoryBytes, req.maxDevices}, m_inventory.snapshot(), m_options.thresholds);
+    if (p.outcome == PlacementOutcome::kNeverFits) return failedPrecondition("job refused: " + p.reason);
+    const std::size_t ahead = m_jobs.queued().size();
+    if (!req.wait && p.outcome == PlacementOutcome::kWait)
+      return resourceExhausted("too few free devices: the job " + p.reason + " (submit with wait to queue it)");
+    if (!req.wait && ahead > 0)
+      return resourceExhausted("devices are promised to " + std::to_string(ahead) + " queued job(s) ahead of this one (submit with wait to queue it)");
+
+    Job j;
+    j.seq = m_jobs.maxSeq() + 1;
+    j.id = jobIdFor(j.seq);
+    j.name = req.name.empty() ? req.sceneName : req.name;
+    j.state = JobState::kQueued;
+    j.sceneName = req.sceneName;
+    j.modelId = model->modelId;
+    j.modelUri = model->modelUri;
+    j.particles = model->particles;
+    j.memoryBytes = model->memoryBytes;
+    j.maxDevices = req.maxDevices;
+    j.wait = req.wait;
+    j.submittedAt = m_clock.now();
+    j.progress.totalSteps = model->steps;
+    j.progress.duration = model->duration;
+    const std::string event = p.outcome == PlacementOutcome::kWait ? "queued: the job " + p.reason : "queued";
+    if (p.outcome == PlacementOutcome::kWait) j.reason = "waiting: the job " + p.reason;
+    if (Status s = commitLocked(j, event); !s) return s;
+    id = j.id;
+    scheduleLocked(actions);
+  }
+  runActions(std::move(actions));
+  return get(id);
+}
+
+Result<Job> Manager::get(const std::string& id) const {
+  if (id.empty()) return invalidArgument("job id is empty");
+  std::lock_guard lock(m_mu);
+  const Job* j = m_jobs.find(id);
+  if (!j) return notFound("no job '" + id + "'");
+  return *j;
+}
+
+std::vector<Job> Manager::list(bool activeOnly) const {
+  std::lock_guard lock(m_mu);
+  return m_jobs.list(activeOnly);
+}
+
+Result<Job> Manager::cancel(const std::string& id) {
+  if (id.empty()) return invalidArgument("job id is empty");
+  Actions actions;
+  {
+    std::lock_guard lock(m_mu);
+    const Job* j = m_jobs.find(id);
+    if (!j) return notFound("no job '" + id + "'");
+    switch (j->state) {
+      case JobState::kQueued:
+        endLocked(*j, JobState::kCancelled, "cancelled while queued", std::nullopt, "cancelled while queued");
+        scheduleLocked(actions);  // the jobs behind it may fit now
+        break;
+      case JobState::kStarting:
+      case JobState::kRunning: {
+        Job next = *j;
+        (void)JobTable::transition(next, JobState::kCancelling, "cancelled by request", m_clock.now());
+        if (Status s = commitLocked(next, "cancelling: asking the agent to stop the worker"); !s) return s;
+        stopAction(next, actions);
+        break;
+      }
+      case JobState::kCancelling:
+        stopAction(*j, actions);  // ask again; the state stays
+        break;
+      case JobState::kCancelled:
+        return *j;
+      case JobState::kSucceeded:
+      case JobState::kFailed:
+        return failedPrecondition("job " + id + " already " + jobStateName(j->state) + "; there is nothing to cancel");
+    }
+  }
+  runActions(std::move(actions));
+  return get(id);
+}
+
+Result<std::uint64_t> Manager::watch(const std::string& id, EventCallback callback) {
+  if (id.empty()) return invalidArgument("job id is empty");
+  std::lock_guard lock(m_mu);
+  const Job* j = m_jobs.find(id);
+  if (!j) return notFound("no job '" + id + "'");
+  const std::uint64_t sub = m_nextWatcher++;
+  callback(JobEvent{*j, std::string("now ") + jobStateName(j->state)});
+  if (!isFinal(j->state)) m_watchers.emplace(sub, Watcher{id, std::move(callback)});
+  return sub;
+}
+
+void Manager::unwatch(std::uint64_t subscription) {
+  std::lock_guard lock(m_mu);
+  m_watchers.erase(subscription);
+}
+
+// ---- agents and workers ------------------------------------------------------------------------------------------
+
+Result<HeartbeatReply> Manager::heartbeat(const HeartbeatInfo& hb) {
+  if (Status s = Inventory::validateHeartbeat(hb); !s) return s;
+  HeartbeatReply reply;
+  reply.heartbeatIntervalSeconds = m_options.heartbeatIntervalSeconds;
+  Actions actions;
+  {
+    std::lock_guard lock(m_mu);
+    const double now = m_clock.now();
+    if (m_inventory.heartbeat(hb))
+      spdlog::info("manager: node {} at {} joined with {} device(s)", hb.node, hb.agentAddress, hb.devices.size());
+    const std::set<std::string> running(hb.runningJobs.begin(), hb.runningJobs.end());
+    for (const std::string& id : running) {
+      const Job* j = m_jobs.find(id);
+      if (!j || isFinal(j->state) || j->state == JobState::kCancelling || j->state == JobState::kQueued) reply.stopJobs.push_back(id);
+    }
+    std::vector<std::string> held;
+    for (const Job* j : m_jobs.holdingDevices())
+      if (leadNode(*j) == hb.node) held.push_back(j->id);
+    for (const std::string& id : held) {
+      const Job& j = *m_jobs.find(id);
+      Runtime& rt = m_runtime[id];
+      if (running.count(id)) {
+        rt.attached = true;
+        rt.missingSince.reset();
+        if (j.state == JobState::kStarting) {
+          Job next = j;
+          (void)JobTable::transition(next, JobState::kRunning, "", now);
+          (void)commitLocked(next, "running (its agent on " + hb.node + " lists it)");
+        }
+      } else if (rt.attached && !rt.missingSince) {
+        rt.missingSince = now;
+      }
+    }
+    checkNodesLocked(actions);
+    scheduleLocked(actions);
+  }
+  runActions(std::move(actions));
+  return reply;
+}
+
+Result<bool> Manager::reportProgress(const std::string& jobId, const Progress& p, const std::string& message) {
+  ErrorList errors;
+  if (jobId.empty()) errors.add("job_id", "is empty");
+  if (p.step < 0) errors.add("progress.step", "is negative (" + std::to_string(p.step) + ")");
+  if (p.totalSteps < 0) errors.add("progress.total_steps", "is negative (" + std::to_string(p.totalSteps) + ")");
+  if (!(p.time >= 0)) errors.add("progress.time", "is negative or not a number");
+  if (!(p.duration >= 0)) errors.add("progress.duration", "is negative or not a number");
+  if (!(p.particleStepsPerSecond >= 0)) errors.add("progress.particle_steps_per_second", "is negative or not a number");
+  if (!(p.etaSeconds >= 0)) errors.add("progress.eta_seconds", "is negative or not a number");
+  if (!errors.empty()) return errors.toStatus("ReportProgress");
+
+  std::lock_guard lock(m_mu);
+  const Job* j = m_jobs.find(jobId);
+  if (!j) return notFound("no job '" + jobId + "'");
+  if (isFinal(j->state)) return true;  // a stray worker of an ended job: tell it to stop
+  if (j->state == JobState::kQueued)
+    return failedPrecondition("job " + jobId + " is queued: it has no worker that could report progress");
+
+  const double now = m_clock.now();
+  Job next = *j;
+  Progress q = p;
+  const double dt = now - j->progressAt;
+  if (q.particleStepsPerSecond <= 0 && j->progressAt > 0 && dt > 0 && q.step > j->progress.step)
+    q.particleStepsPerSecond = static_cast<double>(q.step - j->progress.step) * static_cast<double>(j->particles) / dt;
+  if (q.etaSeconds <= 0) {
+    if (q.totalSteps > q.step && q.particleStepsPerSecond > 0 && j->particles > 0) {
+      q.etaSeconds = static_cast<double>(q.totalSteps - q.step) * static_cast<double>(j->particles) / q.particleStepsPerSecond;
+    } else if (q.duration > q.time && j->progressAt > 0 && dt > 0 && q.time > j->progress.time) {
+      q.etaSeconds = (q.duration - q.time) / ((q.time - j->progress.time) / dt);
+    }
+  }
+  next.progress = q;
+  next.progressAt = now;
+  if (!message.empty()) next.message = message;
+  if (next.state == JobState::kStarting) (void)JobTable::transition(next, JobState::kRunning, "", now);
+  if (auto it = m_runtime.find(jobId); it != m_runtime.end()) it->second.attached = true;
+  if (Status s = commitLocked(next, message.empty() ? "progress" : message); !s) return s;
+  return next.state == JobState::kCancelling;
+}
+
+Status Manager::reportExit(const std::string& jobId, const std::string& node, int exitCode, const std::string& reason) {
+  if (jobId.empty()) return invalidArgument("ReportJobExit: job_id is empty");
+  Actions actions;
+  {
+    std::lock_guard lock(m_mu);
+    const Job* j = m_jobs.find(jobId);
+    if (!j) return notFound("no job '" + jobId + "'");
+    if (isFinal(j->state)) return Status::ok();  // it already ended (e.g. its node was declared lost)
+    if (j->state == JobState::kQueued) return failedPrecondition("job " + jobId + " is queued: it has no worker that could exit");
+    const auto nodes = nodesOf(*j);
+    if (!node.empty() && !nodes.count(node))
+      return failedPrecondition("job " + jobId + " does not run on node '" + node + "' (it runs on " + describeDevices(j->devices) + ")");
+    const std::string code = "exit code " + std::to_string(exitCode);
+    if (j->state == JobState::kCancelling) {
+      endLocked(*j, JobState::kCancelled, "", exitCode, "cancelled: the worker stopped (" + code + ")");
+    } else if (exitCode == 0) {
+      endLocked(*j, JobState::kSucceeded, "", exitCode, "succeeded");
+    } else {
+      const std::string why = "the worker failed with " + code + (reason.empty() ? "" : ": " + reason);
+      endLocked(*j, JobState::kFailed, why, exitCode, "failed: " + why);
+    }
+    scheduleLocked(actions);
+  }
+  runActions(std::move(actions));
+  return Status::ok();
+}
+
+void Manager::checkNodesLocked(Actions& actions) {
+  const double now = m_clock.now();
+  for (const std::string& node : m_inventory.expireLost())
+    spdlog::warn("manager: node {} lost: no heartbeat for more than {}", node, seconds(m_options.heartbeatTimeoutSeconds));
+
+  std::vector<std::string> held;
+  for (const Job* j : m_jobs.holdingDevices()) held.push_back(j->id);
+  for (const std::string& id : held) {
+    const Job& j = *m_jobs.find(id);
+    std::string why;
+    bool leadAlive = true;
+    for (const std::string& node : nodesOf(j)) {
+      if (m_inventory.isLost(node)) {
+        why = "node " + node + " lost: no heartbeat for more than " + seconds(m_options.heartbeatTimeoutSeconds);
+        if (node == leadNode(j)) leadAlive = false;
+        break;
+      }
+      if (!m_inventory.isKnown(node) && now - m_loadedAt > m_options.heartbeatTimeoutSeconds) {
+        why = "node " + node + " did not come back within " + seconds(m_options.heartbeatTimeoutSeconds) + " of the manager's restart";
+        if (node == leadNode(j)) leadAlive = false;
+        break;
+      }
+    }
+    if (why.empty()) {
+      const Runtime& rt = m_runtime[id];
+      if (rt.missingSince && now - *rt.missingSince >= m_options.missingJobGraceSeconds)
+        why = "the agent on node " + leadNode(j) + " no longer runs the worker (missing from its heartbeats for " +
+              seconds(now - *rt.missingSince) + ")";
+    }
+    if (why.empty()) continue;
+    if (leadAlive) stopAction(j, actions);
+    if (j.state == JobState::kCancelling)
+      endLocked(j, JobState::kCancelled, "", std::nullopt, "cancelled: " + why);
+    else
+      endLocked(j, JobState::kFailed, why, std::nullopt, "failed: " + why);
+  }
+}
+
+void Manager::tick() {
+  Actions actions;
+  {
+    std::lock_guard lock(m_mu);
+    checkNodesLocked(actions);
+    scheduleLocked(actions);
+  }
+  runActions(std::move(actions));
+}
+
+void Manager::setManagerAddress(const std::string& address) {
+  std::lock_guard lock(m_mu);
+  m_options.managerAddress = address;
+}
+
+std::vector<NodeView> Manager::nodes() const {
+  std::lock_guard lock(m_mu);
+  return m_inventory.snapshot();
+}
+
+}  // namespace pflow::manager

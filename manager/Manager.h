@@ -1,0 +1,129 @@
+// The manager's domain: jobs, devices, placement, persistence, and the calls to agents and the frontend. No gRPC:
+// ManagerService.cc adapts it to the wire. Thread-safe: one mutex guards the state; calls to agents and the
+// frontend are made without holding it (they may block up to their deadlines).
+//
+// Errors (Status codes the adapters pass on):
+//   INVALID_ARGUMENT    a malformed request or an invalid scene (the message lists what is wrong)
+//   NOT_FOUND           an unknown job id
+//   FAILED_PRECONDITION an operation the job's state does not allow (cancel a finished job, progress for a queued
+//                       one); a job that can never fit on the devices that exist
+//   RESOURCE_EXHAUSTED  too few devices free now and the submitter did not ask to wait
+//   UNAVAILABLE         the frontend cannot be reached
+//   IO                  the job database failed (nothing changed)
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/Clock.h"
+#include "common/Status.h"
+#include "manager/AgentClient.h"
+#include "manager/FrontendClient.h"
+#include "manager/Inventory.h"
+#include "manager/JobStore.h"
+#include "manager/JobTable.h"
+#include "manager/Placement.h"
+#include "manager/Types.h"
+
+namespace pflow::manager {
+
+struct ManagerOptions {
+  PlacementThresholds thresholds;
+  double heartbeatTimeoutSeconds = 15;   // a node silent this long is lost
+  double heartbeatIntervalSeconds = 2;   // what agents are told to use
+  double missingJobGraceSeconds = 15;    // a started job its agent's heartbeats stop listing fails after this long
+  std::string managerAddress;            // put in leases: where workers report progress
+  std::string backendAddress;            // put in leases: where workers send snapshots
+};
+
+class Manager {
+ public:
+  using EventCallback = std::function<void(const JobEvent&)>;
+
+  // Loads every job and lease from `store`. Jobs that were starting, running or cancelling stay so and re-attach
+  // when their agents heartbeat (see heartbeat() and tick()).
+  static Result<std::unique_ptr<Manager>> create(ManagerOptions options, const Clock& clock, JobStore& store,
+                                                 AgentClient& agents, FrontendClient& frontend);
+
+  // Builds the scene through the frontend, stores the job QUEUED and schedules it (it may come back STARTING or
+  // RUNNING). Refused (nothing stored): RESOURCE_EXHAUSTED when too few devices are free and !wait (or other jobs
+  // queue ahead of it); FAILED_PRECONDITION when it could never fit.
+  Result<Job> submit(const SubmitRequest& request);
+  Result<Job> get(const std::string& id) const;
+  std::vector<Job> list(bool activeOnly) const;
+  // QUEUED -> CANCELLED; STARTING/RUNNING -> CANCELLING (the agent is asked to stop the worker). Cancelling a
+  // cancelling or cancelled job again returns it unchanged; a succeeded or failed one is FAILED_PRECONDITION.
+  Result<Job> cancel(const std::string& id);
+
+  // Calls `callback` with the job now, then with every change (state, progress), until the job is final. The
+  // callback runs under the manager's lock: it must be quick and must not call back into the Manager. Returns a
+  // subscription id for unwatch(); after unwatch() returns, the callback is never called again.
+  Result<std::uint64_t> watch(const std::string& id, EventCallback callback);
+  void unwatch(std::uint64_t subscription);
+
+  Result<HeartbeatReply> heartbeat(const HeartbeatInfo& hb);
+  // Records progress (STARTING -> RUNNING on the first report) and fills in the rate and ETA when the worker
+  // left them 0. Returns whether the worker should stop (the job is cancelling, or already ended).
+  Result<bool> reportProgress(const std::string& jobId, const Progress& progress, const std::string& message);
+  // Exit code 0 -> SUCCEEDED; otherwise FAILED with the reason; a cancelling job -> CANCELLED. Frees the devices.
+  // A report for a job that already ended is accepted and ignored.
+  Status reportExit(const std::string& jobId, const std::string& node, int exitCode, const std::string& reason);
+
+  // Lost-node detection, jobs whose agents stopped listing them, re-attachment deadlines after a restart, and the
+  // queue. main() calls it from a timer thread; tests call it directly.
+  void tick();
+
+  std::vector<NodeView> nodes() const;
+  // The address leases carry for workers (main() sets it once the server's port is known when listening on :0).
+  void setManagerAddress(const std::string& address);
+
+ private:
+  struct Action {
+    enum class Kind { kStart, kStop } kind;
+    std::string jobId;
+    std::string address;
+    Lease lease;
+  };
+  struct Runtime {
+    bool attached = false;               // the agent confirmed the worker (start answer, progress, heartbeat)
+    std::optional<double> missingSince;  // first heartbeat of its agent that did not list it
+  };
+  struct Watcher {
+    std::string jobId;
+    EventCallback callback;
+  };
+  using Actions = std::vector<Action>;
+
+  Manager(ManagerOptions options, const Clock& clock, JobStore& store, AgentClient& agents, FrontendClient& frontend);
+
+  Status commitLocked(Job next, const std::string& event);
+  void endLocked(const Job& job, JobState to, const std::string& reason, std::optional<int> exitCode, const std::string& event);
+  void scheduleLocked(Actions& actions);
+  void checkNodesLocked(Actions& actions);
+  Lease leaseFor(const Job& job) const;
+  void stopAction(const Job& job, Actions& actions) const;
+  void runActions(Actions actions);
+  void applyStart(const Action& a, const Result<std::int64_t>& result, Actions& more);
+  void applyStop(const Action& a, const Status& result, Actions& more);
+
+  ManagerOptions m_options;
+  const Clock& m_clock;
+  JobStore& m_store;
+  AgentClient& m_agents;
+  FrontendClient& m_frontend;
+
+  mutable std::mutex m_mu;
+  Inventory m_inventory;
+  JobTable m_jobs;
+  std::map<std::string, Runtime> m_runtime;  // jobs holding devices
+  std::map<std::uint64_t, Watcher> m_watchers;
+  std::uint64_t m_nextWatcher = 1;
+  double m_loadedAt = 0;
+};
+
+}  // namespace pflow::manager

@@ -1,0 +1,57 @@
+#include "manager/Types.h"
+
+namespace pflow::manager {
+
+const char* deviceKindName(DeviceKind kind) { return kind == DeviceKind::kGpu ? "GPU" : "CPU"; }
+
+std::string DeviceKey::toString() const { return node + "/" + deviceKindName(kind) + " " + std::to_string(index); }
+
+const char* deviceStateName(DeviceState state) {
+  switch (state) {
+    case DeviceState::kFree: return "FREE";
+    case DeviceState::kBusy: return "BUSY";
+    case DeviceState::kLost: return "LOST";
+  }
+  return "?";
+}
+
+namespace {
+constexpr JobState kAllStates[] = {JobState::kQueued,    JobState::kStarting,   JobState::kRunning,  JobState::kSucceeded,
+                                   JobState::kFailed,    JobState::kCancelling, JobState::kCancelled};
+}
+
+const char* jobStateName(JobState state) {
+  switch (state) {
+    case JobState::kQueued: return "QUEUED";
+    case JobState::kStarting: return "STARTING";
+    case JobState::kRunning: return "RUNNING";
+    case JobState::kSucceeded: return "SUCCEEDED";
+    case JobState::kFailed: return "FAILED";
+    case JobState::kCancelling: return "CANCELLING";
+    case JobState::kCancelled: return "CANCELLED";
+  }
+  return "?";
+}
+
+std::optional<JobState> jobStateFromName(const std::string& name) {
+  for (JobState s : kAllStates)
+    if (name == jobStateName(s)) return s;
+  return std::nullopt;
+}
+
+bool isFinal(JobState s) { return s == JobState::kSucceeded || s == JobState::kFailed || s == JobState::kCancelled; }
+
+bool holdsDevices(JobState s) {
+  return s == JobState::kStarting || s == JobState::kRunning || s == JobState::kCancelling;
+}
+
+std::string hostOfAddress(const std::string& address) {
+  if (!address.empty() && address.front() == '[') {
+    const auto close = address.find(']');
+    return close == std::string::npos ? address : address.substr(0, close + 1);
+  }
+  const auto colon = address.rfind(':');
+  return colon == std::string::npos ? address : address.substr(0, colon);
+}
+
+}  // namespace pflow::manager

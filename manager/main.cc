@@ -1,0 +1,154 @@
+// pflow-manager: the job and device manager (ManagerService for users, NodeRegistry for agents and workers).
+#include <CLI/CLI.hpp>
+#include <pthread.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <csignal>
+#include <mutex>
+#include <thread>
+
+#include "common/Clock.h"
+#include "common/Log.h"
+#include "common/rpc/Rpc.h"
+#include "manager/GrpcAgentClient.h"
+#include "manager/GrpcFrontendClient.h"
+#include "manager/JobStore.h"
+#include "manager/Manager.h"
+#include "manager/ManagerService.h"
+
+namespace {
+
+std::string hostname() {
+  char buf[256] = {};
+  return ::gethostname(buf, sizeof buf - 1) == 0 ? std::string(buf) : std::string("localhost");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace pflow;
+  using namespace pflow::manager;
+
+  CLI::App app{"pflow-manager: job and device manager of pflow"};
+  std::string listen = "127.0.0.1:50051";
+  std::string advertise;
+  std::string dbPath = "pflow-manager.db";
+  std::string frontendAddress;
+  std::string backendAddress;
+  std::string logLevel = "info";
+  ManagerOptions options;
+  double tickSeconds = 0.5;
+  int threads = 8;
+  app.add_option("--listen", listen, "HOST:PORT to serve ManagerService and NodeRegistry on")->capture_default_str();
+  app.add_option("--advertise", advertise,
+                 "HOST:PORT workers use to reach the manager (put in leases; default: --listen, with 0.0.0.0 or [::] "
+                 "replaced by this host's name)");
+  app.add_option("--db", dbPath, "SQLite job database (created if missing)")->capture_default_str();
+  app.add_option("--frontend", frontendAddress, "HOST:PORT of the frontend (builds submitted scenes)");
+  app.add_option("--backend", backendAddress, "HOST:PORT of the backend (put in leases: where workers send snapshots)");
+  app.add_option("--particles-per-gpu", options.thresholds.particlesPerGpu,
+                 "particles that keep one GPU busy: a job gets floor(particles / this) GPUs (at least 1)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--particles-per-cpu-slot", options.thresholds.particlesPerCpuSlot,
+                 "particles that keep one CPU slot busy (nodes without GPUs)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--memory-headroom", options.thresholds.memoryHeadroom, "usable fraction of a device's memory")
+      ->capture_default_str()
+      ->check(CLI::Range(0.05, 1.0));
+  app.add_option("--heartbeat-timeout", options.heartbeatTimeoutSeconds, "seconds without a heartbeat before a node is lost")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--heartbeat-interval", options.heartbeatIntervalSeconds, "seconds between heartbeats (told to agents)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--missing-job-grace", options.missingJobGraceSeconds,
+                 "seconds a started job may be missing from its agent's heartbeats before it fails")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--tick", tickSeconds, "seconds between lost-node checks and queue scans")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--threads", threads, "worker threads for calls that reach agents or the frontend")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 256));
+  app.add_option("--log-level", logLevel, "trace, debug, info, warn, error")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+
+  log::init("pflow-manager", logLevel);
+  if (options.heartbeatTimeoutSeconds < 2 * options.heartbeatIntervalSeconds)
+    spdlog::warn("--heartbeat-timeout {} s is less than two heartbeat intervals ({} s): nodes will flap between lost and back",
+                 options.heartbeatTimeoutSeconds, options.heartbeatIntervalSeconds);
+
+  // SIGINT/SIGTERM are taken by sigwait below; block them before any thread starts so none of them gets them.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  auto store = JobStore::open(dbPath);
+  if (!store) {
+    spdlog::error("{}", store.status().toString());
+    return 1;
+  }
+  if (advertise.empty()) {
+    const std::string host = rpc::hostOf(listen);
+    advertise = (host == "0.0.0.0" || host == "[::]" || host.empty() ? hostname() : host) + listen.substr(host.size());
+  }
+  SystemClock clock;
+  GrpcAgentClient agents;
+  GrpcFrontendClient frontend(frontendAddress);
+  options.backendAddress = backendAddress;
+
+  options.managerAddress = advertise;
+  auto manager = Manager::create(options, clock, *store.value(), agents, frontend);
+  if (!manager) {
+    spdlog::error("{}", manager.status().toString());
+    return 1;
+  }
+  TaskPool pool(threads);
+  ManagerServiceImpl managerService(*manager.value(), pool);
+  NodeRegistryImpl registry(*manager.value(), pool);
+  auto server = rpc::ServerRunner::start(listen, {&managerService, &registry});
+  if (!server) {
+    spdlog::error("{}", server.status().toString());
+    return 1;
+  }
+  if (advertise.size() >= 2 && advertise.substr(advertise.size() - 2) == ":0") {  // port 0: the bound one
+    advertise = advertise.substr(0, advertise.size() - 1) + std::to_string(server.value()->port());
+    manager.value()->setManagerAddress(advertise);
+  }
+  spdlog::info("listening on {} (advertised as {}); database {}; frontend {}; backend {}; {} particles per GPU, {} per CPU slot; "
+               "heartbeat timeout {} s",
+               server.value()->address(), advertise, dbPath, frontendAddress.empty() ? "(none)" : frontendAddress,
+               backendAddress.empty() ? "(none)" : backendAddress, options.thresholds.particlesPerGpu,
+               options.thresholds.particlesPerCpuSlot, options.heartbeatTimeoutSeconds);
+
+  std::mutex tickMu;
+  std::condition_variable tickCv;
+  bool stopping = false;
+  std::thread ticker([&] {
+    std::unique_lock lock(tickMu);
+    while (!tickCv.wait_for(lock, std::chrono::duration<double>(tickSeconds), [&] { return stopping; })) {
+      lock.unlock();
+      manager.value()->tick();
+      lock.lock();
+    }
+  });
+
+  int sig = 0;
+  sigwait(&signals, &sig);
+  spdlog::info("{}: shutting down", sig == SIGINT ? "SIGINT" : "SIGTERM");
+  server.value()->shutdown(2.0);
+  {
+    std::lock_guard lock(tickMu);
+    stopping = true;
+  }
+  tickCv.notify_all();
+  ticker.join();
+  spdlog::info("stopped");
+  return 0;
+}

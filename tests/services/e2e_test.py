@@ -1,0 +1,292 @@
+#!/usr/bin/python3
+"""End to end over real sockets on loopback: frontend, back-end, manager and node agents as separate processes,
+driven by the `pflow` CLI. Each scenario is one function; run all (default) or some: e2e_test.py BIN_DIR SRC_DIR [name...]
+
+  equivalence  submit -> running -> succeeded -> fetch equals `pflow run` of the same scene (ids, positions)
+  cancel       cancel mid-run ends the workers within seconds and frees the device
+  queue        a second job waits while the device is busy and starts when it frees
+  restart      killing the manager mid-job and restarting it keeps the job and its state; the job finishes
+  killworker   killing a worker marks its job failed with the reason and frees the device
+  multinode    two agents (node-a on 127.0.0.1, node-b on 127.0.0.2) and one job across both through mpirun + hostfile
+  errors       unknown ids, double cancel, missing steps, a back-end that is down: clear errors, exit codes
+"""
+import json
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+
+import h5py
+import numpy as np
+
+BIN, SRC = sys.argv[1], sys.argv[2]
+PFLOW = os.path.join(BIN, "pflow")
+SCENE = os.path.join(SRC, "tests/data/service_scene.yaml")
+LONG = os.path.join(SRC, "tests/data/service_long_scene.yaml")
+ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def can_bind(host):
+    try:
+        with socket.socket() as s:
+            s.bind((host, 0))
+        return True
+    except OSError:
+        return False
+
+
+class Stack:
+    """The four services as child processes in a temporary folder."""
+
+    def __init__(self, agents=(("node-a", "127.0.0.1"),), manager_args=(), cpu_slots=1):
+        self.dir = tempfile.mkdtemp(prefix="pflow-e2e-")
+        self.ports = {k: free_port() for k in ("manager", "frontend", "backend")}
+        self.procs = {}
+        self.agents = agents
+        self.manager_args = list(manager_args)
+        self.cpu_slots = cpu_slots
+        os.makedirs(os.path.join(self.dir, "logs"))
+        self.start("frontend", [os.path.join(BIN, "pflow-frontend"), "--listen", self.addr("frontend"), "--models", os.path.join(self.dir, "models")])
+        self.start("backend", [os.path.join(BIN, "pflow-backend"), "--listen", self.addr("backend"), "--data", os.path.join(self.dir, "snapshots")])
+        self.start_manager()
+        for node, host in agents:
+            self.start_agent(node, host)
+        self.wait_nodes(len(agents))
+
+    def addr(self, name):
+        return "127.0.0.1:%d" % self.ports[name]
+
+    def start(self, name, cmd):
+        log = open(os.path.join(self.dir, "logs", name + ".log"), "ab")
+        self.procs[name] = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=ENV, start_new_session=True)
+
+    def start_manager(self):
+        self.start("manager", [os.path.join(BIN, "pflow-manager"), "--listen", self.addr("manager"), "--db", os.path.join(self.dir, "manager.db"),
+                               "--frontend", self.addr("frontend"), "--backend", self.addr("backend"), "--heartbeat-timeout", "6",
+                               "--heartbeat-interval", "1", "--tick", "0.5"] + self.manager_args)
+
+    def start_agent(self, node, host):
+        port = free_port() if host == "127.0.0.1" else 0
+        listen = "%s:%d" % (host, port)
+        cmd = [os.path.join(BIN, "pflow-agent"), "--node", node, "--listen", listen, "--manager", self.addr("manager"),
+               "--workdir", os.path.join(self.dir, "agent-" + node), "--worker", os.path.join(BIN, "pflow-worker"),
+               "--cpu-slots", str(self.cpu_slots), "--force-cpu", "--heartbeat-interval", "1", "--grace", "3",
+               "--rsh-agent", os.path.join(SRC, "deploy/local/pflow-rsh")]
+        self.start("agent-" + node, cmd)
+
+    def cli(self, *args, check=True, timeout=300):
+        cmd = [PFLOW, "--manager", self.addr("manager"), "--backend", self.addr("backend")] + list(args)
+        r = subprocess.run(cmd, capture_output=True, text=True, env=ENV, timeout=timeout)
+        if check and r.returncode != 0:
+            raise AssertionError("%s -> %d\n%s%s" % (" ".join(args), r.returncode, r.stdout, r.stderr))
+        return r
+
+    def json(self, *args):
+        return json.loads(self.cli(*args, "--json").stdout)
+
+    def wait_nodes(self, n, timeout=30):
+        end = time.time() + timeout
+        while time.time() < end:
+            r = self.cli("nodes", "--json", check=False)
+            if r.returncode == 0:
+                nodes = json.loads(r.stdout)
+                if len([x for x in nodes if x["devices"] and not x["lost"]]) >= n:
+                    return nodes
+            time.sleep(0.3)
+        raise AssertionError("agents did not register in %d s; logs in %s" % (timeout, self.dir))
+
+    def wait_state(self, job, states, timeout=120):
+        end = time.time() + timeout
+        last = None
+        while time.time() < end:
+            last = self.json("job", job)
+            if last["state"] in states:
+                return last
+            time.sleep(0.3)
+        raise AssertionError("job %s did not reach %s in %d s (last: %s)" % (job, states, timeout, last))
+
+    def submit(self, scene, *extra):
+        return self.json("submit", scene, *extra)["id"]
+
+    def device_states(self):
+        return [d["state"] for n in self.json("nodes") for d in n["devices"]]
+
+    def kill(self, name, sig=signal.SIGKILL):
+        p = self.procs.pop(name)
+        os.killpg(p.pid, sig)
+        p.wait(timeout=30)
+
+    def close(self):
+        for name in sorted(self.procs, key=lambda n: 0 if n.startswith("agent") else 1):
+            p = self.procs[name]
+            try:
+                os.killpg(p.pid, signal.SIGTERM)
+                p.wait(timeout=15)
+            except Exception:
+                try:
+                    os.killpg(p.pid, signal.SIGKILL)
+                except Exception:
+                    pass
+        if os.environ.get("PFLOW_E2E_KEEP"):
+            print("kept", self.dir)
+        else:
+            shutil.rmtree(self.dir, ignore_errors=True)
+
+
+def equivalence():
+    s = Stack()
+    try:
+        job = s.submit(SCENE)
+        final = s.wait_state(job, {"succeeded", "failed", "cancelled"})
+        assert final["state"] == "succeeded", final
+        assert final["particles"] == 400
+        out = os.path.join(s.dir, "fetched.h5")
+        s.cli("fetch", job, "--last", "-o", out)
+        ref = os.path.join(s.dir, "ref.h5")
+        subprocess.run([PFLOW, "run", SCENE, "-o", ref, "--progress", "0"], check=True, capture_output=True, env=ENV)
+        with h5py.File(out) as a, h5py.File(ref) as b:
+            sa = max(a["snapshots"], key=int)
+            sb = max(b["snapshots"], key=int)
+            assert sa == sb, (sa, sb)
+            ga, gb = a["snapshots"][sa], b["snapshots"][sb]
+            ia, ib = ga["id"][...], gb["id"][...]
+            oa, ob = np.argsort(ia), np.argsort(ib)
+            assert np.array_equal(ia[oa], ib[ob])
+            assert np.array_equal(ga["position"][...][oa], gb["position"][...][ob]), "positions differ"
+            assert "grid" in ga and "solid_fraction" in ga["grid"], "no grid fields"
+            assert "geometry" in a
+        listing = s.cli("jobs", "--all").stdout
+        assert job in listing and "succeeded" in listing, listing
+    finally:
+        s.close()
+
+
+def cancel():
+    s = Stack()
+    try:
+        job = s.submit(LONG)
+        s.wait_state(job, {"running"})
+        t0 = time.time()
+        s.cli("cancel", job)
+        final = s.wait_state(job, {"cancelled", "failed", "succeeded"}, timeout=30)
+        assert final["state"] == "cancelled", final
+        took = time.time() - t0
+        assert took < 15, "cancel took %.1f s" % took
+        assert s.device_states() == ["free"], s.device_states()
+        r = s.cli("watch", job, check=False)
+        assert r.returncode == 6, (r.returncode, r.stdout, r.stderr)  # a cancelled job's exit code
+    finally:
+        s.close()
+
+
+def queue():
+    s = Stack()
+    try:
+        a = s.submit(LONG)
+        s.wait_state(a, {"running"})
+        b = s.submit(SCENE, "--wait")
+        assert s.json("job", b)["state"] == "queued"
+        refused = s.cli("submit", SCENE, "--no-wait", check=False)
+        assert refused.returncode == 5, (refused.returncode, refused.stderr)
+        s.cli("cancel", a)
+        final = s.wait_state(b, {"succeeded", "failed"}, timeout=180)
+        assert final["state"] == "succeeded", final
+    finally:
+        s.close()
+
+
+def restart():
+    s = Stack()
+    try:
+        a = s.submit(LONG)
+        s.wait_state(a, {"running"})
+        q = s.submit(SCENE, "--wait")
+        s.kill("manager")
+        s.start_manager()
+        s.wait_nodes(1)
+        ja, jq = s.json("job", a), s.json("job", q)
+        assert ja["state"] == "running", ja
+        assert jq["state"] == "queued", jq
+        time.sleep(3)  # progress reports resume against the new manager
+        assert s.json("job", a)["progress"]["step"] > 0
+        s.cli("cancel", a)
+        assert s.wait_state(q, {"succeeded", "failed"}, timeout=180)["state"] == "succeeded"
+    finally:
+        s.close()
+
+
+def killworker():
+    s = Stack()
+    try:
+        job = s.submit(LONG)
+        s.wait_state(job, {"running"})
+        # The worker ranks: pflow-worker processes with this job id.
+        out = subprocess.run(["pgrep", "-f", "pflow-worker --job-id %s" % job], capture_output=True, text=True).stdout.split()
+        assert out, "no worker process found"
+        for pid in out:
+            os.kill(int(pid), signal.SIGKILL)
+        final = s.wait_state(job, {"failed", "succeeded", "cancelled"}, timeout=60)
+        assert final["state"] == "failed", final
+        assert final["reason"], final
+        assert s.device_states() == ["free"], s.device_states()
+    finally:
+        s.close()
+
+
+def multinode():
+    host_b = "127.0.0.2" if can_bind("127.0.0.2") else "127.0.0.1"
+    s = Stack(agents=(("node-a", "127.0.0.1"), ("node-b", host_b)), manager_args=["--particles-per-cpu-slot", "100"])
+    try:
+        job = s.submit(SCENE)
+        final = s.wait_state(job, {"succeeded", "failed", "cancelled"}, timeout=240)
+        assert final["state"] == "succeeded", final
+        nodes = sorted({d["node"] for d in final["devices"]})
+        assert nodes == ["node-a", "node-b"], final["devices"]
+    finally:
+        s.close()
+
+
+def errors():
+    s = Stack()
+    try:
+        r = s.cli("job", "no-such-job", check=False)
+        assert r.returncode == 1 and "no-such-job" in r.stderr, (r.returncode, r.stderr)
+        job = s.submit(SCENE)
+        s.wait_state(job, {"succeeded"})
+        r = s.cli("cancel", job, check=False)
+        assert r.returncode == 1, (r.returncode, r.stderr)  # finished: FAILED_PRECONDITION
+        r = s.cli("fetch", job, "--step", "999999", "-o", os.path.join(s.dir, "x.h5"), check=False)
+        assert r.returncode == 1 and "999999" in r.stderr, (r.returncode, r.stderr)
+        s.kill("backend")
+        r = s.cli("fetch", job, "--last", "-o", os.path.join(s.dir, "y.h5"), check=False)
+        assert r.returncode == 4 and "back-end" in r.stderr, (r.returncode, r.stderr)
+    finally:
+        s.close()
+
+
+SCENARIOS = [equivalence, cancel, queue, restart, killworker, multinode, errors]
+
+if __name__ == "__main__":
+    wanted = sys.argv[3:] or [f.__name__ for f in SCENARIOS]
+    failed = []
+    for f in SCENARIOS:
+        if f.__name__ not in wanted:
+            continue
+        t0 = time.time()
+        try:
+            f()
+            print("PASS %-12s %.1f s" % (f.__name__, time.time() - t0), flush=True)
+        except Exception as e:  # report and go on with the next scenario
+            failed.append(f.__name__)
+            print("FAIL %-12s %.1f s: %s" % (f.__name__, time.time() - t0, e), flush=True)
+    sys.exit(1 if failed else 0)
