@@ -57,14 +57,16 @@ def main():
 
     ax2 = fig.add_subplot(1, 2, 2)
     order = np.argsort(x[:, 1])[::-1]
-    ax2.scatter(x[order, 0], x[order, 2], c=x[order, 1], s=size[order] * 2, cmap="viridis", edgecolors="none")
+    # Far particles first, so the near ones are drawn over them; shaded by speed like the 3D view.
+    ax2.scatter(x[order, 0], x[order, 2], c=v[order], s=size[order] * 2, cmap="viridis", edgecolors="none",
+                vmin=sc.get_clim()[0], vmax=sc.get_clim()[1])
     if tris is not None:
         for tri in tris:
             ax2.plot(np.append(tri[:, 0], tri[0, 0]), np.append(tri[:, 2], tri[0, 2]), color="k", lw=0.3, alpha=0.3)
     ax2.set_aspect("equal")
     ax2.set_xlabel("x [m]")
     ax2.set_ylabel("z [m]")
-    ax2.set_title("side view (colour: depth y)")
+    ax2.set_title("side view from -y (colour: speed; walls at t = 0)")
     fig.tight_layout()
     fig.savefig(a.output, dpi=110)
     print(f"wrote {a.output} (step {step}, t = {t:.4g} s)")
