@@ -112,8 +112,11 @@ Result<EngineSetup> prepareEngineSetup(const RunConfig& c) {
   const auto& p = c.particles;
   const std::size_t n = p.size();
   s.position = p.position;
-  s.velocity = p.velocity.empty() ? std::vector<Vec3d>(n, Vec3d{0, 0, 0}) : p.velocity;
-  s.angularVelocity = p.angularVelocity.empty() ? std::vector<Vec3d>(n, Vec3d{0, 0, 0}) : p.angularVelocity;
+  // Empty = at rest (assigned, not built in a ternary: GCC 12 then warns falsely about the temporary).
+  s.velocity = p.velocity;
+  if (s.velocity.empty()) s.velocity.assign(n, Vec3d{0, 0, 0});
+  s.angularVelocity = p.angularVelocity;
+  if (s.angularVelocity.empty()) s.angularVelocity.assign(n, Vec3d{0, 0, 0});
   s.radius = p.radius;
   s.material = p.material;
   s.mass.resize(n);
