@@ -257,7 +257,7 @@ Result<Region> Region::mesh(const TriMesh& mesh) {
   m.cy = static_cast<std::size_t>(std::clamp(std::ceil(size.y / side), 1.0, 4096.0));
   m.colW = size.x / static_cast<double>(m.cx);
   m.colH = size.y / static_cast<double>(m.cy);
-  auto colRange = [&m](double lo, double hi, double origin, double w, std::size_t count) {
+  auto colRange = [](double lo, double hi, double origin, double w, std::size_t count) {
     const double top = static_cast<double>(count - 1);
     return std::pair<std::size_t, std::size_t>{static_cast<std::size_t>(std::clamp(std::floor((lo - origin) / w), 0.0, top)),
                                                static_cast<std::size_t>(std::clamp(std::floor((hi - origin) / w), 0.0, top))};

@@ -161,7 +161,8 @@ std::optional<Region> Loader::parseParticleRegion(const Fields& set) {
     const auto bf = mapping(shape.value, sp, shape.loc, kRegionKeys);
     if (!bf) return std::nullopt;
     Vec3d lo{0, 0, 0}, hi{0, 0, 0};
-    if (!(get(*bf, "min", lo, true) & get(*bf, "max", hi, true))) return std::nullopt;
+    const bool haveLo = get(*bf, "min", lo, true), haveHi = get(*bf, "max", hi, true);  // both, to report both
+    if (!haveLo || !haveHi) return std::nullopt;
     if (!isFinite(lo) || !isFinite(hi) || !(hi.x > lo.x && hi.y > lo.y && hi.z > lo.z)) {
       badValue(sp, "max " + vec(hi) + " must be > min " + vec(lo) + " on every axis", bf->loc);
       return std::nullopt;
