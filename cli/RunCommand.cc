@@ -13,6 +13,7 @@
 #include "compute/sim/Simulation.h"
 #include "frontend/SceneLoader.h"
 #include "frontend/SceneSummary.h"
+#include "frontend/service/InitialState.h"
 
 namespace pflow::cli {
 
@@ -58,6 +59,16 @@ std::string humanSeconds(double s) {
 Result<RunSummary> runScene(const RunOptions& o) {
   auto scene = frontend::loadScene(o.scenePath);
   if (!scene) return scene.status();
+  if (o.initialOnly) {  // `pflow build`: the frontend's initial-state writer, the one the model store uses
+    RunSummary sum;
+    sum.outputPath = o.outputPath.empty() ? defaultOutput(scene.value(), o.scenePath) : o.outputPath;
+    sum.xdmfPath = backend::xdmfPathFor(sum.outputPath);
+    sum.particles = scene.value().config.particles.size();
+    sum.snapshots = 1;
+    if (Status s = frontend::writeInitialState(scene.value(), sum.outputPath); !s.isOk()) return s;
+    spdlog::info("initial state of {} particles written to {} (open {} in ParaView)", sum.particles, sum.outputPath, sum.xdmfPath);
+    return sum;
+  }
   compute::RunConfig cfg = scene.value().config;
   if (o.threads > 0) cfg.sim.threads = o.threads;
 
@@ -92,19 +103,9 @@ Result<RunSummary> runScene(const RunOptions& o) {
   auto writeSnapshot = [&]() -> Status {
     auto t = sim.timers().time(compute::Phase::kOutput);
     ++sum.snapshots;
-    compute::ParticleSnapshot snap = sim.snapshot();
-    if (!fields.empty())  // output.fields: keep only the arrays asked for
-      std::erase_if(snap.arrays, [&](const compute::SnapshotArray& a) {
-        return std::find(fields.begin(), fields.end(), a.name) == fields.end();
-      });
-    return writer.value()->writeSnapshot(snap);
+    return writer.value()->writeSnapshot(sim.snapshot(fields));
   };
   if (Status s = writeSnapshot(); !s.isOk()) return s;
-  if (o.initialOnly) {
-    if (Status s = writer.value()->close(); !s.isOk()) return s;
-    spdlog::info("initial state written to {} (open {} in ParaView)", sum.outputPath, sum.xdmfPath);
-    return sum;
-  }
 
   const double duration = cfg.sim.duration, interval = cfg.sim.snapshotInterval;
   auto totalSteps = std::int64_t(std::llround(duration / sim.dt()));

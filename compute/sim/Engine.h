@@ -70,7 +70,9 @@ class Engine {
   virtual Status integrateSecondHalf(double dt) = 0;
 
   // Explicit host copies for output and diagnostics.
-  virtual ParticleSnapshot snapshot(std::int64_t step, double time) const = 0;
+  // The snapshot fields named in `fields` (every kSnapshot field when empty; unknown names are ignored):
+  // only those are copied off the device.
+  virtual ParticleSnapshot snapshot(std::int64_t step, double time, const std::vector<std::string>& fields) const = 0;
   virtual GeometrySnapshot geometry() const = 0;
   virtual ContactStats contactStats() const = 0;
   virtual std::size_t deviceBytes() const = 0;

@@ -149,13 +149,14 @@ class EngineImpl final : public Engine {
     return Status::ok();
   }
 
-  ParticleSnapshot snapshot(std::int64_t step, double time) const override {
+  ParticleSnapshot snapshot(std::int64_t step, double time, const std::vector<std::string>& fields) const override {
     ParticleSnapshot s;
     s.step = step;
     s.time = time;
     s.n = m_n;
     for (const auto& f : kFieldTable) {
       if (!(f.flags & kSnapshot)) continue;
+      if (!fields.empty() && std::find(fields.begin(), fields.end(), f.name) == fields.end()) continue;
       SnapshotArray a{f.name, f.scalar, f.components, f.unit, {}};
       a.data.resize(m_particles.fieldBytes(f, m_n));
       m_mem.copyToHost(a.data.data(), m_particles.buffer(f.id).data(), a.data.size());
@@ -349,7 +350,7 @@ void EngineImpl<Exec>::binTriangles() {
 
 template <class Exec>
 Status EngineImpl<Exec>::nonFiniteError(Index i) const {
-  const ParticleSnapshot s = snapshot(0, 0);
+  const ParticleSnapshot s = snapshot(0, 0, {});
   auto vec = [&](const char* name) {
     const Vec3d v = s.find(name)->template as<Vec3d>()[i];
     return std::string(name) + " (" + std::to_string(v.x) + ", " + std::to_string(v.y) + ", " + std::to_string(v.z) + ")";

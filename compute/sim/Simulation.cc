@@ -84,9 +84,8 @@ Status Simulation::runUntil(double time, const std::function<Status(const Simula
   return Status::ok();
 }
 
-Simulation::Simulation(RunConfig config, const EngineSetup& setup, TimeStepInfo ts, std::unique_ptr<Engine> engine)
-    : m_config(std::move(config)),
-      m_grid(setup.grid),
+Simulation::Simulation(const EngineSetup& setup, TimeStepInfo ts, std::unique_ptr<Engine> engine)
+    : m_grid(setup.grid),
       m_skin(setup.skin),
       m_timeStep(std::move(ts)),
       m_engine(std::move(engine)) {}
@@ -101,7 +100,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const RunConfig& config, 
   if (!ts) return ts.status();
   auto setup = prepareEngineSetup(config);
   if (!setup) return setup.status();
-  std::unique_ptr<Simulation> sim(new Simulation(config, setup.value(), ts.value(), nullptr));
+  std::unique_ptr<Simulation> sim(new Simulation(setup.value(), ts.value(), nullptr));
   sim->m_engine = makeCpuEngine(std::move(setup).value());
   if (Status s = sim->initialise(); !s.isOk()) return s;
   return sim;

@@ -36,13 +36,13 @@ class Simulation {
   double time() const { return m_time; }
   double dt() const { return m_timeStep.dt; }
   const TimeStepInfo& timeStep() const { return m_timeStep; }
-  const RunConfig& config() const { return m_config; }
   const CellGrid& grid() const { return m_grid; }
   double skin() const { return m_skin; }
   std::size_t numParticles() const { return m_engine->size(); }
   std::int64_t rebuilds() const { return m_rebuilds; }
 
-  ParticleSnapshot snapshot() const { return m_engine->snapshot(m_step, m_time); }
+  // Host copy of the particles now: the fields named (scene output.fields), or every snapshot field.
+  ParticleSnapshot snapshot(const std::vector<std::string>& fields = {}) const { return m_engine->snapshot(m_step, m_time, fields); }
   GeometrySnapshot geometry() const { return m_engine->geometry(); }
   ContactStats contactStats() const { return m_engine->contactStats(); }
   const PhaseTimers& timers() const { return m_timers; }
@@ -52,13 +52,12 @@ class Simulation {
   Engine& engine() { return *m_engine; }
 
  private:
-  Simulation(RunConfig config, const EngineSetup& setup, TimeStepInfo ts, std::unique_ptr<Engine> engine);
+  Simulation(const EngineSetup& setup, TimeStepInfo ts, std::unique_ptr<Engine> engine);
   Status initialise();
   Status rebuild();
   Status withStep(Status s) const;
   void reportSlotGrowth();
 
-  RunConfig m_config;
   CellGrid m_grid;  // of the engine, for reports
   double m_skin;    // neighbour skin [m]
   TimeStepInfo m_timeStep;

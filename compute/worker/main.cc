@@ -113,10 +113,7 @@ int runRankZero(const worker::WorkerOptions& o, int ranks) {
   const auto& fields = scene.value().outputFields;
   auto write = [&]() -> Status {
     auto t = sim.timers().time(compute::Phase::kOutput);
-    compute::ParticleSnapshot snap = sim.snapshot();
-    if (!fields.empty())
-      std::erase_if(snap.arrays, [&](const compute::SnapshotArray& a) { return std::find(fields.begin(), fields.end(), a.name) == fields.end(); });
-    return sink.value()->write(snap);
+    return sink.value()->write(sim.snapshot(fields));
   };
   if (Status s = sink.value()->writeGeometry(sim.geometry()); !s.isOk()) return fail(2, s.message());
   if (Status s = write(); !s.isOk()) return fail(2, s.message());

@@ -20,11 +20,7 @@ Status writeInitialState(const LoadedScene& scene, const std::string& h5Path) {
   auto writer = backend::SnapshotWriter::create(h5Path);
   if (!writer) return writer.status();
   if (Status s = writer.value()->writeGeometry(sim.value()->geometry()); !s.isOk()) return s;
-  compute::ParticleSnapshot snap = sim.value()->snapshot();
-  const auto& fields = scene.outputFields;
-  if (!fields.empty())
-    std::erase_if(snap.arrays, [&](const compute::SnapshotArray& a) { return std::find(fields.begin(), fields.end(), a.name) == fields.end(); });
-  if (Status s = writer.value()->writeSnapshot(snap); !s.isOk()) return s;
+  if (Status s = writer.value()->writeSnapshot(sim.value()->snapshot(scene.outputFields)); !s.isOk()) return s;
   return writer.value()->close();
 }
 
