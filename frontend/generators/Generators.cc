@@ -396,8 +396,7 @@ double maxLatticeJitter(LatticeOptions::Packing packing, double spacing, double 
   return packing == LatticeOptions::Packing::kSimpleCubic ? gap : gap / std::numbers::sqrt3;
 }
 
-Result<Particles> generateLattice(const Region& region, const SizeDistribution& size, const LatticeOptions& options, std::uint64_t seed,
-                                  const Avoid& avoid) {
+ErrorList checkLattice(const SizeDistribution& size, const LatticeOptions& options, const Avoid& avoid) {
   ErrorList e = size.validate("lattice.size");
   validateAvoid(avoid, e);
   const double rmax = size.maxRadius();
@@ -418,7 +417,14 @@ Result<Particles> generateLattice(const Region& region, const SizeDistribution& 
     }
   }
   if (options.count && *options.count < 1) e.add("lattice.count", "0 must be >= 1");
-  if (!e.empty()) return e.toStatus("lattice");
+  return e;
+}
+
+Result<Particles> generateLattice(const Region& region, const SizeDistribution& size, const LatticeOptions& options, std::uint64_t seed,
+                                  const Avoid& avoid) {
+  if (ErrorList e = checkLattice(size, options, avoid); !e.empty()) return e.toStatus("lattice");
+  const double rmax = size.maxRadius();
+  const double spacing = options.spacing > 0 ? options.spacing : 2.1 * rmax;
 
   const Bounds b = region.bounds();
   const Vec3d cmin = b.min + Vec3d{rmax, rmax, rmax}, cmax = b.max - Vec3d{rmax, rmax, rmax};
@@ -486,14 +492,18 @@ Result<Particles> generateLattice(const Region& region, const SizeDistribution& 
 
 // ---- random -------------------------------------------------------------------------------------------------------
 
-Result<Particles> generateRandom(const Region& region, const SizeDistribution& size, const RandomOptions& options, std::uint64_t seed,
-                                 const Avoid& avoid) {
+ErrorList checkRandom(const SizeDistribution& size, const RandomOptions& options, const Avoid& avoid) {
   ErrorList e = size.validate("random.size");
   validateAvoid(avoid, e);
   validateFraction(options.count, options.solidFraction, "random", true, e);
   if (options.maxAttemptsPerParticle < 1) e.add("random.max_attempts", "0 must be >= 1");
+  return e;
+}
+
+Result<Particles> generateRandom(const Region& region, const SizeDistribution& size, const RandomOptions& options, std::uint64_t seed,
+                                 const Avoid& avoid) {
+  if (ErrorList e = checkRandom(size, options, avoid); !e.empty()) return e.toStatus("random");
   const double regionVolume = std::fabs(region.volume());
-  if (!e.empty()) return e.toStatus("random");
 
   Random rng(seed);
   const std::vector<double> radii = drawRadii(size, options.count, options.solidFraction.value_or(0) * regionVolume, rng);
@@ -530,8 +540,7 @@ Result<Particles> generateRandom(const Region& region, const SizeDistribution& s
 
 // ---- tiled --------------------------------------------------------------------------------------------------------
 
-Result<Particles> generateTiled(const Region& region, const SizeDistribution& size, const TiledOptions& options, std::uint64_t seed,
-                                const Avoid& avoid) {
+ErrorList checkTiled(const SizeDistribution& size, const TiledOptions& options, const Avoid& avoid) {
   ErrorList e = size.validate("tiled.size");
   validateAvoid(avoid, e);
   validateFraction(options.count, options.solidFraction, "tiled", false, e);
@@ -543,7 +552,14 @@ Result<Particles> generateTiled(const Region& region, const SizeDistribution& si
   } else if (e.empty() && !(edge >= 4 * rmax)) {
     e.add("tiled.tile_edge", num(edge) + " must be >= 2 x the largest diameter " + num(2 * rmax));
   }
-  if (!e.empty()) return e.toStatus("tiled");
+  return e;
+}
+
+Result<Particles> generateTiled(const Region& region, const SizeDistribution& size, const TiledOptions& options, std::uint64_t seed,
+                                const Avoid& avoid) {
+  if (ErrorList e = checkTiled(size, options, avoid); !e.empty()) return e.toStatus("tiled");
+  const double rmax = size.maxRadius();
+  const double edge = options.tileEdge > 0 ? options.tileEdge : 20 * rmax;
 
   // 1. The tile: random sequential addition in the periodic cube [0, edge)^3.
   Random rng(seed);

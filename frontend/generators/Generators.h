@@ -81,6 +81,13 @@ struct TiledOptions {
 Result<Particles> generateTiled(const Region& region, const SizeDistribution& size, const TiledOptions& options, std::uint64_t seed,
                                 const Avoid& avoid = {});
 
+// ---- input checks -------------------------------------------------------------------------------------------------
+// What each generator checks before it starts (it returns these as its kInvalidArgument status), for callers that
+// want the errors one by one: paths are "<method>.<option>" ("lattice.jitter", "random.size.mean", "tiled.count").
+ErrorList checkLattice(const SizeDistribution& size, const LatticeOptions& options, const Avoid& avoid = {});
+ErrorList checkRandom(const SizeDistribution& size, const RandomOptions& options, const Avoid& avoid = {});
+ErrorList checkTiled(const SizeDistribution& size, const TiledOptions& options, const Avoid& avoid = {});
+
 // ---- list: explicit particles -------------------------------------------------------------------------------------
 // Checks explicit particles (finite positions, radii > 0, no overlap among them or with Avoid, not rejected and,
 // when `region` is given, inside it) and returns them unchanged.

@@ -400,6 +400,19 @@ void Loader::parseParticleSet(const YAML::Node& item, const std::string& path, L
       }
     }
     if (!size || !region || m_errors.size() != errorsBefore) return;
+    // The generator's own checks, each reported at the scene key it comes from ("lattice.jitter" ->
+    // particles[i].lattice.jitter, "random.count" -> particles[i].count, "tiled.tile_edge" -> particles[i].tiled.tile_size).
+    const ErrorList inputErrors = method == "lattice" ? checkLattice(*size, lattice)
+                                  : method == "random" ? checkRandom(*size, random)
+                                                       : checkTiled(*size, tiled);
+    for (const FieldError& fe : inputErrors.errors()) {
+      std::string key = fe.path.substr(std::min(fe.path.size(), method.size() + 1));
+      if (key == "tile_edge") key = "tiled.tile_size";
+      else if (key == "spacing" || key == "jitter" || key == "packing" || key == "max_attempts") key = method + "." + key;
+      const std::string p = key.empty() ? path : f->child(key);
+      badValue(p, fe.message, markFor(p));
+    }
+    if (!inputErrors.empty()) return;
     regionVolume = std::fabs(region->volume());
     if (fraction && regionVolume * *fraction / size->meanVolume() + double(m_config.particles.size()) > double(m_options.maxParticles)) {
       badValue(f->child("solid_fraction"), "would make about " + num(regionVolume * *fraction / size->meanVolume()) + " particles; the limit is " +

@@ -505,11 +505,12 @@ TEST(SceneLoader, LatticeParameterErrors) {
   const auto r = loadSceneFromString(latticeScene(latticeSet("{min: [0, 0, 0], max: [0.01, 0.01, 0.01]}", "0.0005",
                                                              "    lattice: {spacing: 0.00105, jitter: 0.1}\n")));
   ASSERT_FALSE(r.isOk());
-  EXPECT_HAS(r.status().message(), "jitter");
+  EXPECT_HAS(r.status().message(), "particles[0].lattice.jitter: 0.1 lets neighbouring particles overlap: with spacing 0.00105 and "
+                                   "largest radius 0.0005 it must be <= 0.05");
 
   const auto tight = loadSceneFromString(latticeScene(latticeSet("{min: [0, 0, 0], max: [0.01, 0.01, 0.01]}", "0.0005", "    lattice: {spacing: 0.0009}\n")));
   ASSERT_FALSE(tight.isOk());
-  EXPECT_HAS(tight.status().message(), "spacing");
+  EXPECT_HAS(tight.status().message(), "particles[0].lattice.spacing: 0.0009 must be >= the largest diameter 0.001");
 
   const auto inverted = loadSceneFromString(latticeScene(latticeSet("{min: [0, 0, 0], max: [0.01, -0.01, 0.01]}", "-1")));
   ASSERT_FALSE(inverted.isOk());
