@@ -16,56 +16,13 @@
 
 namespace pflow::backend {
 
-// A fixed pool of threads running posted tasks in order of posting.
-class Executor {
- public:
-  explicit Executor(int threads) {
-    for (int i = 0; i < std::max(1, threads); ++i) m_threads.emplace_back([this] { run(); });
-  }
-  ~Executor() {
-    {
-      std::lock_guard lock(m_mutex);
-      m_stop = true;
-    }
-    m_cv.notify_all();
-    for (auto& t : m_threads) t.join();
-  }
-  void post(std::function<void()> task) {
-    {
-      std::lock_guard lock(m_mutex);
-      m_tasks.push_back(std::move(task));
-    }
-    m_cv.notify_one();
-  }
-
- private:
-  void run() {
-    for (;;) {
-      std::function<void()> task;
-      {
-        std::unique_lock lock(m_mutex);
-        m_cv.wait(lock, [this] { return m_stop || !m_tasks.empty(); });
-        if (m_tasks.empty()) return;  // stopping, and nothing left to run
-        task = std::move(m_tasks.front());
-        m_tasks.pop_front();
-      }
-      task();
-    }
-  }
-  std::mutex m_mutex;
-  std::condition_variable m_cv;
-  std::deque<std::function<void()>> m_tasks;
-  std::vector<std::thread> m_threads;
-  bool m_stop = false;
-};
-
 namespace {
 
 // WriteSnapshot. Exactly one operation is outstanding at a time (a read, or a task on the executor), so Finish is
 // called once, by whichever completes last; OnDone deletes the reactor.
 class SnapshotIngest final : public grpc::ServerReadReactor<v1::SnapshotChunk> {
  public:
-  SnapshotIngest(SnapshotStore& store, Executor& executor, grpc::CallbackServerContext* context,
+  SnapshotIngest(SnapshotStore& store, TaskPool& executor, grpc::CallbackServerContext* context,
                  v1::WriteSnapshotResponse* response)
       : m_store(store), m_executor(executor), m_context(context), m_response(response) {
     StartRead(&m_chunk);
@@ -117,7 +74,7 @@ class SnapshotIngest final : public grpc::ServerReadReactor<v1::SnapshotChunk> {
   }
 
   SnapshotStore& m_store;
-  Executor& m_executor;
+  TaskPool& m_executor;
   grpc::CallbackServerContext* m_context;
   v1::WriteSnapshotResponse* m_response;
   v1::SnapshotChunk m_chunk;
@@ -128,7 +85,7 @@ class SnapshotIngest final : public grpc::ServerReadReactor<v1::SnapshotChunk> {
 // ReadSnapshot: open on the executor, then alternately read one chunk (executor) and write it (gRPC).
 class SnapshotStreamer final : public grpc::ServerWriteReactor<v1::SnapshotChunk> {
  public:
-  SnapshotStreamer(SnapshotStore& store, Executor& executor, const v1::ReadSnapshotRequest& request)
+  SnapshotStreamer(SnapshotStore& store, TaskPool& executor, const v1::ReadSnapshotRequest& request)
       : m_store(store), m_executor(executor) {
     m_request.step = request.which_case() == v1::ReadSnapshotRequest::kStep ? std::optional(request.step())
                                                                              : std::nullopt;  // last
@@ -170,7 +127,7 @@ class SnapshotStreamer final : public grpc::ServerWriteReactor<v1::SnapshotChunk
   }
 
   SnapshotStore& m_store;
-  Executor& m_executor;
+  TaskPool& m_executor;
   std::string m_jobId;
   ReadRequest m_request;
   std::unique_ptr<SnapshotCursor> m_cursor;
@@ -181,7 +138,7 @@ class SnapshotStreamer final : public grpc::ServerWriteReactor<v1::SnapshotChunk
 }  // namespace
 
 SnapshotService::SnapshotService(SnapshotStore& store, int workers)
-    : m_store(store), m_executor(std::make_unique<Executor>(workers)) {}
+    : m_store(store), m_executor(std::make_unique<TaskPool>(workers)) {}
 
 SnapshotService::~SnapshotService() = default;
 

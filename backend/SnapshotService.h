@@ -10,12 +10,13 @@
 
 #include <memory>
 
+#include "common/TaskPool.h"
+
 #include "backend/SnapshotStore.h"
 #include "pflow/backend/v1/snapshot_service.grpc.pb.h"
 
 namespace pflow::backend {
 
-class Executor;
 
 class SnapshotService final : public v1::SnapshotService::CallbackService {
  public:
@@ -31,7 +32,7 @@ class SnapshotService final : public v1::SnapshotService::CallbackService {
 
  private:
   SnapshotStore& m_store;
-  std::unique_ptr<Executor> m_executor;
+  std::unique_ptr<TaskPool> m_executor;
 };
 
 }  // namespace pflow::backend

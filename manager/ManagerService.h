@@ -12,27 +12,12 @@
 
 #include "manager/Manager.h"
 #include "pflow/manager/v1/manager_service.grpc.pb.h"
+#include "common/TaskPool.h"
 #include "pflow/manager/v1/node_registry.grpc.pb.h"
 
 namespace pflow::manager {
 
-// A fixed set of threads running posted tasks in order; the destructor runs what is queued, then joins.
-class TaskPool {
- public:
-  explicit TaskPool(int threads);
-  ~TaskPool();
-  TaskPool(const TaskPool&) = delete;
-  TaskPool& operator=(const TaskPool&) = delete;
-  void post(std::function<void()> task);
-
- private:
-  void run();
-  std::mutex m_mu;
-  std::condition_variable m_cv;
-  std::deque<std::function<void()>> m_tasks;
-  bool m_stop = false;
-  std::vector<std::thread> m_threads;
-};
+using pflow::TaskPool;
 
 class ManagerServiceImpl final : public pflow::manager::v1::ManagerService::CallbackService {
  public:
