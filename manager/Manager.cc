@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <set>
 
+#include "common/Address.h"
+
 namespace pflow::manager {
 namespace {
 
@@ -86,6 +88,11 @@ Status Manager::commitLocked(Job next, const std::string& event) {
   const Job* prev = m_jobs.find(next.id);
   if (!prev || prev->state != next.state)
     spdlog::info("manager: {} {}{}", next.id, jobStateName(next.state), next.reason.empty() ? "" : " (" + next.reason + ")");
+  publishLocked(next, event);
+  return Status::ok();
+}
+
+void Manager::publishLocked(const Job& next, const std::string& event) {
   m_jobs.put(next);
   const Job& job = *m_jobs.find(next.id);
   const JobEvent ev{job, event};
@@ -99,7 +106,6 @@ Status Manager::commitLocked(Job next, const std::string& event) {
     }
     ++it;
   }
-  return Status::ok();
 }
 
 void Manager::endLocked(const Job& job, JobState to, const std::string& reason, std::optional<int> exitCode, const std::string& event) {
@@ -117,7 +123,7 @@ Lease Manager::leaseFor(const Job& job) const {
   l.jobId = job.id;
   l.modelUri = job.modelUri;
   l.devices = job.devices;
-  for (const std::string& node : nodesOf(job)) l.nodeHosts[node] = hostOfAddress(m_inventory.agentAddress(node));
+  for (const std::string& node : nodesOf(job)) l.nodeHosts[node] = pflow::hostOf(m_inventory.agentAddress(node));
   l.managerAddress = m_options.managerAddress;
   l.backendAddress = m_options.backendAddress;
   return l;
@@ -408,9 +414,22 @@ Result<bool> Manager::reportProgress(const std::string& jobId, const Progress& p
   next.progress = q;
   next.progressAt = now;
   if (!message.empty()) next.message = message;
-  if (next.state == JobState::kStarting) (void)JobTable::transition(next, JobState::kRunning, "", now);
-  if (auto it = m_runtime.find(jobId); it != m_runtime.end()) it->second.attached = true;
-  if (Status s = commitLocked(next, message.empty() ? "progress" : message); !s) return s;
+  const bool started = next.state == JobState::kStarting;
+  if (started) (void)JobTable::transition(next, JobState::kRunning, "", now);
+  Runtime* rt = nullptr;
+  if (auto it = m_runtime.find(jobId); it != m_runtime.end()) {
+    rt = &it->second;
+    rt->attached = true;
+  }
+  // Progress arrives every second per job: watchers see each report, the store gets one at most every
+  // kProgressSaveSeconds (a restart then resumes from a report a few seconds old) and every state change.
+  const std::string event = message.empty() ? "progress" : message;
+  if (started || !rt || now - rt->progressSavedAt >= kProgressSaveSeconds) {
+    if (Status s = commitLocked(next, event); !s) return s;
+    if (auto it = m_runtime.find(jobId); it != m_runtime.end()) it->second.progressSavedAt = now;
+  } else {
+    publishLocked(next, event);
+  }
   return next.state == JobState::kCancelling;
 }
 

@@ -89,9 +89,11 @@ class Manager {
     std::string address;
     Lease lease;
   };
+  static constexpr double kProgressSaveSeconds = 10;
   struct Runtime {
     bool attached = false;               // the agent confirmed the worker (start answer, progress, heartbeat)
     std::optional<double> missingSince;  // first heartbeat of its agent that did not list it
+    double progressSavedAt = 0;          // when its progress last went to the store
   };
   struct Watcher {
     std::string jobId;
@@ -101,7 +103,10 @@ class Manager {
 
   Manager(ManagerOptions options, const Clock& clock, JobStore& store, AgentClient& agents, FrontendClient& frontend);
 
+  // Stores `next`, updates leases, then publishes it.
   Status commitLocked(Job next, const std::string& event);
+  // The job table and the watchers only (no store, no leases): for progress between saves.
+  void publishLocked(const Job& next, const std::string& event);
   void endLocked(const Job& job, JobState to, const std::string& reason, std::optional<int> exitCode, const std::string& event);
   void scheduleLocked(Actions& actions);
   void checkNodesLocked(Actions& actions);

@@ -45,13 +45,5 @@ bool holdsDevices(JobState s) {
   return s == JobState::kStarting || s == JobState::kRunning || s == JobState::kCancelling;
 }
 
-std::string hostOfAddress(const std::string& address) {
-  if (!address.empty() && address.front() == '[') {
-    const auto close = address.find(']');
-    return close == std::string::npos ? address : address.substr(0, close + 1);
-  }
-  const auto colon = address.rfind(':');
-  return colon == std::string::npos ? address : address.substr(0, colon);
-}
 
 }  // namespace pflow::manager

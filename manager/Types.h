@@ -144,7 +144,4 @@ struct JobEvent {
   std::string message;
 };
 
-// The host part of "host:port" ("[::1]:5" -> "[::1]").
-std::string hostOfAddress(const std::string& address);
-
 }  // namespace pflow::manager

@@ -88,13 +88,5 @@ void ServerRunner::wait() {
   if (m_server) m_server->Wait();
 }
 
-std::string hostOf(const std::string& address) {
-  if (!address.empty() && address.front() == '[') {
-    const auto close = address.find(']');
-    return close == std::string::npos ? address : address.substr(0, close + 1);
-  }
-  const auto colon = address.rfind(':');
-  return colon == std::string::npos ? address : address.substr(0, colon);
-}
 
 }  // namespace pflow::rpc

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "common/Address.h"
 #include "common/Status.h"
 
 namespace pflow::rpc {
@@ -47,7 +48,6 @@ class ServerRunner {
   bool m_down = false;
 };
 
-// The host part of host:port (IPv6 in brackets kept).
-std::string hostOf(const std::string& address);
+using pflow::hostOf;  // common/Address.h
 
 }  // namespace pflow::rpc
