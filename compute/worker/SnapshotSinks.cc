@@ -10,7 +10,7 @@ namespace {
 class FileSink final : public SnapshotSink {
  public:
   explicit FileSink(std::unique_ptr<backend::SnapshotWriter> w) : m_writer(std::move(w)) {}
-  Status writeGeometry(const compute::GeometrySnapshot& g) override { return m_writer->writeGeometry(g); }
+  Status writeGeometry(compute::GeometrySnapshot g) override { return m_writer->writeGeometry(g); }
   Status write(const compute::ParticleSnapshot& s) override { return m_writer->writeSnapshot(s); }
   Status close() override { return m_writer->close(); }
 
@@ -22,8 +22,8 @@ class FileSink final : public SnapshotSink {
 class BackendSink final : public SnapshotSink {
  public:
   BackendSink(std::unique_ptr<backend::BackendClient> c, std::string jobId) : m_client(std::move(c)), m_jobId(std::move(jobId)) {}
-  Status writeGeometry(const compute::GeometrySnapshot& g) override {
-    m_geometry = g;
+  Status writeGeometry(compute::GeometrySnapshot g) override {  // sent with the first snapshot
+    m_geometry = std::move(g);
     m_geometryPending = true;
     return Status::ok();
   }

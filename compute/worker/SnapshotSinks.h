@@ -11,7 +11,7 @@ namespace pflow::worker {
 class SnapshotSink {
  public:
   virtual ~SnapshotSink() = default;
-  virtual Status writeGeometry(const compute::GeometrySnapshot& geometry) = 0;
+  virtual Status writeGeometry(compute::GeometrySnapshot geometry) = 0;
   virtual Status write(const compute::ParticleSnapshot& snapshot) = 0;
   virtual Status close() = 0;
 };

@@ -1,7 +1,8 @@
 // pflow-worker: the MPI compute program the node agent starts for a job.
 //
-// Rank 0 loads the built model, runs the step loop, reports progress to the manager (whose answer carries a
-// cancel request), and sends snapshots to the back-end. Until the domain decomposition lands (the MPI issue),
+// Rank 0 loads the built model, runs the step loop, reports progress to the manager from a thread of its own
+// (whose answer carries a cancel request), and sends snapshots to the back-end. A cancel request, or SIGTERM from
+// the agent (forwarded by mpirun), stops the run at the next step boundary with the sink closed. Until the domain decomposition lands (the MPI issue),
 // ranks > 0 hold their device and wait for rank 0's final word without spinning; rank 0 broadcasts it at the step
 // boundary where the run ends, is cancelled or fails, so every rank stops together.
 //
@@ -12,10 +13,14 @@
 
 #include <CLI/CLI.hpp>
 
+#include <atomic>
 #include <chrono>
+#include <condition_variable>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <mutex>
 #include <thread>
 
 #include "common/Log.h"
@@ -51,23 +56,58 @@ void tellOtherRanks(int word) {
   MPI_Wait(&req, MPI_STATUS_IGNORE);
 }
 
+// SIGTERM or SIGINT (the agent stopping the job, mpirun forwarding it): stop at the next step boundary, close the
+// snapshot sink and tell the other ranks, instead of dying mid-write.
+volatile std::sig_atomic_t g_stopSignal = 0;
+void onStopSignal(int) { g_stopSignal = 1; }
+
+// Sends progress to the manager from its own thread, so a slow or unreachable manager never holds up the step
+// loop: the loop posts the latest numbers (no wait) and reads the manager's last cancel answer.
 class ProgressReporter {
  public:
-  ProgressReporter(const std::string& address, std::string jobId) : m_jobId(std::move(jobId)) {
-    if (!address.empty()) m_stub = manager::v1::NodeRegistry::NewStub(rpc::makeChannel(address));
+  ProgressReporter(const std::string& address, std::string jobId, double interval) : m_jobId(std::move(jobId)), m_interval(interval) {
+    if (address.empty()) return;
+    m_stub = manager::v1::NodeRegistry::NewStub(rpc::makeChannel(address));
+    m_thread = std::thread([this] { run(); });
   }
-  // Reports; true when the manager asks to cancel. A manager that does not answer is logged, not fatal.
-  bool report(const compute::Simulation& sim, std::int64_t totalSteps, double duration, double rate, const std::string& message) {
-    if (!m_stub) return false;
+  ~ProgressReporter() {
+    {
+      std::lock_guard lock(m_mu);
+      m_stop = true;
+    }
+    m_cv.notify_all();
+    if (m_thread.joinable()) m_thread.join();
+  }
+  void post(const manager::v1::Progress& p, const std::string& message) {
+    std::lock_guard lock(m_mu);
+    m_latest = p;
+    m_message = message;
+    m_fresh = true;
+  }
+  bool cancelRequested() const { return m_cancel.load(std::memory_order_relaxed); }
+  // The last report, sent now and waited for (the run is over).
+  void final(const manager::v1::Progress& p, const std::string& message) {
+    if (m_stub) send(p, message);
+  }
+
+ private:
+  void run() {
+    std::unique_lock lock(m_mu);
+    while (!m_stop) {
+      m_cv.wait_for(lock, std::chrono::duration<double>(m_interval), [this] { return m_stop; });
+      if (m_stop || !m_fresh) continue;
+      const manager::v1::Progress p = m_latest;
+      const std::string message = m_message;
+      m_fresh = false;
+      lock.unlock();
+      send(p, message);
+      lock.lock();
+    }
+  }
+  void send(const manager::v1::Progress& p, const std::string& message) {
     manager::v1::ReportProgressRequest req;
     req.set_job_id(m_jobId);
-    auto* p = req.mutable_progress();
-    p->set_step(sim.stepCount());
-    p->set_total_steps(totalSteps);
-    p->set_time(sim.time());
-    p->set_duration(duration);
-    p->set_particle_steps_per_second(rate);
-    p->set_eta_seconds(rate > 0 ? double(totalSteps - sim.stepCount()) * double(sim.numParticles()) / rate : 0);
+    *req.mutable_progress() = p;
     req.set_message(message);
     manager::v1::ReportProgressResponse resp;
     auto ctx = rpc::contextWithDeadline(5);
@@ -75,17 +115,34 @@ class ProgressReporter {
     if (!s.ok()) {
       if (!m_warned) spdlog::warn("progress report to the manager failed: {} (the run goes on)", s.error_message());
       m_warned = true;
-      return false;
+      return;
     }
     m_warned = false;
-    return resp.cancel();
+    if (resp.cancel()) m_cancel.store(true, std::memory_order_relaxed);
   }
 
- private:
   std::string m_jobId;
+  double m_interval;
   std::unique_ptr<manager::v1::NodeRegistry::Stub> m_stub;
-  bool m_warned = false;
+  std::mutex m_mu;
+  std::condition_variable m_cv;
+  manager::v1::Progress m_latest;
+  std::string m_message;
+  bool m_fresh = false, m_stop = false, m_warned = false;
+  std::atomic<bool> m_cancel{false};
+  std::thread m_thread;
 };
+
+manager::v1::Progress progressOf(const compute::Simulation& sim, std::int64_t totalSteps, double duration, double rate) {
+  manager::v1::Progress p;
+  p.set_step(sim.stepCount());
+  p.set_total_steps(totalSteps);
+  p.set_time(sim.time());
+  p.set_duration(duration);
+  p.set_particle_steps_per_second(rate);
+  p.set_eta_seconds(rate > 0 ? double(totalSteps - sim.stepCount()) * double(sim.numParticles()) / rate : 0);
+  return p;
+}
 
 int fail(int code, const std::string& message) {
   spdlog::error("{}", message);
@@ -121,22 +178,22 @@ int runRankZero(const worker::WorkerOptions& o, int ranks) {
   const double duration = cfg.sim.duration, interval = cfg.sim.snapshotInterval;
   const auto totalSteps = std::int64_t(std::llround(duration / sim.dt()));
   const auto perSnapshot = interval > 0 ? std::max<std::int64_t>(1, std::llround(interval / sim.dt())) : totalSteps;
-  ProgressReporter progress(o.managerAddress, o.jobId);
+  ProgressReporter progress(o.managerAddress, o.jobId, o.progressInterval);
   const auto start = std::chrono::steady_clock::now();
-  auto lastReport = start - std::chrono::hours(1);
+  auto lastPost = start - std::chrono::hours(1);
   bool cancelled = false;
   auto observer = [&](const compute::Simulation& s) -> Status {
     if (s.stepCount() % perSnapshot == 0 || s.stepCount() == totalSteps)
       if (Status st = write(); !st.isOk()) return st;
+    if (g_stopSignal || progress.cancelRequested()) {
+      cancelled = true;
+      return Status(StatusCode::kCancelled, "cancelled at step " + std::to_string(s.stepCount()));
+    }
     const auto now = std::chrono::steady_clock::now();
-    if (std::chrono::duration<double>(now - lastReport).count() >= o.progressInterval) {
-      lastReport = now;
+    if (std::chrono::duration<double>(now - lastPost).count() >= o.progressInterval) {
+      lastPost = now;
       const double wall = std::chrono::duration<double>(now - start).count();
-      const double rate = wall > 0 ? double(s.numParticles()) * double(s.stepCount()) / wall : 0;
-      if (progress.report(s, totalSteps, duration, rate, executorNote)) {
-        cancelled = true;
-        return Status(StatusCode::kCancelled, "cancelled at step " + std::to_string(s.stepCount()));
-      }
+      progress.post(progressOf(s, totalSteps, duration, wall > 0 ? double(s.numParticles()) * double(s.stepCount()) / wall : 0), executorNote);
     }
     return Status::ok();
   };
@@ -147,7 +204,7 @@ int runRankZero(const worker::WorkerOptions& o, int ranks) {
     return -1;  // tells main: cancelled
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  progress.report(sim, totalSteps, duration, wall > 0 ? double(sim.numParticles()) * double(sim.stepCount()) / wall : 0, "finished");
+  progress.final(progressOf(sim, totalSteps, duration, wall > 0 ? double(sim.numParticles()) * double(sim.stepCount()) / wall : 0), "finished");
   if (Status s = sink.value()->close(); !s.isOk() && run.isOk()) run = s;
   spdlog::info("{}", sim.timers().report());
   if (!run.isOk()) return fail(run.code() == StatusCode::kIo || run.code() == StatusCode::kUnavailable ? 2 : 3, run.message());
@@ -184,6 +241,8 @@ int main(int argc, char** argv) {
     return code == 0 ? 0 : 1;
   }
   pflow::log::init("worker." + std::to_string(rank), logLevel);
+  std::signal(SIGTERM, onStopSignal);
+  std::signal(SIGINT, onStopSignal);
 
   int code = 0;
   auto parsed = worker::parseDevices(devices);
