@@ -276,11 +276,7 @@ std::optional<TriMesh> Loader::parseMesh(const Fields& f) {
   bool flipIt = false;
   if (const Entry* fl = f.find("flip")) ok &= read(fl->value, f.child("flip"), fl->loc, flipIt);
   if (!ok) return std::nullopt;
-  if (file && (scale != 1 || angle != 0 || translate.x != 0 || translate.y != 0 || translate.z != 0)) {
-    auto placed = transform(std::move(*mesh), scale, axis, angle, translate);
-    if (!placed) return shapeError(f, placed.status()), std::nullopt;
-    mesh = std::move(placed).value();
-  } else if (!file && (scale != 1 || angle != 0 || translate.x != 0 || translate.y != 0 || translate.z != 0)) {
+  if (scale != 1 || angle != 0 || translate.x != 0 || translate.y != 0 || translate.z != 0) {
     auto placed = transform(std::move(*mesh), scale, axis, angle, translate);
     if (!placed) return shapeError(f, placed.status()), std::nullopt;
     mesh = std::move(placed).value();

@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -22,6 +23,8 @@
 #include "frontend/scene/YamlUtil.h"
 
 namespace pflow::frontend::detail {
+
+class WallClearance;  // frontend/scene/WallClearance.h
 
 using compute::MaterialConfig;
 using compute::MaterialPairConfig;
@@ -147,7 +150,9 @@ class Loader {
   void parseSimulation(const Fields& top);
   void parseParticles(const Fields& top);
   void parseParticleSet(const YAML::Node& item, const std::string& path, Loc loc, std::size_t setIndex);
-  bool parseParticleList(const Fields& f, Particles& out, std::vector<Vec3d>& vel, std::vector<Vec3d>& spin, ParticleSet& set);
+  // The set's `velocity` / `angular_velocity` (v0, w0) are the defaults of its entries.
+  bool parseParticleList(const Fields& f, const Vec3d& v0, const Vec3d& w0, Particles& out, std::vector<Vec3d>& vel,
+                         std::vector<Vec3d>& spin, ParticleSet& set);
   std::optional<SizeDistribution> parseSize(const Fields& set);
   std::optional<Region> parseParticleRegion(const Fields& set);
   std::optional<Vec3d> readVec(const Fields& f, std::string_view key);
@@ -191,7 +196,8 @@ class Loader {
   std::vector<std::string> m_outputFields;
   std::vector<SurfaceInfo> m_surfaces;
   std::vector<ParticleSetInfo> m_setInfo;
-  std::vector<std::string> m_files;  // files the scene refers to, as written
+  std::vector<std::string> m_files;
+  std::shared_ptr<WallClearance> m_clearance;  // built at the first generated set, shared by all  // files the scene refers to, as written
   bool m_friction = true, m_rollingResistance = true;  // simulation.physics switches
   std::vector<std::string> m_badPaths;
   std::unordered_map<std::string, Loc> m_marks;  // YAML path -> where its value starts

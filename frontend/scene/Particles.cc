@@ -211,11 +211,10 @@ std::optional<Region> Loader::parseParticleRegion(const Fields& set) {
   return std::move(region).value();
 }
 
-bool Loader::parseParticleList(const Fields& f, Particles& out, std::vector<Vec3d>& vel, std::vector<Vec3d>& spin, ParticleSet& set) {
+bool Loader::parseParticleList(const Fields& f, const Vec3d& v0, const Vec3d& w0, Particles& out, std::vector<Vec3d>& vel,
+                               std::vector<Vec3d>& spin, ParticleSet& set) {
   const Entry* list = f.find("list");
   const Entry* file = f.find("file");
-  const Vec3d v0 = readVec(f, "velocity").value_or(Vec3d{0, 0, 0});
-  const Vec3d w0 = readVec(f, "angular_velocity").value_or(Vec3d{0, 0, 0});
   if (list && file) {
     badValue(f.path, "give either 'list' (inline particles) or 'file' (a CSV file), not both", f.loc);
     return false;
@@ -322,7 +321,7 @@ void Loader::parseParticleSet(const YAML::Node& item, const std::string& path, L
   double regionVolume = 0;
 
   if (method == "list") {
-    if (!parseParticleList(*f, made, vel, spin, set)) return;
+    if (!parseParticleList(*f, v0, w0, made, vel, spin, set)) return;
     const Entry* r = f->find("region");
     if (r) {
       auto region = parseParticleRegion(*f);
@@ -422,7 +421,8 @@ void Loader::parseParticleSet(const YAML::Node& item, const std::string& path, L
     }
 
     // Keep clear of earlier sets and of every wall.
-    const auto clearance = std::make_shared<WallClearance>(m_config.planes, m_config.meshes, 2 * size->maxRadius());
+    if (!m_clearance) m_clearance = std::make_shared<WallClearance>(m_config.planes, m_config.meshes);  // walls are final here
+    const auto clearance = m_clearance;
     Avoid avoid;
     avoid.position = m_config.particles.position;
     avoid.radius = m_config.particles.radius;

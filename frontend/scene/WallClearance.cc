@@ -8,11 +8,10 @@
 namespace pflow::frontend::detail {
 
 namespace {
-constexpr int kMaxCellsPerAxis = 512;
+constexpr double kMaxCells = double(1 << 21);  // 8 MiB of cell starts at most
 }
 
-WallClearance::WallClearance(const std::vector<compute::PlaneConfig>& planes, const std::vector<compute::MeshConfig>& meshes,
-                             double cellSize)
+WallClearance::WallClearance(const std::vector<compute::PlaneConfig>& planes, const std::vector<compute::MeshConfig>& meshes)
     : m_planes(planes) {
   for (auto& p : m_planes) {
     const double len = norm(p.normal);
@@ -33,11 +32,15 @@ WallClearance::WallClearance(const std::vector<compute::PlaneConfig>& planes, co
   }
   if (m_tris.empty()) return;
   const Vec3d ext = hi - lo;
+  // Cubic cells, about one per triangle over the triangles' box (flat walls: thin boxes count their thickness as
+  // one cell), so the grid's memory follows the walls, not the particle size.
   const double largest = std::max({ext.x, ext.y, ext.z});
-  m_cell = std::max({cellSize, largest / kMaxCellsPerAxis, 1e-12});
+  const double targetCells = std::min(kMaxCells, std::max(1.0, double(m_tris.size())));
+  const double volume = std::max(ext.x, largest * 1e-3) * std::max(ext.y, largest * 1e-3) * std::max(ext.z, largest * 1e-3);
+  m_cell = std::max({std::cbrt(volume / targetCells), largest / 256, 1e-12});
   m_lo = lo;
   const double e[3] = {ext.x, ext.y, ext.z};
-  for (int k = 0; k < 3; ++k) m_n[k] = std::max(1, std::min(kMaxCellsPerAxis, int(std::floor(e[k] / m_cell)) + 1));
+  for (int k = 0; k < 3; ++k) m_n[k] = std::max(1, int(std::floor(e[k] / m_cell)) + 1);
   auto cellRange = [&](const Tri& t, int lo3[3], int hi3[3]) {
     const double mn[3] = {std::min({t.a.x, t.b.x, t.c.x}), std::min({t.a.y, t.b.y, t.c.y}), std::min({t.a.z, t.b.z, t.c.z})};
     const double mx[3] = {std::max({t.a.x, t.b.x, t.c.x}), std::max({t.a.y, t.b.y, t.c.y}), std::max({t.a.z, t.b.z, t.c.z})};

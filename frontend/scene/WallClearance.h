@@ -11,8 +11,9 @@ namespace pflow::frontend::detail {
 
 class WallClearance {
  public:
-  // cellSize [m]: edge of the grid cells (about the largest particle diameter is a good choice).
-  WallClearance(const std::vector<compute::PlaneConfig>& planes, const std::vector<compute::MeshConfig>& meshes, double cellSize);
+  // The grid has about as many cells as triangles (at most 2^21 cells), whatever the particle sizes, so one
+  // instance serves every particle set of a scene.
+  WallClearance(const std::vector<compute::PlaneConfig>& planes, const std::vector<compute::MeshConfig>& meshes);
 
   // True when a sphere of `radius` at `centre` overlaps a wall: it is closer than `radius` to a triangle, or its
   // centre is less than `radius` in front of a plane (or behind it).

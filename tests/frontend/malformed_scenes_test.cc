@@ -146,6 +146,8 @@ TEST_F(MalformedScenes, EachGivesItsPreciseMessage) {
       {"list particle behind a plane", scene("  - list: [{position: [0, 0, -0.01], radius: 0.001}]\n", "  - {name: floor, plane: {point: [0, 0, 0], normal: [0, 0, 1]}}\n"),
        {"particles[0].list[0].position: centre [0, 0, -0.01] lies behind plane 'floor'"}},
       {"list particle NaN radius", scene("  - list: [{position: [0, 0, 0], radius: .nan}]\n"), {"particles[0].list[0].radius: nan is not a finite number"}},
+      {"list set with a bad velocity, reported once", scene("  - {velocity: [1, 2], list: [{position: [0, 0, 0], radius: 0.001}]}\n"),
+       {"case.yaml: 1 error(s)", "particles[0].velocity: expected a list of 3 numbers"}},
       {"list and size", scene("  - {list: [{position: [0, 0, 0], radius: 0.001}], size: 0.001}\n"), {"particles[0].size: 'size' applies to generated sets"}},
       {"missing CSV file", scene("  - {file: nofile.csv}\n"), {"particles[0].file:", "nofile.csv"}},
       {"CSV without radius column", scene("  - {file: nocol.csv}\n"), {"particles[0].file:", "radius"}},
