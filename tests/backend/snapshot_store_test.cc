@@ -149,7 +149,9 @@ class StoreTest : public ::testing::Test {
 };
 
 TEST_F(StoreTest, IngestListAndReadBackInChunks) {
-  const auto s = makeSnapshot(10, 60000);  // position alone is 1.44 MB: several chunks
+  // 150 000 particles: several chunks per array, and three grid blocks of 65 536 at commit, so the block-wise grid
+  // is checked against the one-pass in-memory computation below.
+  const auto s = makeSnapshot(10, 150000);
   const auto geometry = makeGeometry();
   auto committed = store(*st, "job-1", s, &geometry);
   ASSERT_TRUE(committed) << committed.status().toString();
@@ -162,7 +164,7 @@ TEST_F(StoreTest, IngestListAndReadBackInChunks) {
   ASSERT_TRUE(listing) << listing.status().toString();
   ASSERT_EQ(listing->snapshots.size(), 2u);
   EXPECT_EQ(listing->snapshots[0].step, 10);
-  EXPECT_EQ(listing->snapshots[0].particles, 60000u);
+  EXPECT_EQ(listing->snapshots[0].particles, 150000u);
   EXPECT_DOUBLE_EQ(listing->snapshots[0].time, 1e-2);
   EXPECT_TRUE(listing->snapshots[0].hasGrid);
   EXPECT_EQ(listing->file, (dir / "job-1.h5").string());
@@ -177,8 +179,8 @@ TEST_F(StoreTest, IngestListAndReadBackInChunks) {
     EXPECT_EQ(rb->order[i], s.arrays[i].name);
     EXPECT_TRUE(rb->particles[s.arrays[i].name] == bytesOf(s.arrays[i])) << s.arrays[i].name;
   }
-  EXPECT_EQ(rb->shapes["position"], (std::vector<std::uint64_t>{60000, 3}));
-  EXPECT_EQ(rb->shapes["id"], (std::vector<std::uint64_t>{60000}));
+  EXPECT_EQ(rb->shapes["position"], (std::vector<std::uint64_t>{150000, 3}));
+  EXPECT_EQ(rb->shapes["id"], (std::vector<std::uint64_t>{150000}));
   ASSERT_TRUE(rb->spec.has_value());
   EXPECT_EQ(rb->grid.size(), 3u);
   EXPECT_TRUE(rb->geometry);
@@ -190,7 +192,11 @@ TEST_F(StoreTest, IngestListAndReadBackInChunks) {
   ASSERT_EQ(sf.size(), expected->solidFraction.size() * sizeof(double));
   EXPECT_EQ(std::memcmp(sf.data(), expected->solidFraction.data(), sf.size()), 0);
   const auto& t = rb->grid[kGranularTemperatureName];
+  ASSERT_EQ(t.size(), expected->granularTemperature.size() * sizeof(double));
   EXPECT_EQ(std::memcmp(t.data(), expected->granularTemperature.data(), t.size()), 0);
+  const auto& mv = rb->grid[kMeanVelocityName];
+  ASSERT_EQ(mv.size(), expected->meanVelocity.size() * sizeof(expected->meanVelocity[0]));
+  EXPECT_EQ(std::memcmp(mv.data(), expected->meanVelocity.data(), mv.size()), 0);
   EXPECT_EQ(rb->shapes[kMeanVelocityName], (std::vector<std::uint64_t>{expected->spec.cells[0], expected->spec.cells[1],
                                                                        expected->spec.cells[2], 3}));
 
