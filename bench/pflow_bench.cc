@@ -43,11 +43,15 @@ int main(int argc, char** argv) {
   std::vector<long> sizes{100000};
   int settleSteps = 30000, steps = 3000, threads = 0, lammpsRanks = 0;
   bool poly = false, noLammps = false;
+  std::string executor = "cpu";
+  int gpu = 0;
   std::string device = shell("lscpu | sed -n 's/^Model name: *//p' | head -1");
   app.add_option("-n,--particles", sizes, "particle counts (nx = ny scaled, nz = 20)")->delimiter(',');
   app.add_option("--settle-steps", settleSteps, "steps to settle the bed before timing")->capture_default_str();
   app.add_option("--steps", steps, "timed steps")->capture_default_str();
   app.add_option("--threads", threads, "OpenMP threads (0: all cores)");
+  app.add_option("--executor", executor, "cpu, cuda or auto")->capture_default_str();
+  app.add_option("--gpu", gpu, "CUDA device index")->capture_default_str();
   app.add_option("--lammps-ranks", lammpsRanks, "LAMMPS MPI ranks (0: as many as pflow's threads)");
   app.add_flag("--poly", poly, "polydisperse bed: radii uniform in [d/4, d/2]");
   app.add_flag("--no-lammps", noLammps, "skip the LAMMPS run");
@@ -66,7 +70,15 @@ int main(int argc, char** argv) {
     auto spec = pflow::bench::bedSpecFor(n, poly);
     spec.threads = threads;
     auto cfg = pflow::bench::bedScene(spec);
-    auto sim = pflow::compute::Simulation::create(cfg);
+    auto kind = pflow::compute::parseExecutorKind(executor);
+    if (!kind) {
+      std::fprintf(stderr, "%s\n", kind.status().toString().c_str());
+      return 1;
+    }
+    pflow::compute::SimulationOptions so;
+    so.executor = kind.value();
+    so.device = gpu;
+    auto sim = pflow::compute::Simulation::create(cfg, so);
     if (!sim) {
       std::fprintf(stderr, "%s\n", sim.status().toString().c_str());
       return 1;
@@ -91,19 +103,25 @@ int main(int argc, char** argv) {
     nlohmann::json phases;
     for (int p = 0; p < int(pflow::compute::Phase::kCount); ++p)
       phases[pflow::compute::kPhaseNames[p]] = s.timers().seconds(pflow::compute::Phase(p));
-    const int usedThreads = std::stoi(s.executorDescription().substr(s.executorDescription().find(" on ") + 4));
-    nlohmann::json j{{"code", "pflow"}, {"executor", "cpu"}, {"threads", usedThreads}, {"precision", "double"},
+    const bool onGpu = s.executorKind() == pflow::compute::ExecutorKind::kCuda;
+    const int usedThreads =
+        onGpu ? 0 : std::stoi(s.executorDescription().substr(s.executorDescription().find(" on ") + 4));
+    const std::string execName = onGpu ? "cuda" : "cpu";
+    const std::string where = onGpu ? s.executorDescription() : device;
+    nlohmann::json j{{"code", "pflow"}, {"executor", execName}, {"executor_description", s.executorDescription()},
+                     {"launch", s.engine().launchReport()}, {"threads", usedThreads}, {"precision", "double"},
                      {"case", caseName}, {"n", s.numParticles()}, {"settle_steps", settleSteps},
                      {"settle_s", settleWall}, {"steps", steps}, {"wall_s", wall},
                      {"particle_steps_per_s", rate}, {"phases_s", phases},
                      {"coordination", before.coordinationNumber}, {"rebuilds", s.rebuilds() - rebuilds0},
                      {"history_slots", s.engine().historySlots()},
                      {"device_bytes_per_particle", double(s.deviceBytes()) / double(s.numParticles())},
-                     {"device", device}, {"commit", commit}, {"command", cmdline.str()}};
+                     {"device", where}, {"commit", commit}, {"command", cmdline.str()}};
     std::printf("%s\n", j.dump().c_str());
     std::fflush(stdout);
-    std::fprintf(stderr, "| %s | %s | %s | pflow cpu | double | %s | %zu | %d threads | %.3g | `%s` |\n", today().c_str(),
-                 commit.c_str(), device.c_str(), caseName.c_str(), s.numParticles(), usedThreads, rate, cmdline.str().c_str());
+    std::fprintf(stderr, "| %s | %s | %s | pflow %s | double | %s | %zu | %s | %.3g | `%s` |\n", today().c_str(),
+                 commit.c_str(), where.c_str(), execName.c_str(), caseName.c_str(), s.numParticles(),
+                 onGpu ? "1 GPU" : (std::to_string(usedThreads) + " threads").c_str(), rate, cmdline.str().c_str());
 
     if (noLammps) continue;
     if (!pflow::bench::findLammps()) {

@@ -73,9 +73,10 @@ Result<RunSummary> runScene(const RunOptions& o) {
   if (o.threads > 0) cfg.sim.threads = o.threads;
 
   compute::SimulationOptions so;
-  if (o.executor == "cuda") so.executor = compute::ExecutorKind::kCuda;
-  else if (o.executor != "cpu" && o.executor != "auto")
-    return invalidArgument("--executor: '" + o.executor + "' is not one of auto, cpu, cuda");
+  auto kind = compute::parseExecutorKind(o.executor);
+  if (!kind) return kind.status();
+  so.executor = kind.value();
+  so.device = o.device;
 
   auto created = compute::Simulation::create(cfg, so);
   if (!created) return created.status();

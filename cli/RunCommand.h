@@ -11,6 +11,7 @@ struct RunOptions {
   std::string scenePath;
   std::string outputPath;      // empty: the scene's output.file, else <scene stem>.h5 beside the scene
   std::string executor = "auto";  // auto | cpu | cuda
+  int device = 0;                  // CUDA device index
   int threads = 0;             // 0: the scene's, else all cores
   double progressSeconds = 2;  // progress line interval (wall clock); 0 = none
   bool json = false;           // print the summary as one JSON object on stdout

@@ -19,7 +19,10 @@ int main(int argc, char** argv) {
   auto* runCmd = app.add_subcommand("run", "run a scene in this process and write snapshots (HDF5 + XDMF)");
   runCmd->add_option("scene", run.scenePath, "scene file (YAML)")->required()->check(CLI::ExistingFile);
   runCmd->add_option("-o,--output", run.outputPath, "output HDF5 file (default: the scene's output.file, else SCENE.h5)");
-  runCmd->add_option("--executor", run.executor, "auto, cpu or cuda")->capture_default_str();
+  runCmd->add_option("--executor", run.executor,
+                     "auto (the GPU where one is visible), cpu (OpenMP) or cuda (an error without a GPU)")
+      ->capture_default_str();
+  runCmd->add_option("--device", run.device, "CUDA device index")->capture_default_str();
   runCmd->add_option("--threads", run.threads, "CPU threads (default: all)");
   runCmd->add_option("--progress", run.progressSeconds, "seconds between progress lines (0: none)")->capture_default_str();
   runCmd->add_flag("--json", run.json, "print the summary as JSON on stdout");

@@ -12,9 +12,11 @@ if(PFLOW_ENABLE_CUDA)
       set(CMAKE_CUDA_ARCHITECTURES 90-real 90-virtual)
     endif()
     enable_language(CUDA)
-    # CMake 3.25 knows no CUDA20 dialect flags for nvcc 13: device code is C++17 (the kernel headers
-    # use nothing newer); host code stays C++20.
-    set(CMAKE_CUDA_STANDARD 17)
+    # The engine (EngineImpl.h) is instantiated in .cu files, so CUDA sources are C++20 like the rest.
+    # CMake 3.25 knows no CUDA20 dialect flag for nvcc 13 (CUDA_STANDARD 20 fails to generate): teach it.
+    set(CMAKE_CUDA20_STANDARD_COMPILE_OPTION "-std=c++20")
+    set(CMAKE_CUDA20_EXTENSION_COMPILE_OPTION "-std=c++20")
+    set(CMAKE_CUDA_STANDARD 20)
     set(CMAKE_CUDA_STANDARD_REQUIRED ON)
     find_package(CUDAToolkit REQUIRED)
     set(PFLOW_HAVE_CUDA ON)

@@ -13,6 +13,7 @@
 #include "compute/core/Atomics.h"
 #include "compute/core/Conditions.h"
 #include "compute/geometry/MeshKernels.h"
+#include "compute/neighbor/NeighborKernels.h"
 
 namespace pflow::compute {
 
@@ -36,6 +37,7 @@ struct ForceArgs {
   std::int8_t* nbrSlot;
   const std::uint32_t* nbrCount;
   Index nbrCapacity;
+  ListLayout nbrLayout;
   int slots;
   Gid* histPartner;
   Vec3d* histDisp;
@@ -85,8 +87,9 @@ struct ComputeForces {
     const double* __restrict__ mass = a.mass;
     const std::int32_t* __restrict__ material = a.material;
     const Gid* __restrict__ gid = a.gid;
-    const Index* __restrict__ nbr = a.nbr + std::size_t(i) * a.nbrCapacity;
-    std::int8_t* __restrict__ nbrSlot = a.nbrSlot + std::size_t(i) * a.nbrCapacity;
+    const Index* __restrict__ nbr = a.nbr + std::size_t(i) * a.nbrLayout.rowStride;
+    std::int8_t* __restrict__ nbrSlot = a.nbrSlot + std::size_t(i) * a.nbrLayout.rowStride;
+    const std::size_t col = a.nbrLayout.colStride;
     const int slots = a.slots;
     Gid* __restrict__ partner = a.histPartner + std::size_t(i) * slots;
     Vec3d* __restrict__ disp = a.histDisp + std::size_t(i) * slots;
@@ -104,17 +107,17 @@ struct ComputeForces {
     std::uint32_t contacts = 0;
     bool overflow = false;
     for (std::uint32_t e = 0; e < count; ++e) {
-      const Index j = nbr[e];
+      const Index j = nbr[e * col];
       const Vec3d d = pos[j] - xi;
       const double rj = radius[j], rs = ri + rj;
       const double d2 = norm2(d);
       // Invariant: nbrSlot[e] >= 0 exactly when slot nbrSlot[e] holds j's history (set at rebuild,
       // on claiming, cleared here when the contact ends), so the hot path never reads gid[j].
-      int slot = nbrSlot[e];
+      int slot = nbrSlot[e * col];
       if (d2 >= rs * rs) {
         if (slot >= 0) {  // the contact has ended: forget its history
           partner[slot] = kNoGid;
-          nbrSlot[e] = -1;
+          nbrSlot[e * col] = -1;
         }
         continue;
       }
@@ -153,7 +156,7 @@ struct ComputeForces {
       f += out.force;
       tq += out.torque;
       if (slot >= 0) disp[slot] = out.history;
-      nbrSlot[e] = std::int8_t(slot);
+      nbrSlot[e * col] = std::int8_t(slot);
     }
     if (overflow) {
       atomicOrU32(&a.cond->flags, kHistoryOverflow);

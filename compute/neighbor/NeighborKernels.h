@@ -7,6 +7,22 @@
 #include "compute/core/Conditions.h"
 #include "compute/neighbor/CellGrid.h"
 
+namespace pflow::compute {
+
+// Where entry e of particle i's candidate row lives. Row-major (i * capacity + e) suits a CPU core
+// walking its own row; column-major (e * n + i) lets the 32 threads of a GPU warp, 32 consecutive
+// particles, read 32 consecutive words. Each executor picks its default (Exec::kColumnMajorLists).
+struct ListLayout {
+  std::size_t rowStride = 1, colStride = 1;
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE std::size_t at(Index i, std::uint32_t e) const {
+    return std::size_t(i) * rowStride + std::size_t(e) * colStride;
+  }
+  static ListLayout rowMajor(Index capacity) { return {capacity, 1}; }
+  static ListLayout columnMajor(Index n) { return {1, n}; }
+};
+
+}  // namespace pflow::compute
+
 namespace pflow::compute::kernels {
 
 struct CellKey {
@@ -22,7 +38,22 @@ struct GatherBytes {
   unsigned char* dst;
   const Index* perm;
   std::size_t stride;
-  PFLOW_HOSTDEVICE void operator()(Index k) const { std::memcpy(dst + k * stride, src + perm[k] * stride, stride); }
+  // Copies by 8- or 4-byte words (every field is a multiple of one and buffers are 64-byte aligned):
+  // a run-time-sized memcpy would go byte by byte on the GPU.
+  PFLOW_HOSTDEVICE void operator()(Index k) const {
+    const std::size_t from = std::size_t(perm[k]) * stride, to = std::size_t(k) * stride;
+    if (stride % 8 == 0) {
+      const auto* s = reinterpret_cast<const std::uint64_t*>(src + from);
+      auto* d = reinterpret_cast<std::uint64_t*>(dst + to);
+      for (std::size_t w = 0; w < stride / 8; ++w) d[w] = s[w];
+    } else if (stride % 4 == 0) {
+      const auto* s = reinterpret_cast<const std::uint32_t*>(src + from);
+      auto* d = reinterpret_cast<std::uint32_t*>(dst + to);
+      for (std::size_t w = 0; w < stride / 4; ++w) d[w] = s[w];
+    } else {
+      std::memcpy(dst + to, src + from, stride);
+    }
+  }
 };
 
 struct CopyPositions {
@@ -45,8 +76,9 @@ struct BuildNeighbors {
   int slots;
   double skin;
   Index capacity;
-  Index* nbr;               // [i * capacity + e]
-  std::int8_t* nbrSlot;     // [i * capacity + e]
+  ListLayout layout;
+  Index* nbr;               // [layout.at(i, e)]
+  std::int8_t* nbrSlot;     // [layout.at(i, e)]
   std::uint32_t* nbrCount;  // [i]
   Conditions* cond;
 
@@ -56,7 +88,7 @@ struct BuildNeighbors {
     int cx, cy, cz;
     grid.coords(xi, cx, cy, cz);
     std::uint32_t count = 0;
-    const std::size_t row = std::size_t(i) * capacity;
+    const std::size_t row = std::size_t(i) * layout.rowStride, col = layout.colStride;
     Gid* partners = historyPartner + std::size_t(i) * slots;
     for (int dz = -1; dz <= 1; ++dz) {
       const int z = cz + dz;
@@ -73,12 +105,12 @@ struct BuildNeighbors {
             const double cut = ri + radius[j];
             if (norm2(pos[j] - xi) >= cut * cut) continue;
             if (count < capacity) {
-              nbr[row + count] = j;
+              nbr[row + count * col] = j;
               std::int8_t slot = -1;
               const Gid g = gid[j];
               for (int k = 0; k < slots; ++k)
                 if (partners[k] == g) slot = std::int8_t(k);
-              nbrSlot[row + count] = slot;
+              nbrSlot[row + count * col] = slot;
             }
             ++count;
           }
@@ -94,7 +126,7 @@ struct BuildNeighbors {
     for (int k = 0; k < slots; ++k) {
       if (partners[k] == kNoGid) continue;
       bool candidate = false;
-      for (std::uint32_t e = 0; e < count && !candidate; ++e) candidate = nbrSlot[row + e] == k;
+      for (std::uint32_t e = 0; e < count && !candidate; ++e) candidate = nbrSlot[row + e * col] == k;
       if (!candidate) partners[k] = kNoGid;
     }
   }

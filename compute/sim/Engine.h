@@ -4,6 +4,7 @@
 #pragma once
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/Status.h"
@@ -78,8 +79,21 @@ class Engine {
   virtual std::size_t deviceBytes() const = 0;
   virtual int historySlots() const = 0;
   virtual int wallHistorySlots() const = 0;
+  // Every neighbour candidate pair (i, j) as global ids, sorted (diagnostics and executor comparisons).
+  virtual std::vector<std::pair<Gid, Gid>> candidatePairs() const = 0;
+  // Waits for the device's queued work (phase timers call it so each phase is timed whole).
+  virtual void fence() const = 0;
+  // How the executor chose its launch configuration (CUDA: measured block size per kernel); empty on the CPU.
+  virtual std::vector<std::string> launchReport() const = 0;
 };
 
 std::unique_ptr<Engine> makeCpuEngine(EngineSetup setup);
+
+// The CUDA engine on `device` (compute/cuda/CudaEngine.cu). An error, never a fall-back, where this pflow
+// was built without CUDA or the device is missing.
+Result<std::unique_ptr<Engine>> makeCudaEngine(EngineSetup setup, int device);
+// Usable CUDA devices: 0 without CUDA in the build, a driver or a GPU.
+int cudaDeviceCount();
+bool cudaBuiltIn();
 
 }  // namespace pflow::compute

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -84,7 +85,7 @@ class EngineImpl final : public Engine {
                                                   m_particles.ptr<Field::Gid>(),
                                                   m_particles.ptr<Field::HistoryPartner>(),
                                                   m_particles.contactSlots(), m_setup.skin, m_nbrCap,
-                                                  m_nbr.as<Index>(), m_nbrSlot.as<std::int8_t>(),
+                                                  nbrLayout(), m_nbr.as<Index>(), m_nbrSlot.as<std::int8_t>(),
                                                   m_nbrCount.as<std::uint32_t>(), m_cond.as<Conditions>()});
       m_exec.forEach(m_n, kernels::WallCandidates{m_setup.grid, m_planes.as<PlaneParams>(), int(m_setup.planes.size()),
                                                   m_numTri ? m_binStart.as<Index>() : nullptr, m_binItems.as<Index>(),
@@ -187,6 +188,26 @@ class EngineImpl final : public Engine {
 
   ContactStats contactStats() const override;
 
+  std::vector<std::pair<Gid, Gid>> candidatePairs() const override {
+    std::vector<Index> nbr(std::size_t(m_n) * m_nbrCap);
+    std::vector<std::uint32_t> cnt(m_n);
+    std::vector<Gid> gid(m_n);
+    m_mem.copyToHost(nbr.data(), m_nbr.data(), nbr.size() * sizeof(Index));
+    m_mem.copyToHost(cnt.data(), m_nbrCount.data(), cnt.size() * sizeof(std::uint32_t));
+    m_mem.copyToHost(gid.data(), m_particles.ptr<Field::Gid>(), gid.size() * sizeof(Gid));
+    std::vector<std::pair<Gid, Gid>> pairs;
+    for (Index i = 0; i < m_n; ++i)
+      for (std::uint32_t e = 0; e < std::min<std::uint32_t>(cnt[i], m_nbrCap); ++e)
+        pairs.emplace_back(gid[i], gid[nbr[nbrLayout().at(i, e)]]);
+    std::sort(pairs.begin(), pairs.end());
+    return pairs;
+  }
+  void fence() const override { m_exec.synchronize(); }
+  std::vector<std::string> launchReport() const override {
+    if constexpr (requires(const Exec& e) { e.tuningReport(); }) return m_exec.tuningReport();
+    else return {};
+  }
+
   std::size_t rebuilds() const { return m_rebuilds; }
 
  private:
@@ -195,6 +216,9 @@ class EngineImpl final : public Engine {
     m_nbr.resize(std::size_t(m_n) * m_nbrCap * sizeof(Index));
     m_nbrSlot.resize(std::size_t(m_n) * m_nbrCap * sizeof(std::int8_t));
   }
+  // Candidate rows: the executor's preferred layout (PFLOW_LIST_LAYOUT=row|column overrides it, for
+  // measurements).
+  ListLayout nbrLayout() const { return m_columnMajor ? ListLayout::columnMajor(m_n) : ListLayout::rowMajor(m_nbrCap); }
   void allocWallCandidates() { m_wallCand.resize(std::max<std::size_t>(1, std::size_t(m_n) * m_wallCap) * sizeof(Index)); }
   void binTriangles();
   void resetConditions() {
@@ -230,6 +254,7 @@ class EngineImpl final : public Engine {
     a.nbrSlot = m_nbrSlot.as<std::int8_t>();
     a.nbrCount = m_nbrCount.as<std::uint32_t>();
     a.nbrCapacity = m_nbrCap;
+    a.nbrLayout = nbrLayout();
     a.slots = m_particles.contactSlots();
     a.histPartner = m_particles.ptr<Field::HistoryPartner>();
     a.histDisp = m_particles.ptr<Field::HistoryDisp>();
@@ -269,6 +294,7 @@ class EngineImpl final : public Engine {
   bool m_anyMeshMoves = false;
   bool m_binned = false;
   Index m_nbrCap = 16;
+  bool m_columnMajor = Exec::kColumnMajorLists;
   Index m_wallCap = 4;
   std::size_t m_rebuilds = 0;
   Buffer m_refPos{m_mem, 0}, m_cellKey{m_mem, 0}, m_perm{m_mem, 0}, m_cellStart{m_mem, 0}, m_scratch{m_mem, 0};
@@ -286,6 +312,7 @@ void EngineImpl<Exec>::init() {
   m_n = Index(s.position.size());
   m_numTri = Index(s.triMesh.size());
   m_particles.allocate(m_n, s.historySlots, s.wallHistorySlots);
+  if (const char* layout = std::getenv("PFLOW_LIST_LAYOUT")) m_columnMajor = std::string(layout) == "column";
   std::vector<Vec3d> zeros(m_n, Vec3d{0, 0, 0});
   std::vector<Gid> gids(m_n);
   for (Index i = 0; i < m_n; ++i) gids[i] = i;
@@ -407,7 +434,7 @@ ContactStats EngineImpl<Exec>::contactStats() const {
     st.kineticEnergy += 0.5 * mass[i] * norm2(vel[i]) + 0.5 * 0.4 * mass[i] * rad[i] * rad[i] * norm2(om[i]);
     st.maxSpeed = std::max(st.maxSpeed, norm(vel[i]));
     for (std::uint32_t e = 0; e < std::min<std::uint32_t>(cnt[i], m_nbrCap); ++e) {
-      const Index j = nbr[std::size_t(i) * m_nbrCap + e];
+      const Index j = nbr[nbrLayout().at(i, e)];
       if (j < i) continue;
       const double ov = rad[i] + rad[j] - norm(pos[j] - pos[i]);
       if (ov <= 0) continue;

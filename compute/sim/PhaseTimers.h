@@ -2,6 +2,7 @@
 #pragma once
 #include <array>
 #include <chrono>
+#include <functional>
 #include <string>
 
 namespace pflow::compute {
@@ -14,7 +15,10 @@ class PhaseTimers {
   class Scope {
    public:
     Scope(PhaseTimers& t, Phase p) : m_t(t), m_p(p), m_start(std::chrono::steady_clock::now()) {}
-    ~Scope() { m_t.m_seconds[int(m_p)] += std::chrono::duration<double>(std::chrono::steady_clock::now() - m_start).count(); }
+    ~Scope() {
+      if (m_t.m_fence) m_t.m_fence();
+      m_t.m_seconds[int(m_p)] += std::chrono::duration<double>(std::chrono::steady_clock::now() - m_start).count();
+    }
    private:
     PhaseTimers& m_t;
     Phase m_p;
@@ -28,11 +32,15 @@ class PhaseTimers {
     return s;
   }
   void reset() { m_seconds.fill(0); }
+  // Called at the end of each timed phase: an asynchronous executor waits there for its queued work,
+  // so each phase's time is its own.
+  void setFence(std::function<void()> fence) { m_fence = std::move(fence); }
   // "PERFORMANCE integrate1 0.12 s (3.1 %) ..." one line.
   std::string report() const;
 
  private:
   std::array<double, int(Phase::kCount)> m_seconds{};
+  std::function<void()> m_fence;
 };
 
 }  // namespace pflow::compute

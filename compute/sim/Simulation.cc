@@ -94,16 +94,32 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const RunConfig& config, 
   if (ErrorList errors = config.validate(); !errors.empty()) return errors.toStatus("invalid run configuration");
   if (config.sim.precision != Precision::kDouble)
     return invalidArgument("simulation.precision: 'float' needs the CUDA executor, which is not built into this pflow yet");
-  if (options.executor != ExecutorKind::kCpu)
-    return invalidArgument("--executor cuda: this pflow has no CUDA executor yet; use --executor cpu");
   auto ts = chooseTimeStep(config);
   if (!ts) return ts.status();
   auto setup = prepareEngineSetup(config);
   if (!setup) return setup.status();
   std::unique_ptr<Simulation> sim(new Simulation(setup.value(), ts.value(), nullptr));
-  sim->m_engine = makeCpuEngine(std::move(setup).value());
+  ExecutorKind kind = options.executor;
+  if (kind == ExecutorKind::kAuto) kind = cudaDeviceCount() > 0 ? ExecutorKind::kCuda : ExecutorKind::kCpu;
+  if (kind == ExecutorKind::kCuda) {
+    auto engine = makeCudaEngine(std::move(setup).value(), options.device);
+    if (!engine) return engine.status();
+    sim->m_engine = std::move(engine).value();
+    // Kernels run asynchronously: each phase timer waits for its own work.
+    sim->m_timers.setFence([e = sim->m_engine.get()] { e->fence(); });
+  } else {
+    sim->m_engine = makeCpuEngine(std::move(setup).value());
+  }
+  sim->m_executor = kind;
   if (Status s = sim->initialise(); !s.isOk()) return s;
   return sim;
+}
+
+Result<ExecutorKind> parseExecutorKind(const std::string& name, const std::string& flag) {
+  if (name == "cpu") return ExecutorKind::kCpu;
+  if (name == "cuda") return ExecutorKind::kCuda;
+  if (name == "auto") return ExecutorKind::kAuto;
+  return invalidArgument(flag + ": '" + name + "' is not one of auto, cpu, cuda");
 }
 
 Result<EngineSetup> prepareEngineSetup(const RunConfig& c) {

@@ -14,11 +14,16 @@
 
 namespace pflow::compute {
 
-enum class ExecutorKind { kCpu, kCuda };
+// kAuto: the CUDA executor where a GPU is visible, else OpenMP. An explicit kCuda never falls back.
+enum class ExecutorKind { kCpu, kCuda, kAuto };
 
 struct SimulationOptions {
   ExecutorKind executor = ExecutorKind::kCpu;
+  int device = 0;  // CUDA device index (of the visible ones)
 };
+
+// "cpu" | "cuda" | "auto" -> kind; an error naming the flag otherwise.
+Result<ExecutorKind> parseExecutorKind(const std::string& name, const std::string& flag = "--executor");
 
 class Simulation {
  public:
@@ -48,6 +53,7 @@ class Simulation {
   const PhaseTimers& timers() const { return m_timers; }
   PhaseTimers& timers() { return m_timers; }
   std::string executorDescription() const { return m_engine->executorDescription(); }
+  ExecutorKind executorKind() const { return m_executor; }
   std::size_t deviceBytes() const { return m_engine->deviceBytes(); }
   Engine& engine() { return *m_engine; }
 
@@ -66,6 +72,7 @@ class Simulation {
   std::int64_t m_step = 0;
   double m_time = 0;
   std::int64_t m_rebuilds = 0;
+  ExecutorKind m_executor = ExecutorKind::kCpu;
   int m_historySlots = 0, m_wallHistorySlots = 0;  // last reported
 };
 

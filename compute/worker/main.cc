@@ -15,6 +15,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstdlib>
 #include <condition_variable>
 #include <csignal>
 #include <cstdio>
@@ -156,12 +157,16 @@ int runRankZero(const worker::WorkerOptions& o, int ranks) {
   compute::RunConfig cfg = scene.value().config;
   if (o.threads > 0) cfg.sim.threads = o.threads;
   const worker::LeasedDevice& device = o.devices.front();
-  compute::SimulationOptions so;  // the CUDA executor plugs in with the GPU issue; until then every rank runs on CPU cores
+  compute::SimulationOptions so;
+  if (device.kind == "gpu") {  // a GPU lease runs on that GPU or fails: never silently on the CPU
+    so.executor = compute::ExecutorKind::kCuda;
+    so.device = device.index;
+  }
   auto created = compute::Simulation::create(cfg, so);
   if (!created) return fail(created.status().code() == StatusCode::kInvalidArgument ? 1 : 3, created.status().message());
   compute::Simulation& sim = *created.value();
   const std::string executorNote = sim.executorDescription() + " (device " + device.node + ":" + device.kind + ":" +
-                                   std::to_string(device.index) + (device.kind == "gpu" ? ", CUDA executor not in this build" : "") +
+                                   std::to_string(device.index) +
                                    "; " + std::to_string(ranks) + " rank(s))";
   spdlog::info("job {}: {} particles, executor {}", o.jobId, sim.numParticles(), executorNote);
 
@@ -215,6 +220,8 @@ int runRankZero(const worker::WorkerOptions& o, int ranks) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Device indices in a lease come from NVML, which numbers GPUs by PCI bus; make CUDA number them alike.
+  setenv("CUDA_DEVICE_ORDER", "PCI_BUS_ID", 0);
   int provided = 0;
   MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
   int rank = 0, size = 1;

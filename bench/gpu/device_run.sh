@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# One call on the lent GPU machine (see bench/gpu/README.md): unpack the bundle built here, run the GPU
+# tests, measure the copy bandwidth and the settled-bed throughput, print a short table last.
+# Usage (from the repository root on the device machine):
+#   bash bench/gpu/device_run.sh [tests] [sanitize] [bench] [layouts]
+# Logs and JSON go to $OUT (or ./out).
+set -uo pipefail
+OUT=${OUT:-out}
+mkdir -p "$OUT"
+tar xzf .gpuz/b.tgz
+source .gpu/env.sh
+B=.gpu/bin
+stages=("$@")
+((${#stages[@]})) || stages=(tests bench)
+has() { local s; for s in "${stages[@]}"; do [[ $s == "$1" ]] && return 0; done; return 1; }
+summary=()
+nvidia-smi --query-gpu=name,memory.total,clocks.max.sm,driver_version --format=csv,noheader | tee "$OUT/gpu.txt"
+dev=$(nvidia-smi --query-gpu=name --format=csv,noheader | head -1)
+commit=$(cat .gpuz/commit 2>/dev/null || echo unknown)
+
+if has tests; then
+  for t in cuda_executor_test gpu_kernel_test; do
+    start=$SECONDS
+    "$B/$t" > "$OUT/$t.log" 2>&1
+    rc=$?
+    summary+=("$t rc=$rc $((SECONDS - start))s $(grep -E '^\[  (PASSED|FAILED)' "$OUT/$t.log" | tr '\n' ' ')")
+  done
+fi
+if has sanitize; then
+  for tool in memcheck racecheck; do
+    start=$SECONDS
+    compute-sanitizer --tool $tool --error-exitcode 9 "$B/cuda_executor_test" \
+      --gtest_filter='CudaExecutor.SameCandidates*:CudaExecutor.BlowUp*' > "$OUT/sanitizer_$tool.log" 2>&1
+    rc=$?
+    summary+=("compute-sanitizer $tool rc=$rc $((SECONDS - start))s $(grep -E 'ERROR SUMMARY' "$OUT/sanitizer_$tool.log" | tail -1)")
+  done
+fi
+if has bench; then
+  "$B/pflow-gpu-bandwidth" > "$OUT/bandwidth.json" 2>&1
+  summary+=("bandwidth $(cat "$OUT/bandwidth.json")")
+  for n in ${BENCH_SIZES:-1000000 4000000}; do
+    for poly in "" "--poly"; do
+      "$B/pflow-bench" --executor cuda -n "$n" --settle-steps "${SETTLE:-3000}" --steps "${STEPS:-1000}" --no-lammps \
+        --device "$dev" --commit "$commit" $poly >> "$OUT/bench.jsonl" 2>> "$OUT/bench.log"
+      summary+=("bench n=$n $poly rc=$? $(tail -1 "$OUT/bench.jsonl" | python3 -c 'import json,sys; j=json.loads(sys.stdin.read()); print(f"{j[\"particle_steps_per_s\"]:.3g} p-s/s", {k: round(v,3) for k,v in j["phases_s"].items()}, f"{j[\"device_bytes_per_particle\"]:.0f} B/p")' 2>&1)")
+    done
+  done
+fi
+if has layouts; then
+  for layout in row column; do
+    PFLOW_LIST_LAYOUT=$layout "$B/pflow-bench" --executor cuda -n 1000000 --settle-steps "${SETTLE:-3000}" --steps 500 \
+      --no-lammps --device "$dev" --commit "$commit" >> "$OUT/layouts.jsonl" 2>> "$OUT/bench.log"
+    summary+=("layout $layout $(tail -1 "$OUT/layouts.jsonl" | python3 -c 'import json,sys; j=json.loads(sys.stdin.read()); print(f"{j[\"particle_steps_per_s\"]:.3g}", j["phases_s"]["forces"], j["phases_s"]["contacts"])' 2>&1)")
+  done
+fi
+echo
+echo "== summary ($dev, commit $commit) =="
+printf '%s\n' "${summary[@]}"

@@ -1,0 +1,14 @@
+// This pflow was built without nvcc: the CUDA executor is absent and says so.
+#include "compute/sim/Engine.h"
+
+namespace pflow::compute {
+
+int cudaDeviceCount() { return 0; }
+bool cudaBuiltIn() { return false; }
+
+Result<std::unique_ptr<Engine>> makeCudaEngine(EngineSetup, int) {
+  return Status(StatusCode::kFailedPrecondition,
+                "--executor cuda: this pflow was built without CUDA (nvcc was not found at configure time)");
+}
+
+}  // namespace pflow::compute

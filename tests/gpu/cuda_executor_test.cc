@@ -1,0 +1,248 @@
+// The CUDA executor against the OpenMP executor (the reference): the same systems give the same
+// neighbour candidates, the same forces to 1e-12 of the largest force (double), the same impact
+// trajectories, and a settled bed with the same statistics. Skipped where no GPU is visible.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <random>
+
+#include "bench/BedScene.h"
+#include "compute/sim/Simulation.h"
+#include "tests/support/TestScenes.h"
+
+namespace pflow::test {
+namespace {
+
+using compute::ExecutorKind;
+
+#define SKIP_WITHOUT_GPU() \
+  if (compute::cudaDeviceCount() == 0) GTEST_SKIP() << "no CUDA device"
+
+std::unique_ptr<compute::Simulation> make(const compute::RunConfig& c, ExecutorKind kind) {
+  compute::SimulationOptions o;
+  o.executor = kind;
+  auto sim = compute::Simulation::create(c, o);
+  EXPECT_TRUE(sim.isOk()) << sim.status().toString();
+  return sim.isOk() ? std::move(sim).value() : nullptr;
+}
+
+// Per gid: the named Vec3d field of a snapshot.
+std::map<Gid, Vec3d> byGid(const compute::ParticleSnapshot& s, const char* field) {
+  std::map<Gid, Vec3d> out;
+  const Gid* id = s.find("id")->as<Gid>();
+  const Vec3d* v = s.find(field)->as<Vec3d>();
+  for (std::size_t k = 0; k < s.n; ++k) out[id[k]] = v[k];
+  return out;
+}
+
+// max over particles of |a - b|, and max |b|.
+std::pair<double, double> maxDiff(const std::map<Gid, Vec3d>& a, const std::map<Gid, Vec3d>& b) {
+  double d = 0, scale = 0;
+  for (const auto& [g, v] : b) {
+    d = std::max(d, norm(a.at(g) - v));
+    scale = std::max(scale, norm(v));
+  }
+  return {d, scale};
+}
+
+// A dense, compressed, polydisperse cluster with friction and rolling resistance, random velocities
+// and spins, in a box of planes over a tilted triangle-mesh floor; one initial history slot, so the
+// slot-growth path runs too.
+compute::RunConfig denseCluster(int n, std::uint64_t seed) {
+  compute::RunConfig c;
+  c.materials = {material("grain", 5e7, 0.3, 2500, 0.6, 0.4, 0.05), material("steel", 2e11, 0.3, 7800, 0.5, 0.3, 0.02)};
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0, 1);
+  const double rMax = 1e-3, a = 1.9 * rMax;  // lattice pitch below the largest diameter: overlaps
+  const int side = int(std::ceil(std::cbrt(double(n))));
+  for (int k = 0; k < n; ++k) {
+    const int ix = k % side, iy = (k / side) % side, iz = k / (side * side);
+    const double r = rMax * (0.6 + 0.4 * u(rng));
+    addParticle(c, {0.004 + ix * a + 0.1 * rMax * u(rng), 0.004 + iy * a + 0.1 * rMax * u(rng), 0.003 + iz * a}, r,
+                k % 7 == 0 ? 1 : 0, {0.2 * (u(rng) - 0.5), 0.2 * (u(rng) - 0.5), -0.1 * u(rng)},
+                {50 * (u(rng) - 0.5), 50 * (u(rng) - 0.5), 50 * (u(rng) - 0.5)});
+  }
+  const double L = 0.008 + side * a;
+  c.planes = {plane({0, 0, 0}, {1, 0, 0}, 1, "x0"), plane({L, 0, 0}, {-1, 0, 0}, 1, "x1"),
+              plane({0, 0, 0}, {0, 1, 0}, 1, "y0"), plane({0, L, 0}, {0, -1, 0}, 1, "y1")};
+  compute::MeshConfig floor;  // a tilted floor of 2 x 8 x 8 triangles
+  floor.name = "floor";
+  floor.material = 1;
+  const int m = 8;
+  for (int j = 0; j <= m; ++j)
+    for (int i = 0; i <= m; ++i) floor.vertices.push_back({L * i / m, L * j / m, 0.0015 + 0.002 * i / m});
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < m; ++i) {
+      const std::uint32_t v0 = j * (m + 1) + i, v1 = v0 + 1, v2 = v0 + m + 1, v3 = v2 + 1;
+      floor.triangles.push_back({v0, v1, v3});
+      floor.triangles.push_back({v0, v3, v2});
+    }
+  c.meshes = {floor};
+  c.sim.gravity = {0, 0, -9.81};
+  c.sim.dt = 2e-6;
+  c.sim.duration = 1;
+  c.sim.historySlots = 1;
+  c.sim.wallHistorySlots = 1;
+  c.sim.domain = compute::Aabb{{0, 0, 0}, {L, L, L + 0.01}};
+  return c;
+}
+
+TEST(CudaExecutor, SameCandidatesForcesAndTrajectoriesAsCpu) {
+  SKIP_WITHOUT_GPU();
+  const auto cfg = denseCluster(4000, 7);
+  auto cpu = make(cfg, ExecutorKind::kCpu);
+  auto gpu = make(cfg, ExecutorKind::kCuda);
+  ASSERT_TRUE(cpu && gpu);
+  EXPECT_NE(gpu->executorDescription().find("CUDA"), std::string::npos) << gpu->executorDescription();
+  std::printf("executor: %s\n", gpu->executorDescription().c_str());
+
+  // Identical neighbour candidate sets, as gid pairs.
+  const auto pc = cpu->engine().candidatePairs(), pg = gpu->engine().candidatePairs();
+  EXPECT_GT(pc.size(), 10u * 4000);
+  EXPECT_EQ(pc, pg);
+
+  // Forces at t = 0 and after steps with tangential history, rolling and walls: within 1e-12 of the
+  // largest force (the sums run in the same order; only fused multiply-adds round differently).
+  for (int stage = 0; stage < 4; ++stage) {
+    const auto fc = byGid(cpu->snapshot(), "force"), fg = byGid(gpu->snapshot(), "force");
+    const auto [d, scale] = maxDiff(fg, fc);
+    std::printf("step %lld: max |dF| = %.3g N, max |F| = %.3g N, ratio %.3g\n", (long long)cpu->stepCount(), d, scale,
+                d / scale);
+    EXPECT_LE(d, 1e-12 * scale) << "at step " << cpu->stepCount();
+    ASSERT_TRUE(cpu->runSteps(stage == 0 ? 1 : 20).isOk());
+    ASSERT_TRUE(gpu->runSteps(stage == 0 ? 1 : 20).isOk());
+  }
+  // Slots grew from one on both, identically.
+  EXPECT_GT(cpu->engine().historySlots(), 1);
+  EXPECT_EQ(cpu->engine().historySlots(), gpu->engine().historySlots());
+  EXPECT_EQ(cpu->engine().wallHistorySlots(), gpu->engine().wallHistorySlots());
+  EXPECT_EQ(cpu->rebuilds(), gpu->rebuilds());
+
+  // Trajectories over 200 more steps (with rebuilds): positions and spins to round-off growth.
+  ASSERT_TRUE(cpu->runSteps(200).isOk());
+  ASSERT_TRUE(gpu->runSteps(200).isOk());
+  const auto sc = cpu->snapshot(), sg = gpu->snapshot();
+  const auto [dx, sx] = maxDiff(byGid(sg, "position"), byGid(sc, "position"));
+  const auto [dv, sv] = maxDiff(byGid(sg, "velocity"), byGid(sc, "velocity"));
+  const auto [dw, sw] = maxDiff(byGid(sg, "angular_velocity"), byGid(sc, "angular_velocity"));
+  std::printf("after %lld steps: |dx| %.3g m, |dv| %.3g of %.3g m/s, |dw| %.3g of %.3g rad/s, rebuilds %lld\n",
+              (long long)cpu->stepCount(), dx, dv, sv, dw, sw, (long long)cpu->rebuilds());
+  EXPECT_LE(dx, 1e-12);  // on a 1 mm sphere
+  EXPECT_LE(dv, 1e-8 * sv);
+  EXPECT_LE(dw, 1e-8 * sw);
+  EXPECT_EQ(cpu->contactStats().historyEntries, gpu->contactStats().historyEntries);
+}
+
+// Chung & Ooi style normal impacts (sphere-sphere and sphere-plane) across restitution: the GPU gives
+// the CPU's rebound speeds to 1e-12 and the requested restitution to 1 %.
+TEST(CudaExecutor, ImpactsMatchCpuAcrossRestitution) {
+  SKIP_WITHOUT_GPU();
+  for (double e : {0.1, 0.5, 0.9, 1.0}) {
+    compute::RunConfig c;
+    c.materials = {material("alumina", 3.8e11, 0.23, 4000, e, 0.0)};
+    const double r = 0.0025, v = 3.9;
+    addParticle(c, {0, 0, r + 1e-5}, r, 0, {0, 0, -v});             // onto the plane
+    addParticle(c, {0.02, 0, 0.01}, r, 0, {0, 0, -v});              // sphere-sphere, head on
+    addParticle(c, {0.02, 0, 0.01 - 2 * r - 1e-5}, r, 0, {0, 0, v});
+    c.planes = {plane({0, 0, 0}, {0, 0, 1}, 0, "floor")};
+    c.sim.gravity = {0, 0, 0};
+    c.sim.dt = 2e-9;
+    c.sim.duration = 1;
+    auto cpu = make(c, ExecutorKind::kCpu);
+    auto gpu = make(c, ExecutorKind::kCuda);
+    ASSERT_TRUE(cpu && gpu);
+    ASSERT_TRUE(cpu->runSteps(5000).isOk());
+    ASSERT_TRUE(gpu->runSteps(5000).isOk());
+    const auto vc = byGid(cpu->snapshot(), "velocity"), vg = byGid(gpu->snapshot(), "velocity");
+    for (Gid g = 0; g < 3; ++g) EXPECT_NEAR(vg.at(g).z, vc.at(g).z, 1e-12 * v) << "e = " << e << ", particle " << g;
+    EXPECT_NEAR(vg.at(0).z / v, e, 0.01 * e) << "sphere-plane, e = " << e;
+    EXPECT_NEAR((vg.at(2).z - vg.at(1).z) / (2 * v), e, 0.01 * e) << "sphere-sphere, e = " << e;
+  }
+}
+
+// Solid fraction of the lower part of a bed and the mean coordination number.
+struct BedStats {
+  double solidFraction = 0, coordination = 0;
+};
+BedStats bedStats(const compute::Simulation& s, double Lx, double Ly, double d) {
+  const auto snap = s.snapshot();
+  const Vec3d* x = snap.find("position")->as<Vec3d>();
+  const double* r = snap.find("radius")->as<double>();
+  // Sample box: 3 d from the side walls and the floor, up to 6 d; spheres counted by centre (fine
+  // for a box many diameters wide).
+  const double lo = 3 * d, top = 6 * d;
+  double vol = 0;
+  for (std::size_t k = 0; k < snap.n; ++k)
+    if (x[k].x > lo && x[k].x < Lx - lo && x[k].y > lo && x[k].y < Ly - lo && x[k].z > lo && x[k].z < top)
+      vol += 4.0 / 3.0 * 3.141592653589793 * r[k] * r[k] * r[k];
+  return {vol / ((Lx - 2 * lo) * (Ly - 2 * lo) * (top - lo)), s.contactStats().coordinationNumber};
+}
+
+// The 20 000-sphere polydisperse bed of the regression suite, settled on both executors: the same
+// solid fraction and coordination number within 1 %.
+TEST(CudaExecutor, SettledBedStatisticsMatchCpu) {
+  SKIP_WITHOUT_GPU();
+  bench::BedSpec spec;
+  spec.nx = 50;
+  spec.ny = 40;
+  spec.nz = 10;
+  spec.polydisperse = true;
+  auto cfg = bench::bedScene(spec);
+  cfg.materials[0].restitution = 0.3;
+  cfg.materials[0].rollingFriction = 0.05;
+  auto cpu = make(cfg, ExecutorKind::kCpu);
+  auto gpu = make(cfg, ExecutorKind::kCuda);
+  ASSERT_TRUE(cpu && gpu);
+  ASSERT_TRUE(gpu->runSteps(30000).isOk());
+  ASSERT_TRUE(cpu->runSteps(30000).isOk());
+  const double Lx = cfg.sim.domain->hi.x, Ly = cfg.sim.domain->hi.y;
+  const auto a = bedStats(*cpu, Lx, Ly, spec.diameter), b = bedStats(*gpu, Lx, Ly, spec.diameter);
+  std::printf("solid fraction cpu %.4f gpu %.4f; coordination cpu %.3f gpu %.3f\n", a.solidFraction, b.solidFraction,
+              a.coordination, b.coordination);
+  EXPECT_GT(a.solidFraction, 0.5);
+  EXPECT_NEAR(b.solidFraction, a.solidFraction, 0.01 * a.solidFraction);
+  EXPECT_NEAR(b.coordination, a.coordination, 0.01 * a.coordination);
+  EXPECT_LT(gpu->contactStats().maxOverlapRatio, 0.01);
+}
+
+// A blow-up on the GPU is caught and reported like on the CPU: the particle, the step, the cause.
+TEST(CudaExecutor, BlowUpIsReported) {
+  SKIP_WITHOUT_GPU();
+  compute::RunConfig c;
+  c.materials = {material("glass", 4.8e10, 0.2, 2800, 0.9, 0.3)};
+  const double r = 0.01, a = 2 * r * 0.995;
+  for (int k = 0; k < 4; ++k)
+    for (int j = 0; j < 4; ++j)
+      for (int i = 0; i < 4; ++i) addParticle(c, {r + i * a, r + j * a, r + k * a}, r, 0);
+  c.planes = {plane({0, 0, 0}, {0, 0, 1}, 0, "floor")};
+  c.sim.dt = 3 * compute::rayleighTime(r, 2800, 4.8e10, 0.2);
+  c.sim.duration = 2000 * *c.sim.dt;
+  auto gpu = make(c, ExecutorKind::kCuda);
+  ASSERT_TRUE(gpu);
+  const Status s = gpu->runUntil(c.sim.duration);
+  ASSERT_FALSE(s.isOk());
+  EXPECT_EQ(s.code(), StatusCode::kNumerical);
+  EXPECT_NE(s.message().find("particle "), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("at step "), std::string::npos) << s.message();
+}
+
+TEST(CudaExecutor, ExplicitCudaWithoutDeviceIsAnError) {
+  if (compute::cudaDeviceCount() > 0) GTEST_SKIP() << "a CUDA device is present";
+  compute::RunConfig c;
+  c.materials = {material("m", 1e7, 0.3, 2500)};
+  addParticle(c, {0, 0, 0}, 1e-3, 0);
+  c.sim.dt = 1e-6;
+  c.sim.duration = 1e-5;
+  c.sim.domain = compute::Aabb{{-1, -1, -1}, {1, 1, 1}};
+  compute::SimulationOptions o;
+  o.executor = ExecutorKind::kCuda;
+  auto sim = compute::Simulation::create(c, o);
+  ASSERT_FALSE(sim.isOk());
+  EXPECT_EQ(sim.status().code(), StatusCode::kFailedPrecondition);
+  std::printf("%s\n", sim.status().message().c_str());
+}
+
+}  // namespace
+}  // namespace pflow::test
