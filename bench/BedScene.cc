@@ -55,6 +55,39 @@ compute::RunConfig bedScene(const BedSpec& s) {
   return c;
 }
 
+compute::RunConfig tiledBed(const compute::RunConfig& bed, const compute::ParticleSnapshot& settled, int tx, int ty) {
+  compute::RunConfig c = bed;
+  const Vec3d lo = bed.sim.domain->lo, hi = bed.sim.domain->hi;
+  const double lx = hi.x - lo.x, ly = hi.y - lo.y;
+  const std::size_t n = settled.n;
+  const auto* x = settled.find("position")->as<Vec3d>();
+  const auto* v = settled.find("velocity")->as<Vec3d>();
+  const auto* w = settled.find("angular_velocity")->as<Vec3d>();
+  const auto* r = settled.find("radius")->as<double>();
+  auto& p = c.particles;
+  p = {};
+  const std::size_t total = n * std::size_t(tx) * std::size_t(ty);
+  p.position.reserve(total);
+  p.velocity.reserve(total);
+  p.angularVelocity.reserve(total);
+  p.radius.reserve(total);
+  for (int b = 0; b < ty; ++b)
+    for (int a = 0; a < tx; ++a)
+      for (std::size_t k = 0; k < n; ++k) {
+        p.position.push_back(x[k] + Vec3d{a * lx, b * ly, 0});
+        p.velocity.push_back(v[k]);
+        p.angularVelocity.push_back(w[k]);
+        p.radius.push_back(r[k]);
+      }
+  p.material.assign(total, 0);
+  for (auto& pl : c.planes) {
+    if (pl.name == "x_hi") pl.point.x = lo.x + tx * lx;
+    if (pl.name == "y_hi") pl.point.y = lo.y + ty * ly;
+  }
+  c.sim.domain = compute::Aabb{lo, {lo.x + tx * lx, lo.y + ty * ly, hi.z}};
+  return c;
+}
+
 BedSpec bedSpecFor(std::int64_t n, bool polydisperse) {
   BedSpec s;
   s.polydisperse = polydisperse;

@@ -3,6 +3,7 @@
 #pragma once
 #include <cstdint>
 
+#include "compute/particles/ParticleSnapshot.h"
 #include "compute/sim/RunConfig.h"
 
 namespace pflow::bench {
@@ -25,5 +26,11 @@ compute::RunConfig bedScene(const BedSpec& spec);
 
 // nx = ny chosen so that nx * ny * nz is close to n.
 BedSpec bedSpecFor(std::int64_t n, bool polydisperse);
+
+// A large bed made of tx x ty copies of a settled small one (`bed` as built by bedScene, `settled` its
+// state after settling), side by side in a box tx times as long and ty times as wide: the standard bed
+// at 10^6..10^8 spheres without settling each at full size. Positions, velocities and spins are copied;
+// contact history starts empty (it rebuilds within a few steps of a resettle).
+compute::RunConfig tiledBed(const compute::RunConfig& bed, const compute::ParticleSnapshot& settled, int tx, int ty);
 
 }  // namespace pflow::bench

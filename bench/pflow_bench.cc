@@ -4,7 +4,10 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <memory>
 #include <cstdio>
 #include <ctime>
 #include <sstream>
@@ -55,6 +58,12 @@ int main(int argc, char** argv) {
   app.add_option("--lammps-ranks", lammpsRanks, "LAMMPS MPI ranks (0: as many as pflow's threads)");
   app.add_flag("--poly", poly, "polydisperse bed: radii uniform in [d/4, d/2]");
   app.add_flag("--no-lammps", noLammps, "skip the LAMMPS run");
+  long tileFrom = 0;
+  int resettleSteps = 1000;
+  app.add_option("--tile-from", tileFrom,
+                 "settle a bed of about this many spheres for --settle-steps, then build each size from copies of it "
+                 "and resettle those for --resettle-steps (0: settle every size itself)");
+  app.add_option("--resettle-steps", resettleSteps, "steps a tiled bed settles before timing")->capture_default_str();
   app.add_option("--device", device, "device name for the results table");
   std::string commit = shell("git rev-parse --short HEAD 2>/dev/null");
   app.add_option("--commit", commit, "commit for the results table (default: git rev-parse)");
@@ -66,30 +75,65 @@ int main(int argc, char** argv) {
   const std::string caseName = poly ? "settled_bed_poly" : "settled_bed_mono";
   int rc = 0;
 
-  for (long n : sizes) {
-    auto spec = pflow::bench::bedSpecFor(n, poly);
-    spec.threads = threads;
-    auto cfg = pflow::bench::bedScene(spec);
-    auto kind = pflow::compute::parseExecutorKind(executor);
-    if (!kind) {
-      std::fprintf(stderr, "%s\n", kind.status().toString().c_str());
-      return 1;
-    }
-    pflow::compute::SimulationOptions so;
-    so.executor = kind.value();
-    so.device = gpu;
+  auto kind = pflow::compute::parseExecutorKind(executor);
+  if (!kind) {
+    std::fprintf(stderr, "%s\n", kind.status().toString().c_str());
+    return 1;
+  }
+  pflow::compute::SimulationOptions so;
+  so.executor = kind.value();
+  so.device = gpu;
+  auto settle = [&](const pflow::compute::RunConfig& cfg, int nsteps, double& wallOut)
+      -> std::unique_ptr<pflow::compute::Simulation> {
     auto sim = pflow::compute::Simulation::create(cfg, so);
     if (!sim) {
       std::fprintf(stderr, "%s\n", sim.status().toString().c_str());
-      return 1;
+      return nullptr;
     }
-    auto& s = *sim.value();
     const auto t0 = std::chrono::steady_clock::now();
-    if (auto st = s.runSteps(settleSteps); !st.isOk()) {
+    if (auto st = sim.value()->runSteps(nsteps); !st.isOk()) {
       std::fprintf(stderr, "settling failed: %s\n", st.toString().c_str());
-      return 1;
+      return nullptr;
     }
-    const double settleWall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    wallOut = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return std::move(sim).value();
+  };
+
+  // --tile-from: settle one small bed the standard way, then build every size from copies of it.
+  pflow::compute::RunConfig baseBed;
+  pflow::compute::ParticleSnapshot baseState;
+  double baseSettleWall = 0;
+  if (tileFrom > 0) {
+    auto spec = pflow::bench::bedSpecFor(tileFrom, poly);
+    spec.threads = threads;
+    baseBed = pflow::bench::bedScene(spec);
+    auto base = settle(baseBed, settleSteps, baseSettleWall);
+    if (!base) return 1;
+    baseState = base->snapshot();
+  }
+
+  for (long n : sizes) {
+    pflow::compute::RunConfig cfg;
+    int tx = 1, ty = 1;
+    if (tileFrom > 0) {
+      const double copies = std::max(1.0, double(n) / double(baseState.n));
+      // The tx x ty closest to the copies asked for, as square as possible.
+      double best = 1e300;
+      for (int a = 1; a <= int(std::ceil(std::sqrt(copies))) + 1; ++a) {
+        const int b = std::max(1, int(std::lround(copies / a)));
+        const double miss = std::fabs(double(a) * b - copies) + 1e-3 * std::abs(a - b);
+        if (miss < best) best = miss, tx = std::max(a, b), ty = std::min(a, b);
+      }
+      cfg = pflow::bench::tiledBed(baseBed, baseState, tx, ty);
+    } else {
+      auto spec = pflow::bench::bedSpecFor(n, poly);
+      spec.threads = threads;
+      cfg = pflow::bench::bedScene(spec);
+    }
+    double settleWall = 0;
+    auto simPtr = settle(cfg, tileFrom > 0 ? resettleSteps : settleSteps, settleWall);
+    if (!simPtr) return 1;
+    auto& s = *simPtr;
     const auto before = s.contactStats();
     s.timers().reset();
     const auto rebuilds0 = s.rebuilds();
@@ -111,7 +155,9 @@ int main(int argc, char** argv) {
     nlohmann::json j{{"code", "pflow"}, {"executor", execName}, {"executor_description", s.executorDescription()},
                      {"launch", s.engine().launchReport()}, {"threads", usedThreads}, {"precision", "double"},
                      {"case", caseName}, {"n", s.numParticles()}, {"settle_steps", settleSteps},
-                     {"settle_s", settleWall}, {"steps", steps}, {"wall_s", wall},
+                     {"settle_s", settleWall}, {"tiled_from", tileFrom > 0 ? long(baseState.n) : 0L},
+                     {"tiles", tx * ty}, {"resettle_steps", tileFrom > 0 ? resettleSteps : 0},
+                     {"base_settle_s", baseSettleWall}, {"steps", steps}, {"wall_s", wall},
                      {"particle_steps_per_s", rate}, {"phases_s", phases},
                      {"coordination", before.coordinationNumber}, {"rebuilds", s.rebuilds() - rebuilds0},
                      {"history_slots", s.engine().historySlots()},

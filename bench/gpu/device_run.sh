@@ -38,13 +38,23 @@ fi
 if has bench; then
   "$B/pflow-gpu-bandwidth" > "$OUT/bandwidth.json" 2>&1
   summary+=("bandwidth $(cat "$OUT/bandwidth.json")")
-  for n in ${BENCH_SIZES:-1000000 4000000}; do
-    for poly in "" "--poly"; do
-      "$B/pflow-bench" --executor cuda -n "$n" --settle-steps "${SETTLE:-3000}" --steps "${STEPS:-1000}" --no-lammps \
-        --device "$dev" --commit "$commit" $poly >> "$OUT/bench.jsonl" 2>> "$OUT/bench.log"
-      summary+=("bench n=$n $poly rc=$? $(tail -1 "$OUT/bench.jsonl" | python3 -c 'import json,sys; j=json.loads(sys.stdin.read()); print(f"{j[\"particle_steps_per_s\"]:.3g} p-s/s", {k: round(v,3) for k,v in j["phases_s"].items()}, f"{j[\"device_bytes_per_particle\"]:.0f} B/p")' 2>&1)")
-    done
+  # One settled 200 000-sphere bed per polydispersity, tiled up to each size (bench/README.md).
+  for poly in "" "--poly"; do
+    timeout "${BENCH_TIMEOUT:-240}" "$B/pflow-bench" --executor cuda -n "${BENCH_SIZES:-1000000,4000000}" \
+      --tile-from 200000 --settle-steps "${SETTLE:-30000}" --resettle-steps "${RESETTLE:-1000}" \
+      --steps "${STEPS:-1000}" --no-lammps ${BENCH_ARGS:-} --device "$dev" --commit "$commit" $poly \
+      >> "$OUT/bench.jsonl" 2>> "$OUT/bench.log"
+    summary+=("bench $poly rc=$?")
   done
+  summary+=("$(python3 - "$OUT/bench.jsonl" <<'PY'
+import json, sys
+for line in open(sys.argv[1]):
+    j = json.loads(line)
+    ph = " ".join(f"{k}={v:.3f}" for k, v in j["phases_s"].items())
+    print(f'{j["case"]} {j.get("precision","double")} n={j["n"]} {j["particle_steps_per_s"]:.3g} p-s/s '
+          f'{j["device_bytes_per_particle"]:.0f} B/p coord={j["coordination"]:.2f} slots={j["history_slots"]} {ph}')
+PY
+)")
 fi
 if has layouts; then
   for layout in row column; do

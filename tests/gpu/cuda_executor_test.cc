@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdlib>
+#include <string>
 #include <cmath>
 #include <map>
 #include <random>
@@ -17,8 +19,16 @@ namespace {
 
 using compute::ExecutorKind;
 
+// The executor under test: CUDA where a device is visible. Without one the tests skip, unless
+// PFLOW_GPU_TESTS_ON_CPU=1 asks to run the CPU against itself: a check of the scenes and of the
+// assertions that do not compare executors, on a machine without a GPU.
+ExecutorKind underTest() {
+  if (compute::cudaDeviceCount() > 0) return ExecutorKind::kCuda;
+  const char* self = std::getenv("PFLOW_GPU_TESTS_ON_CPU");
+  return self && std::string(self) == "1" ? ExecutorKind::kCpu : ExecutorKind::kAuto;
+}
 #define SKIP_WITHOUT_GPU() \
-  if (compute::cudaDeviceCount() == 0) GTEST_SKIP() << "no CUDA device"
+  if (underTest() == ExecutorKind::kAuto) GTEST_SKIP() << "no CUDA device"
 
 std::unique_ptr<compute::Simulation> make(const compute::RunConfig& c, ExecutorKind kind) {
   compute::SimulationOptions o;
@@ -55,12 +65,12 @@ compute::RunConfig denseCluster(int n, std::uint64_t seed) {
   c.materials = {material("grain", 5e7, 0.3, 2500, 0.6, 0.4, 0.05), material("steel", 2e11, 0.3, 7800, 0.5, 0.3, 0.02)};
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0, 1);
-  const double rMax = 1e-3, a = 1.9 * rMax;  // lattice pitch below the largest diameter: overlaps
+  const double rMax = 1e-3, a = 1.75 * rMax;  // lattice pitch below most diameters: overlaps up to 40 %
   const int side = int(std::ceil(std::cbrt(double(n))));
   for (int k = 0; k < n; ++k) {
     const int ix = k % side, iy = (k / side) % side, iz = k / (side * side);
-    const double r = rMax * (0.6 + 0.4 * u(rng));
-    addParticle(c, {0.004 + ix * a + 0.1 * rMax * u(rng), 0.004 + iy * a + 0.1 * rMax * u(rng), 0.003 + iz * a}, r,
+    const double r = rMax * (0.8 + 0.2 * u(rng));
+    addParticle(c, {0.004 + ix * a + 0.05 * rMax * u(rng), 0.004 + iy * a + 0.05 * rMax * u(rng), 0.0035 + rMax + iz * a}, r,
                 k % 7 == 0 ? 1 : 0, {0.2 * (u(rng) - 0.5), 0.2 * (u(rng) - 0.5), -0.1 * u(rng)},
                 {50 * (u(rng) - 0.5), 50 * (u(rng) - 0.5), 50 * (u(rng) - 0.5)});
   }
@@ -93,14 +103,16 @@ TEST(CudaExecutor, SameCandidatesForcesAndTrajectoriesAsCpu) {
   SKIP_WITHOUT_GPU();
   const auto cfg = denseCluster(4000, 7);
   auto cpu = make(cfg, ExecutorKind::kCpu);
-  auto gpu = make(cfg, ExecutorKind::kCuda);
+  auto gpu = make(cfg, underTest());
   ASSERT_TRUE(cpu && gpu);
-  EXPECT_NE(gpu->executorDescription().find("CUDA"), std::string::npos) << gpu->executorDescription();
+  if (underTest() == ExecutorKind::kCuda) {
+    EXPECT_NE(gpu->executorDescription().find("CUDA"), std::string::npos) << gpu->executorDescription();
+  }
   std::printf("executor: %s\n", gpu->executorDescription().c_str());
 
   // Identical neighbour candidate sets, as gid pairs.
   const auto pc = cpu->engine().candidatePairs(), pg = gpu->engine().candidatePairs();
-  EXPECT_GT(pc.size(), 10u * 4000);
+  EXPECT_GT(pc.size(), 5u * 4000);
   EXPECT_EQ(pc, pg);
 
   // Forces at t = 0 and after steps with tangential history, rolling and walls: within 1e-12 of the
@@ -151,14 +163,16 @@ TEST(CudaExecutor, ImpactsMatchCpuAcrossRestitution) {
     c.sim.dt = 2e-9;
     c.sim.duration = 1;
     auto cpu = make(c, ExecutorKind::kCpu);
-    auto gpu = make(c, ExecutorKind::kCuda);
+    auto gpu = make(c, underTest());
     ASSERT_TRUE(cpu && gpu);
-    ASSERT_TRUE(cpu->runSteps(5000).isOk());
-    ASSERT_TRUE(gpu->runSteps(5000).isOk());
+    // 4e-5 s: the 1e-5 m gap closes in 2.6e-6 s (sphere-plane) and the Hertz contacts last about 8e-6 s
+    // (sphere-plane) and 6e-6 s (sphere-sphere), so both have ended.
+    ASSERT_TRUE(cpu->runSteps(20000).isOk());
+    ASSERT_TRUE(gpu->runSteps(20000).isOk());
     const auto vc = byGid(cpu->snapshot(), "velocity"), vg = byGid(gpu->snapshot(), "velocity");
     for (Gid g = 0; g < 3; ++g) EXPECT_NEAR(vg.at(g).z, vc.at(g).z, 1e-12 * v) << "e = " << e << ", particle " << g;
     EXPECT_NEAR(vg.at(0).z / v, e, 0.01 * e) << "sphere-plane, e = " << e;
-    EXPECT_NEAR((vg.at(2).z - vg.at(1).z) / (2 * v), e, 0.01 * e) << "sphere-sphere, e = " << e;
+    EXPECT_NEAR((vg.at(1).z - vg.at(2).z) / (2 * v), e, 0.01 * e) << "sphere-sphere, e = " << e;
   }
 }
 
@@ -170,14 +184,15 @@ BedStats bedStats(const compute::Simulation& s, double Lx, double Ly, double d) 
   const auto snap = s.snapshot();
   const Vec3d* x = snap.find("position")->as<Vec3d>();
   const double* r = snap.find("radius")->as<double>();
-  // Sample box: 3 d from the side walls and the floor, up to 6 d; spheres counted by centre (fine
-  // for a box many diameters wide).
-  const double lo = 3 * d, top = 6 * d;
+  // Sample box: 3 d from the side walls, from d above the floor to 2.5 d (the bed of 10 lattice layers
+  // of spheres of mean diameter 0.75 d settles to about 3.7 d); spheres counted by centre (fine for a
+  // box many diameters wide).
+  const double side = 3 * d, bottom = d, top = 2.5 * d;
   double vol = 0;
   for (std::size_t k = 0; k < snap.n; ++k)
-    if (x[k].x > lo && x[k].x < Lx - lo && x[k].y > lo && x[k].y < Ly - lo && x[k].z > lo && x[k].z < top)
+    if (x[k].x > side && x[k].x < Lx - side && x[k].y > side && x[k].y < Ly - side && x[k].z > bottom && x[k].z < top)
       vol += 4.0 / 3.0 * 3.141592653589793 * r[k] * r[k] * r[k];
-  return {vol / ((Lx - 2 * lo) * (Ly - 2 * lo) * (top - lo)), s.contactStats().coordinationNumber};
+  return {vol / ((Lx - 2 * side) * (Ly - 2 * side) * (top - bottom)), s.contactStats().coordinationNumber};
 }
 
 // The 20 000-sphere polydisperse bed of the regression suite, settled on both executors: the same
@@ -193,7 +208,7 @@ TEST(CudaExecutor, SettledBedStatisticsMatchCpu) {
   cfg.materials[0].restitution = 0.3;
   cfg.materials[0].rollingFriction = 0.05;
   auto cpu = make(cfg, ExecutorKind::kCpu);
-  auto gpu = make(cfg, ExecutorKind::kCuda);
+  auto gpu = make(cfg, underTest());
   ASSERT_TRUE(cpu && gpu);
   ASSERT_TRUE(gpu->runSteps(30000).isOk());
   ASSERT_TRUE(cpu->runSteps(30000).isOk());
@@ -219,7 +234,7 @@ TEST(CudaExecutor, BlowUpIsReported) {
   c.planes = {plane({0, 0, 0}, {0, 0, 1}, 0, "floor")};
   c.sim.dt = 3 * compute::rayleighTime(r, 2800, 4.8e10, 0.2);
   c.sim.duration = 2000 * *c.sim.dt;
-  auto gpu = make(c, ExecutorKind::kCuda);
+  auto gpu = make(c, underTest());
   ASSERT_TRUE(gpu);
   const Status s = gpu->runUntil(c.sim.duration);
   ASSERT_FALSE(s.isOk());
