@@ -19,7 +19,7 @@ dev=$(nvidia-smi --query-gpu=name --format=csv,noheader | head -1)
 commit=$(cat .gpuz/commit 2>/dev/null || echo unknown)
 
 if has tests; then
-  for t in cuda_executor_test gpu_kernel_test; do
+  for t in cuda_executor_test; do
     start=$SECONDS
     "$B/$t" > "$OUT/$t.log" 2>&1
     rc=$?

@@ -21,17 +21,21 @@ inline constexpr int kMaxWallContacts = 16;  // simultaneous wall contacts of on
 
 namespace kernels {
 
+// R: the run's precision. Positions are double at both precisions and the contact geometry (separation,
+// distance, overlap, closest point on a wall) is computed in double from them; the physics (relative
+// velocities, forces, torques, history) runs in R.
+template <class R>
 struct ForceArgs {
   // particles
   const Vec3d* pos;
-  const Vec3d* vel;
-  const Vec3d* omega;
-  const double* radius;
-  const double* mass;
+  const Vec3<R>* vel;
+  const Vec3<R>* omega;
+  const R* radius;
+  const R* mass;
   const std::int32_t* material;
   const Gid* gid;
-  Vec3d* force;
-  Vec3d* torque;
+  Vec3<R>* force;
+  Vec3<R>* torque;
   // particle-particle candidates and history
   const Index* nbr;
   std::int8_t* nbrSlot;
@@ -40,7 +44,7 @@ struct ForceArgs {
   ListLayout nbrLayout;
   int slots;
   Gid* histPartner;
-  Vec3d* histDisp;
+  Vec3<R>* histDisp;
   // walls
   const PlaneParams* planes;
   const std::uint32_t* planeMask;  // per particle: planes within r + skin at the last rebuild
@@ -53,7 +57,7 @@ struct ForceArgs {
   Index wallCandCapacity;
   int wallSlots;
   std::uint64_t* wallKey;
-  Vec3d* wallDisp;
+  Vec3<R>* wallDisp;
   // parameters
   const ContactParams* params;  // [matI * numMaterials + matJ]
   int numMaterials;
@@ -74,17 +78,19 @@ struct WallContact {
   bool isFace;
 };
 
+template <class R>
 struct ComputeForces {
-  ForceArgs a;
+  using V = Vec3<R>;
+  ForceArgs<R> a;
 
   PFLOW_HOSTDEVICE void operator()(Index i) const {
     // Local restrict copies: the int8 slot stores could otherwise alias every pointer in `a` and
     // force the compiler to reload them after each store.
     const Vec3d* __restrict__ pos = a.pos;
-    const Vec3d* __restrict__ vel = a.vel;
-    const Vec3d* __restrict__ omega = a.omega;
-    const double* __restrict__ radius = a.radius;
-    const double* __restrict__ mass = a.mass;
+    const V* __restrict__ vel = a.vel;
+    const V* __restrict__ omega = a.omega;
+    const R* __restrict__ radius = a.radius;
+    const R* __restrict__ mass = a.mass;
     const std::int32_t* __restrict__ material = a.material;
     const Gid* __restrict__ gid = a.gid;
     const Index* __restrict__ nbr = a.nbr + std::size_t(i) * a.nbrLayout.rowStride;
@@ -92,15 +98,16 @@ struct ComputeForces {
     const std::size_t col = a.nbrLayout.colStride;
     const int slots = a.slots;
     Gid* __restrict__ partner = a.histPartner + std::size_t(i) * slots;
-    Vec3d* __restrict__ disp = a.histDisp + std::size_t(i) * slots;
+    V* __restrict__ disp = a.histDisp + std::size_t(i) * slots;
     const ContactParams* __restrict__ params = a.params + std::size_t(a.material[i]) * a.numMaterials;
-    const double dt = a.dt;
+    const R dt = R(a.dt);
     const bool storeOnly = a.storeOnly;
 
-    const Vec3d xi = pos[i], vi = vel[i], wi = omega[i];
-    const double ri = radius[i], mi = mass[i];
-    const double Ii = 0.4 * mi * ri * ri;
-    Vec3d f = zero3<double>(), tq = zero3<double>();
+    const Vec3d xi = pos[i];
+    const V vi = vel[i], wi = omega[i];
+    const R ri = radius[i], mi = mass[i];
+    const R Ii = R(0.4) * mi * ri * ri;
+    V f = zero3<R>(), tq = zero3<R>();
 
     // ---- particle-particle ----
     const std::uint32_t count = a.nbrCount[i] < a.nbrCapacity ? a.nbrCount[i] : a.nbrCapacity;
@@ -109,7 +116,8 @@ struct ComputeForces {
     for (std::uint32_t e = 0; e < count; ++e) {
       const Index j = nbr[e * col];
       const Vec3d d = pos[j] - xi;
-      const double rj = radius[j], rs = ri + rj;
+      const R rj = radius[j];
+      const double rs = double(ri) + double(rj);
       const double d2 = norm2(d);
       // Invariant: nbrSlot[e] >= 0 exactly when slot nbrSlot[e] holds j's history (set at rebuild,
       // on claiming, cleared here when the contact ends), so the hot path never reads gid[j].
@@ -122,7 +130,7 @@ struct ComputeForces {
         continue;
       }
       ++contacts;
-      Vec3d xiOld = zero3<double>();
+      V xiOld = zero3<R>();
       if (slot >= 0) {
         if (storeOnly) continue;  // stored by the first pass
         xiOld = disp[slot];
@@ -132,24 +140,24 @@ struct ComputeForces {
         if (storeOnly && slot < 0) continue;
       }
       const double dist = std::sqrt(d2);
-      const Vec3d n = (1.0 / dist) * d;
-      const double overlap = rs - dist;
-      if (overlap > kMaxOverlapRatio * (ri < rj ? ri : rj)) flagDeep(i);
-      const double mj = mass[j];
+      const V n = vcast<R>((1.0 / dist) * d);
+      const R overlap = R(rs - dist);
+      if (overlap > R(kMaxOverlapRatio) * (ri < rj ? ri : rj)) flagDeep(i);
+      const R mj = mass[j];
       const ContactParams& pp = params[material[j]];
-      const double li = ri - 0.5 * overlap, lj = rj - 0.5 * overlap;
-      contact::ContactState<double> s;
+      const R li = ri - R(0.5) * overlap, lj = rj - R(0.5) * overlap;
+      contact::ContactState<R> s;
       s.n = n;
       s.overlap = overlap;
       s.vRel = (vi + cross(wi, li * n)) - (vel[j] + cross(omega[j], -lj * n));
       s.omegaRel = wi - omega[j];
-      s.effRadius = ri * rj / rs;
+      s.effRadius = ri * rj / (ri + rj);
       s.effMass = mi * mj / (mi + mj);
       if (pp.rollingFriction > 0) {
-        const double Ij = 0.4 * mj * rj * rj;
+        const R Ij = R(0.4) * mj * rj * rj;
         s.effInertia = Ii * Ij / (Ii + Ij);
       } else {
-        s.effInertia = 0;  // unused without rolling resistance
+        s.effInertia = R(0);  // unused without rolling resistance
       }
       s.leverArm = li;
       const auto out = contact::hertzMindlin(pp, s, xiOld, dt);
@@ -198,8 +206,8 @@ struct ComputeForces {
     return -1;
   }
 
-  PFLOW_HOSTDEVICE void wallForces(Index i, Vec3d xi, Vec3d vi, Vec3d wi, double ri, double mi, double Ii,
-                                   const ContactParams* params, Vec3d& f, Vec3d& tq) const {
+  PFLOW_HOSTDEVICE void wallForces(Index i, Vec3d xi, V vi, V wi, R ri, R mi, R Ii, const ContactParams* params,
+                                   V& f, V& tq) const {
     WallContact wc[kMaxWallContacts];
     int nwc = 0;
     bool tooMany = false;
@@ -207,10 +215,10 @@ struct ComputeForces {
       const int p = lowestBit(mask);
       const PlaneParams& pl = a.planes[p];
       const double sd = dot(xi - pl.point, pl.normal);
-      if (sd >= ri) continue;
+      if (sd >= double(ri)) continue;
       if (nwc == kMaxWallContacts) { tooMany = true; break; }
-      if (ri - sd > kMaxOverlapRatio * ri) flagDeep(i);
-      wc[nwc++] = {-pl.normal, xi - sd * pl.normal, pl.normal, zero3<double>(), ri - sd, planeKey(Index(p)), pl.material, true};
+      if (double(ri) - sd > kMaxOverlapRatio * double(ri)) flagDeep(i);
+      wc[nwc++] = {-pl.normal, xi - sd * pl.normal, pl.normal, zero3<double>(), double(ri) - sd, planeKey(Index(p)), pl.material, true};
     }
     const std::uint32_t nc = a.wallCandCount[i] < a.wallCandCapacity ? a.wallCandCount[i] : a.wallCandCapacity;
     for (std::uint32_t e = 0; e < nc; ++e) {
@@ -218,20 +226,20 @@ struct ComputeForces {
       const Vec3d* v = a.triVerts + 3 * t;
       const auto cp = geometry::closestPointOnTriangle(xi, v[0], v[1], v[2]);
       const Vec3d dv = cp.point - xi;
-      const double d2 = norm2(dv);
-      if (d2 >= ri * ri) continue;
+      const double d2 = norm2(dv), rid = double(ri);
+      if (d2 >= rid * rid) continue;
       if (nwc == kMaxWallContacts) { tooMany = true; break; }
       const Vec3d fn = geometry::triangleNormal(v[0], v[1], v[2]);
       const double d = std::sqrt(d2);
       const Vec3d n = d > 0 ? (1.0 / d) * dv : -fn;
-      if (ri - d > kMaxOverlapRatio * ri) flagDeep(i);
+      if (rid - d > kMaxOverlapRatio * rid) flagDeep(i);
       const std::int32_t mesh = a.triMesh[t];
-      wc[nwc++] = {n, cp.point, fn, a.meshMotion[mesh].velocityAt(cp.point, a.time), ri - d, triangleKey(mesh, t),
+      wc[nwc++] = {n, cp.point, fn, a.meshMotion[mesh].velocityAt(cp.point, a.time), rid - d, triangleKey(mesh, t),
                    a.triMaterial[t], cp.feature == geometry::Feature::kFace};
     }
     if (tooMany) atomicOrU32(&a.cond->flags, kTooManyWallContacts);
     std::uint64_t* key = a.wallKey + std::size_t(i) * a.wallSlots;
-    Vec3d* disp = a.wallDisp + std::size_t(i) * a.wallSlots;
+    V* disp = a.wallDisp + std::size_t(i) * a.wallSlots;
     if (nwc == 0) {  // no wall contact; forget any that just ended
       if (a.planeMask[i] == 0 && nc == 0) return;  // far from every wall: its slots were cleared at rebuild
       for (int k = 0; k < a.wallSlots; ++k)
@@ -244,7 +252,7 @@ struct ComputeForces {
     // of a kept face contact (the neighbour triangle's rim seen through a flat surface).
     sortByOverlap(wc, nwc);
     bool keep[kMaxWallContacts];
-    const double tol = 1e-9 * ri;
+    const double tol = 1e-9 * double(ri);
     int kept = 0;
     for (int k = 0; k < nwc; ++k) {
       keep[k] = true;
@@ -279,7 +287,7 @@ struct ComputeForces {
             sharesVertex(Index(key[s] & 0xffffffffu), Index(wc[k].key & 0xffffffffu)))
           slotOf[k] = s;  // inherit from the neighbouring triangle just left
       for (int s = 0; s < a.wallSlots && slotOf[k] < 0; ++s)
-        if (key[s] == kNoGid) { slotOf[k] = s; claimedNow[k] = true; disp[s] = zero3<double>(); }  // fresh
+        if (key[s] == kNoGid) { slotOf[k] = s; claimedNow[k] = true; disp[s] = zero3<R>(); }  // fresh
       if (slotOf[k] < 0) overflow = true;
       else { key[slotOf[k]] = wc[k].key; matched[slotOf[k]] = true; }
     }
@@ -295,18 +303,20 @@ struct ComputeForces {
       const WallContact& c = wc[k];
       const int s = slotOf[k];
       if (a.storeOnly && !claimedNow[k]) continue;  // the first pass handled it
-      const double li = ri - 0.5 * c.overlap;
-      contact::ContactState<double> st;
-      st.n = c.n;
-      st.overlap = c.overlap;
-      st.vRel = (vi + cross(wi, li * c.n)) - c.wallVel;
+      const R overlap = R(c.overlap);
+      const R li = ri - R(0.5) * overlap;
+      const V n = vcast<R>(c.n);
+      contact::ContactState<R> st;
+      st.n = n;
+      st.overlap = overlap;
+      st.vRel = (vi + cross(wi, li * n)) - vcast<R>(c.wallVel);
       st.omegaRel = wi;
       st.effRadius = ri;
       st.effMass = mi;
       st.effInertia = Ii;
       st.leverArm = li;
-      const Vec3d xiOld = s >= 0 ? disp[s] : zero3<double>();
-      const auto out = contact::hertzMindlin(params[c.material], st, xiOld, a.dt);
+      const V xiOld = s >= 0 ? disp[s] : zero3<R>();
+      const auto out = contact::hertzMindlin(params[c.material], st, xiOld, R(a.dt));
       f += out.force;
       tq += out.torque;
       if (s >= 0) disp[s] = out.history;

@@ -30,6 +30,8 @@ template <class T> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE bool isFinite(Vec3<T> a) {
   return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
 }
 template <class T> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE Vec3<T> zero3() { return {T(0), T(0), T(0)}; }
+// Converts between precisions (float runs keep positions in double, everything else in float).
+template <class T, class U> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE Vec3<T> vcast(Vec3<U> a) { return {T(a.x), T(a.y), T(a.z)}; }
 
 // Rotates v about the unit axis k by angle a (Rodrigues).
 template <class T>

@@ -5,7 +5,8 @@
 
 namespace pflow::compute {
 
-template class EngineImpl<cuda::CudaExecutor>;
+template class EngineImpl<cuda::CudaExecutor, double>;
+template class EngineImpl<cuda::CudaExecutor, float>;
 
 int cudaDeviceCount() {
   int n = 0;
@@ -19,7 +20,7 @@ int cudaDeviceCount() {
 
 bool cudaBuiltIn() { return true; }
 
-Result<std::unique_ptr<Engine>> makeCudaEngine(EngineSetup setup, int device) {
+Result<std::unique_ptr<Engine>> makeCudaEngine(EngineSetup setup, int device, bool singlePrecision) {
   const int count = cudaDeviceCount();
   if (count == 0) return Status(StatusCode::kFailedPrecondition, "--executor cuda: no CUDA device is visible to this process");
   if (device < 0 || device >= count)
@@ -27,7 +28,9 @@ Result<std::unique_ptr<Engine>> makeCudaEngine(EngineSetup setup, int device) {
                            " visible)");
   try {
     PFLOW_CUDA_CHECK(cudaSetDevice(device));
-    return std::unique_ptr<Engine>(std::make_unique<EngineImpl<cuda::CudaExecutor>>(std::move(setup)));
+    if (singlePrecision)
+      return std::unique_ptr<Engine>(std::make_unique<EngineImpl<cuda::CudaExecutor, float>>(std::move(setup)));
+    return std::unique_ptr<Engine>(std::make_unique<EngineImpl<cuda::CudaExecutor, double>>(std::move(setup)));
   } catch (const std::exception& e) {
     return Status(StatusCode::kResourceExhausted, e.what());
   }

@@ -6,7 +6,7 @@ namespace pflow::compute {
 int cudaDeviceCount() { return 0; }
 bool cudaBuiltIn() { return false; }
 
-Result<std::unique_ptr<Engine>> makeCudaEngine(EngineSetup, int) {
+Result<std::unique_ptr<Engine>> makeCudaEngine(EngineSetup, int, bool) {
   return Status(StatusCode::kFailedPrecondition,
                 "--executor cuda: this pflow was built without CUDA (nvcc was not found at configure time)");
 }

@@ -127,6 +127,8 @@ struct SortBins {
 
 // Walls near particle i at rebuild time: planes within r_i + skin (a bit mask) and triangles within
 // r_i + skin (from its cell's bin). Wall-history slots of walls no longer near are cleared.
+// R: the precision of the radii.
+template <class R>
 struct WallCandidates {
   CellGrid grid;
   const PlaneParams* planes;
@@ -135,7 +137,7 @@ struct WallCandidates {
   const Index* binItems;
   const Vec3d* verts;
   const Vec3d* pos;
-  const double* radius;
+  const R* radius;
   double skin;
   Index capacity;
   Index* cand;               // [i * capacity + e]
@@ -146,7 +148,7 @@ struct WallCandidates {
   Conditions* cond;
   PFLOW_HOSTDEVICE void operator()(Index i) const {
     const Vec3d x = pos[i];
-    const double cut = radius[i] + skin;
+    const double cut = double(radius[i]) + skin;
     std::uint32_t mask = 0;
     for (int p = 0; p < numPlanes; ++p)
       if (dot(x - planes[p].point, planes[p].normal) < cut) mask |= 1u << p;

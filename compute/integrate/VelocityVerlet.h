@@ -11,36 +11,39 @@
 
 namespace pflow::compute::kernels {
 
+// R: the run's precision for velocities, spins, forces, radius and mass; positions are double.
+template <class R>
 struct IntegrateArgs {
   Vec3d* pos;
-  Vec3d* vel;
-  Vec3d* omega;
-  const Vec3d* force;
-  const Vec3d* torque;
-  const double* radius;
-  const double* mass;
+  Vec3<R>* vel;
+  Vec3<R>* omega;
+  const Vec3<R>* force;
+  const Vec3<R>* torque;
+  const R* radius;
+  const R* mass;
   const Vec3d* refPos;  // positions at the last neighbour rebuild
   Vec3d gravity;
   double dt;
   Conditions* cond;
 
   // Half kick of particle i: v += (F/m + g) dt/2 and w += T/I dt/2, with I = (2/5) m r^2.
-  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void halfKick(Index i, Vec3d& v, Vec3d& w) const {
-    const double h = 0.5 * dt;
-    const double invM = 1.0 / mass[i];
-    const double invI = invM / (0.4 * radius[i] * radius[i]);
-    v = vel[i] + h * (invM * force[i] + gravity);
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void halfKick(Index i, Vec3<R>& v, Vec3<R>& w) const {
+    const R h = R(0.5 * dt);
+    const R invM = R(1) / mass[i];
+    const R invI = invM / (R(0.4) * radius[i] * radius[i]);
+    v = vel[i] + h * (invM * force[i] + vcast<R>(gravity));
     w = omega[i] + (h * invI) * torque[i];
   }
 };
 
 // Returns the squared displacement since the last rebuild (for the skin criterion).
+template <class R>
 struct IntegrateFirstHalf {
-  IntegrateArgs a;
+  IntegrateArgs<R> a;
   PFLOW_HOSTDEVICE double operator()(Index i) const {
-    Vec3d v, w;
+    Vec3<R> v, w;
     a.halfKick(i, v, w);
-    const Vec3d x = a.pos[i] + a.dt * v;
+    const Vec3d x = a.pos[i] + a.dt * vcast<double>(v);
     a.vel[i] = v;
     a.pos[i] = x;
     a.omega[i] = w;
@@ -48,16 +51,18 @@ struct IntegrateFirstHalf {
   }
 };
 
+template <class R>
 struct IntegrateSecondHalf {
-  IntegrateArgs a;
+  IntegrateArgs<R> a;
   PFLOW_HOSTDEVICE void operator()(Index i) const {
-    Vec3d v, w;
+    Vec3<R> v, w;
     a.halfKick(i, v, w);
     a.vel[i] = v;
     a.omega[i] = w;
     // One test on a sum: NaN and infinity propagate through it, so it is finite only if every term is.
-    const Vec3d x = a.pos[i], f = a.force[i], t = a.torque[i];
-    const double sum = x.x + x.y + x.z + v.x + v.y + v.z + w.x + w.y + w.z + f.x + f.y + f.z + t.x + t.y + t.z;
+    const Vec3d x = a.pos[i];
+    const Vec3<R> f = a.force[i], t = a.torque[i];
+    const R sum = R(x.x + x.y + x.z) + v.x + v.y + v.z + w.x + w.y + w.z + f.x + f.y + f.z + t.x + t.y + t.z;
     if (!std::isfinite(sum)) {
       atomicOrU32(&a.cond->flags, kNonFinite);
       atomicMinU32(&a.cond->badParticle, i);

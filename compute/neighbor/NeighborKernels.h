@@ -65,12 +65,13 @@ struct CopyPositions {
 // Candidates j of particle i with |x_i - x_j| < r_i + r_j + skin, in fixed-stride rows of `capacity`.
 // Each candidate's history slot (the slot of i holding j's gid, or -1) is resolved here, so the
 // force loop reaches its history directly; slots whose partner is no longer a candidate (it moved
-// beyond the skin, so the contact has ended) are cleared.
+// beyond the skin, so the contact has ended) are cleared. R: the precision of the radii.
+template <class R>
 struct BuildNeighbors {
   CellGrid grid;
   const Index* cellStart;  // numCells + 1
   const Vec3d* pos;
-  const double* radius;
+  const R* radius;
   const Gid* gid;
   Gid* historyPartner;  // [i * slots + k]
   int slots;
@@ -84,7 +85,7 @@ struct BuildNeighbors {
 
   PFLOW_HOSTDEVICE void operator()(Index i) const {
     const Vec3d xi = pos[i];
-    const double ri = radius[i] + skin;
+    const double ri = double(radius[i]) + skin;
     int cx, cy, cz;
     grid.coords(xi, cx, cy, cz);
     std::uint32_t count = 0;
@@ -102,7 +103,7 @@ struct BuildNeighbors {
           const std::uint32_t c = grid.index(x, y, z);
           for (Index j = cellStart[c]; j < cellStart[c + 1]; ++j) {
             if (j == i) continue;
-            const double cut = ri + radius[j];
+            const double cut = ri + double(radius[j]);
             if (norm2(pos[j] - xi) >= cut * cut) continue;
             if (count < capacity) {
               nbr[row + count * col] = j;

@@ -5,12 +5,14 @@
 
 namespace pflow::compute {
 
-void ParticleData::resizeSlots(Multiplicity kind, int newSlots) {
+template <class R>
+void ParticleData<R>::resizeSlots(Multiplicity kind, int newSlots) {
   const int oldSlots = kind == Multiplicity::kContactSlots ? m_contactSlots : m_wallSlots;
   if (newSlots == oldSlots) return;
   // Slot layout is [particle][slot]; re-stride on the host side of the memory space. This is a rare,
   // growth-only event, so a round trip through host memory is acceptable and keeps it executor-neutral.
-  for (const auto& f : kFieldTable) {
+  for (int k = 0; k < kNumFields; ++k) {
+    const FieldInfo& f = kTable[k];
     if (f.multiplicity != kind) continue;
     const std::size_t oldStride = f.elementBytes * std::size_t(oldSlots);
     const std::size_t newStride = f.elementBytes * std::size_t(newSlots);
@@ -27,5 +29,8 @@ void ParticleData::resizeSlots(Multiplicity kind, int newSlots) {
   }
   (kind == Multiplicity::kContactSlots ? m_contactSlots : m_wallSlots) = newSlots;
 }
+
+template class ParticleData<float>;
+template class ParticleData<double>;
 
 }  // namespace pflow::compute

@@ -1,5 +1,5 @@
 // Particle state as structure-of-arrays in the executor's memory, one Buffer per entry of the field
-// table. Slot fields (contact history) hold `slots` values per particle.
+// table at the run's precision R. Slot fields (contact history) hold `slots` values per particle.
 #pragma once
 #include <array>
 #include <cstdint>
@@ -9,8 +9,11 @@
 
 namespace pflow::compute {
 
+template <class R>
 class ParticleData {
  public:
+  static constexpr const FieldInfo* kTable = kFieldTableOf<R>;
+
   explicit ParticleData(MemorySpace& space) : m_space(&space) {
     for (auto& b : m_fields) b.bind(space);
   }
@@ -24,7 +27,7 @@ class ParticleData {
     m_n = n;
     m_contactSlots = contactSlots;
     m_wallSlots = wallSlots;
-    for (const auto& f : kFieldTable) m_fields[int(f.id)].resize(fieldBytes(f, n));
+    for (int k = 0; k < kNumFields; ++k) m_fields[k].resize(fieldBytes(kTable[k], n));
   }
 
   std::size_t valuesPerParticle(const FieldInfo& f) const {
@@ -38,10 +41,10 @@ class ParticleData {
   std::size_t strideBytes(const FieldInfo& f) const { return f.elementBytes * valuesPerParticle(f); }
   std::size_t fieldBytes(const FieldInfo& f, Index n) const { return strideBytes(f) * n; }
 
-  template <Field F> typename FieldType<F>::type* ptr() { return m_fields[int(F)].as<typename FieldType<F>::type>(); }
-  template <Field F> const typename FieldType<F>::type* ptr() const {
-    return m_fields[int(F)].as<typename FieldType<F>::type>();
-  }
+  template <Field F> using Type = typename FieldType<F, R>::type;
+  template <Field F> Type<F>* ptr() { return m_fields[int(F)].template as<Type<F>>(); }
+  template <Field F> const Type<F>* ptr() const { return m_fields[int(F)].template as<Type<F>>(); }
+  const FieldInfo& info(Field f) const { return kTable[int(f)]; }
   Buffer& buffer(Field f) { return m_fields[int(f)]; }
   const Buffer& buffer(Field f) const { return m_fields[int(f)]; }
 
@@ -51,7 +54,7 @@ class ParticleData {
 
   std::size_t bytesPerParticle() const {
     std::size_t b = 0;
-    for (const auto& f : kFieldTable) b += strideBytes(f);
+    for (int k = 0; k < kNumFields; ++k) b += strideBytes(kTable[k]);
     return b;
   }
 

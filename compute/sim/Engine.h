@@ -59,6 +59,7 @@ class Engine {
  public:
   virtual ~Engine() = default;
   virtual std::string executorDescription() const = 0;
+  virtual const char* precisionName() const = 0;  // "float" or "double" (simulation.precision)
   virtual std::size_t size() const = 0;
 
   // Phases, in step order. The first two return the largest squared displacement since the last
@@ -87,11 +88,12 @@ class Engine {
   virtual std::vector<std::string> launchReport() const = 0;
 };
 
-std::unique_ptr<Engine> makeCpuEngine(EngineSetup setup);
+// `singlePrecision`: float physics (simulation.precision: float); positions stay double.
+std::unique_ptr<Engine> makeCpuEngine(EngineSetup setup, bool singlePrecision = false);
 
 // The CUDA engine on `device` (compute/cuda/CudaEngine.cu). An error, never a fall-back, where this pflow
 // was built without CUDA or the device is missing.
-Result<std::unique_ptr<Engine>> makeCudaEngine(EngineSetup setup, int device);
+Result<std::unique_ptr<Engine>> makeCudaEngine(EngineSetup setup, int device, bool singlePrecision = false);
 // Usable CUDA devices: 0 without CUDA in the build, a driver or a GPU.
 int cudaDeviceCount();
 bool cudaBuiltIn();

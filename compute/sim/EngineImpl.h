@@ -1,5 +1,6 @@
-// Engine over any executor: the phases as launches of the kernel functors. Instantiated for the
-// OpenMP executor in CpuEngine.cc (and for CUDA in CudaEngine.cu when that executor lands).
+// Engine over any executor and precision: the phases as launches of the kernel functors. Instantiated
+// for the OpenMP executor in CpuEngine.cc and for CUDA in CudaEngine.cu, each in float and double
+// (R: velocities, spins, forces, torques, radii, masses and history; positions are double in both).
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -7,6 +8,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "compute/contact/ForceKernel.h"
@@ -27,22 +29,25 @@ struct Fill {
 };
 }  // namespace kernels
 
-template <class Exec>
+template <class Exec, class R>
 class EngineImpl final : public Engine {
  public:
+  using V = Vec3<R>;
+
   explicit EngineImpl(EngineSetup s)
       : m_exec(s.threads), m_mem(m_exec.memory()), m_particles(m_mem), m_setup(std::move(s)) {
     init();
   }
 
   std::string executorDescription() const override { return m_exec.description(); }
+  const char* precisionName() const override { return sizeof(R) == 4 ? "float" : "double"; }
   std::size_t size() const override { return m_n; }
   int historySlots() const override { return m_particles.contactSlots(); }
   int wallHistorySlots() const override { return m_particles.wallSlots(); }
   std::size_t deviceBytes() const override { return m_mem.bytesInUse(); }
 
   double integrateFirstHalf(double dt) override {
-    return m_exec.maxOf(m_n, kernels::IntegrateFirstHalf{integrateArgs(dt)});
+    return m_exec.maxOf(m_n, kernels::IntegrateFirstHalf<R>{integrateArgs(dt)});
   }
 
   double moveMeshes(double time) override {
@@ -54,14 +59,14 @@ class EngineImpl final : public Engine {
 
   void sortByCell() override {
     const CellGrid& g = m_setup.grid;
-    m_exec.forEach(m_n, kernels::CellKey{g, m_particles.ptr<Field::Position>(), m_cellKey.as<std::uint32_t>()});
+    m_exec.forEach(m_n, kernels::CellKey{g, m_particles.template ptr<Field::Position>(), m_cellKey.as<std::uint32_t>()});
     m_exec.sortByKey(m_cellKey.as<std::uint32_t>(), m_n, g.numCells(), m_perm.as<Index>(), m_cellStart.as<Index>());
     // Reorder every field of the table by the permutation, through one scratch buffer of the largest
     // field's size (allocated once, not per field and rebuild).
     std::size_t largest = 0;
-    for (const auto& f : kFieldTable) largest = std::max(largest, m_particles.buffer(f.id).bytes());
+    for (const auto& f : kFieldTableOf<R>) largest = std::max(largest, m_particles.buffer(f.id).bytes());
     if (m_scratch.bytes() < largest) m_scratch.resize(largest);
-    for (const auto& f : kFieldTable) {
+    for (const auto& f : kFieldTableOf<R>) {
       Buffer& field = m_particles.buffer(f.id);
       m_exec.forEach(m_n, kernels::GatherBytes{field.template as<unsigned char>(), m_scratch.as<unsigned char>(),
                                                m_perm.as<Index>(), m_particles.strideBytes(f)});
@@ -71,7 +76,7 @@ class EngineImpl final : public Engine {
 
   Status buildContacts() override {
     // Positions and vertices now are the reference for the skin criterion.
-    m_exec.forEach(m_n, kernels::CopyPositions{m_particles.ptr<Field::Position>(), m_refPos.as<Vec3d>()});
+    m_exec.forEach(m_n, kernels::CopyPositions{m_particles.template ptr<Field::Position>(), m_refPos.as<Vec3d>()});
     // Static meshes are binned once; moving ones at every rebuild, from where they are now.
     if (m_numTri && (m_anyMeshMoves || !m_binned)) {
       m_mem.copyWithin(m_triRebuild.data(), m_triVerts.data(), m_triVerts.bytes());
@@ -80,19 +85,19 @@ class EngineImpl final : public Engine {
     }
     for (;;) {
       resetConditions();
-      m_exec.forEach(m_n, kernels::BuildNeighbors{m_setup.grid, m_cellStart.as<Index>(),
-                                                  m_particles.ptr<Field::Position>(), m_particles.ptr<Field::Radius>(),
-                                                  m_particles.ptr<Field::Gid>(),
-                                                  m_particles.ptr<Field::HistoryPartner>(),
+      m_exec.forEach(m_n, kernels::BuildNeighbors<R>{m_setup.grid, m_cellStart.as<Index>(),
+                                                  m_particles.template ptr<Field::Position>(), m_particles.template ptr<Field::Radius>(),
+                                                  m_particles.template ptr<Field::Gid>(),
+                                                  m_particles.template ptr<Field::HistoryPartner>(),
                                                   m_particles.contactSlots(), m_setup.skin, m_nbrCap,
                                                   nbrLayout(), m_nbr.as<Index>(), m_nbrSlot.as<std::int8_t>(),
                                                   m_nbrCount.as<std::uint32_t>(), m_cond.as<Conditions>()});
-      m_exec.forEach(m_n, kernels::WallCandidates{m_setup.grid, m_planes.as<PlaneParams>(), int(m_setup.planes.size()),
+      m_exec.forEach(m_n, kernels::WallCandidates<R>{m_setup.grid, m_planes.as<PlaneParams>(), int(m_setup.planes.size()),
                                                   m_numTri ? m_binStart.as<Index>() : nullptr, m_binItems.as<Index>(),
-                                                  m_triVerts.as<Vec3d>(), m_particles.ptr<Field::Position>(),
-                                                  m_particles.ptr<Field::Radius>(), m_setup.skin, m_wallCap,
+                                                  m_triVerts.as<Vec3d>(), m_particles.template ptr<Field::Position>(),
+                                                  m_particles.template ptr<Field::Radius>(), m_setup.skin, m_wallCap,
                                                   m_wallCand.as<Index>(), m_wallCandCount.as<std::uint32_t>(),
-                                                  m_planeMask.as<std::uint32_t>(), m_particles.ptr<Field::WallKey>(),
+                                                  m_planeMask.as<std::uint32_t>(), m_particles.template ptr<Field::WallKey>(),
                                                   m_particles.wallSlots(), m_cond.as<Conditions>()});
       const Conditions c = readConditions();
       if (!(c.flags & (kNeighborOverflow | kWallCandidateOverflow))) break;
@@ -111,7 +116,7 @@ class EngineImpl final : public Engine {
 
   Status computeForces(double dt, double time) override {
     resetConditions();
-    m_exec.forEach(m_n, kernels::ComputeForces{forceArgs(dt, time, false)});
+    m_exec.forEach(m_n, kernels::ComputeForces<R>{forceArgs(dt, time, false)});
     Conditions c = readConditions();
     if (c.flags & kExcessiveOverlap) return deepOverlapError(c.deepParticle);
     if (c.flags & kTooManyWallContacts)
@@ -136,7 +141,7 @@ class EngineImpl final : public Engine {
         m_particles.resizeSlots(Multiplicity::kWallSlots, grown);
       }
       resetConditions();
-      m_exec.forEach(m_n, kernels::ComputeForces{forceArgs(dt, time, true)});
+      m_exec.forEach(m_n, kernels::ComputeForces<R>{forceArgs(dt, time, true)});
       c = readConditions();
     }
     return Status::ok();
@@ -144,7 +149,7 @@ class EngineImpl final : public Engine {
 
   Status integrateSecondHalf(double dt) override {
     resetConditions();
-    m_exec.forEach(m_n, kernels::IntegrateSecondHalf{integrateArgs(dt)});
+    m_exec.forEach(m_n, kernels::IntegrateSecondHalf<R>{integrateArgs(dt)});
     const Conditions c = readConditions();
     if (c.flags & kNonFinite) return nonFiniteError(c.badParticle);
     return Status::ok();
@@ -155,12 +160,22 @@ class EngineImpl final : public Engine {
     s.step = step;
     s.time = time;
     s.n = m_n;
-    for (const auto& f : kFieldTable) {
+    // Output is double at both precisions (one file layout): float fields are widened on the host.
+    for (const auto& f : kFieldTableOf<R>) {
       if (!(f.flags & kSnapshot)) continue;
       if (!fields.empty() && std::find(fields.begin(), fields.end(), f.name) == fields.end()) continue;
       SnapshotArray a{f.name, f.scalar, f.components, f.unit, {}};
       a.data.resize(m_particles.fieldBytes(f, m_n));
       m_mem.copyToHost(a.data.data(), m_particles.buffer(f.id).data(), a.data.size());
+      if (f.scalar == ScalarType::kF32) {
+        const std::size_t values = a.data.size() / sizeof(float);
+        std::vector<std::byte> wide(values * sizeof(double));
+        const float* from = reinterpret_cast<const float*>(a.data.data());
+        double* to = reinterpret_cast<double*>(wide.data());
+        for (std::size_t k = 0; k < values; ++k) to[k] = from[k];
+        a.data = std::move(wide);
+        a.type = ScalarType::kF64;
+      }
       s.arrays.push_back(std::move(a));
     }
     return s;
@@ -194,7 +209,7 @@ class EngineImpl final : public Engine {
     std::vector<Gid> gid(m_n);
     m_mem.copyToHost(nbr.data(), m_nbr.data(), nbr.size() * sizeof(Index));
     m_mem.copyToHost(cnt.data(), m_nbrCount.data(), cnt.size() * sizeof(std::uint32_t));
-    m_mem.copyToHost(gid.data(), m_particles.ptr<Field::Gid>(), gid.size() * sizeof(Gid));
+    m_mem.copyToHost(gid.data(), m_particles.template ptr<Field::Gid>(), gid.size() * sizeof(Gid));
     std::vector<std::pair<Gid, Gid>> pairs;
     for (Index i = 0; i < m_n; ++i)
       for (std::uint32_t e = 0; e < std::min<std::uint32_t>(cnt[i], m_nbrCap); ++e)
@@ -233,31 +248,31 @@ class EngineImpl final : public Engine {
   Status nonFiniteError(Index i) const;
   Status deepOverlapError(Index i) const;
 
-  kernels::IntegrateArgs integrateArgs(double dt) {
-    return {m_particles.ptr<Field::Position>(), m_particles.ptr<Field::Velocity>(),
-            m_particles.ptr<Field::AngularVelocity>(), m_particles.ptr<Field::Force>(),
-            m_particles.ptr<Field::Torque>(), m_particles.ptr<Field::Radius>(), m_particles.ptr<Field::Mass>(),
+  kernels::IntegrateArgs<R> integrateArgs(double dt) {
+    return {m_particles.template ptr<Field::Position>(), m_particles.template ptr<Field::Velocity>(),
+            m_particles.template ptr<Field::AngularVelocity>(), m_particles.template ptr<Field::Force>(),
+            m_particles.template ptr<Field::Torque>(), m_particles.template ptr<Field::Radius>(), m_particles.template ptr<Field::Mass>(),
             m_refPos.as<Vec3d>(), m_setup.gravity, dt, m_cond.as<Conditions>()};
   }
-  kernels::ForceArgs forceArgs(double dt, double time, bool storeOnly) {
-    kernels::ForceArgs a{};
-    a.pos = m_particles.ptr<Field::Position>();
-    a.vel = m_particles.ptr<Field::Velocity>();
-    a.omega = m_particles.ptr<Field::AngularVelocity>();
-    a.radius = m_particles.ptr<Field::Radius>();
-    a.mass = m_particles.ptr<Field::Mass>();
-    a.material = m_particles.ptr<Field::Material>();
-    a.gid = m_particles.ptr<Field::Gid>();
-    a.force = m_particles.ptr<Field::Force>();
-    a.torque = m_particles.ptr<Field::Torque>();
+  kernels::ForceArgs<R> forceArgs(double dt, double time, bool storeOnly) {
+    kernels::ForceArgs<R> a{};
+    a.pos = m_particles.template ptr<Field::Position>();
+    a.vel = m_particles.template ptr<Field::Velocity>();
+    a.omega = m_particles.template ptr<Field::AngularVelocity>();
+    a.radius = m_particles.template ptr<Field::Radius>();
+    a.mass = m_particles.template ptr<Field::Mass>();
+    a.material = m_particles.template ptr<Field::Material>();
+    a.gid = m_particles.template ptr<Field::Gid>();
+    a.force = m_particles.template ptr<Field::Force>();
+    a.torque = m_particles.template ptr<Field::Torque>();
     a.nbr = m_nbr.as<Index>();
     a.nbrSlot = m_nbrSlot.as<std::int8_t>();
     a.nbrCount = m_nbrCount.as<std::uint32_t>();
     a.nbrCapacity = m_nbrCap;
     a.nbrLayout = nbrLayout();
     a.slots = m_particles.contactSlots();
-    a.histPartner = m_particles.ptr<Field::HistoryPartner>();
-    a.histDisp = m_particles.ptr<Field::HistoryDisp>();
+    a.histPartner = m_particles.template ptr<Field::HistoryPartner>();
+    a.histDisp = m_particles.template ptr<Field::HistoryDisp>();
     a.planes = m_planes.as<PlaneParams>();
     a.planeMask = m_planeMask.as<std::uint32_t>();
     a.triVerts = m_triVerts.as<Vec3d>();
@@ -268,8 +283,8 @@ class EngineImpl final : public Engine {
     a.wallCandCount = m_wallCandCount.as<std::uint32_t>();
     a.wallCandCapacity = m_wallCap;
     a.wallSlots = m_particles.wallSlots();
-    a.wallKey = m_particles.ptr<Field::WallKey>();
-    a.wallDisp = m_particles.ptr<Field::WallDisp>();
+    a.wallKey = m_particles.template ptr<Field::WallKey>();
+    a.wallDisp = m_particles.template ptr<Field::WallDisp>();
     a.params = m_params.as<ContactParams>();
     a.numMaterials = m_setup.numMaterials;
     a.dt = dt;
@@ -287,7 +302,7 @@ class EngineImpl final : public Engine {
 
   Exec m_exec;
   MemorySpace& m_mem;
-  ParticleData m_particles;
+  ParticleData<R> m_particles;
   EngineSetup m_setup;
   Index m_n = 0;
   Index m_numTri = 0;
@@ -306,28 +321,36 @@ class EngineImpl final : public Engine {
   Buffer m_params{m_mem, 0}, m_cond{m_mem, sizeof(Conditions)};
 };
 
-template <class Exec>
-void EngineImpl<Exec>::init() {
+template <class Exec, class R>
+void EngineImpl<Exec, R>::init() {
   const EngineSetup& s = m_setup;
   m_n = Index(s.position.size());
   m_numTri = Index(s.triMesh.size());
   m_particles.allocate(m_n, s.historySlots, s.wallHistorySlots);
   if (const char* layout = std::getenv("PFLOW_LIST_LAYOUT")) m_columnMajor = std::string(layout) == "column";
-  std::vector<Vec3d> zeros(m_n, Vec3d{0, 0, 0});
   std::vector<Gid> gids(m_n);
   for (Index i = 0; i < m_n; ++i) gids[i] = i;
-  auto put = [&](Field f, const void* src) {
-    m_mem.copyFromHost(m_particles.buffer(f).data(), src, m_particles.buffer(f).bytes());
+  // Host values (double) converted to the field's type at the run's precision; empty = zero.
+  auto put = [&]<Field F, class T>(std::integral_constant<Field, F>, const std::vector<T>& src) {
+    using Dst = typename ParticleData<R>::template Type<F>;
+    std::vector<Dst> v(m_n);
+    for (Index i = 0; i < m_n && !src.empty(); ++i) {
+      if constexpr (std::is_same_v<T, Vec3d>) v[i] = vcast<typename FieldType<F, R>::Real>(src[i]);
+      else v[i] = Dst(src[i]);
+    }
+    if (src.empty()) std::memset(static_cast<void*>(v.data()), 0, v.size() * sizeof(Dst));
+    m_mem.copyFromHost(m_particles.buffer(F).data(), v.data(), v.size() * sizeof(Dst));
   };
-  put(Field::Position, s.position.data());
-  put(Field::Velocity, s.velocity.empty() ? zeros.data() : s.velocity.data());
-  put(Field::AngularVelocity, s.angularVelocity.empty() ? zeros.data() : s.angularVelocity.data());
-  put(Field::Force, zeros.data());
-  put(Field::Torque, zeros.data());
-  put(Field::Radius, s.radius.data());
-  put(Field::Mass, s.mass.data());
-  put(Field::Material, s.material.data());
-  put(Field::Gid, gids.data());
+  m_mem.copyFromHost(m_particles.buffer(Field::Position).data(), s.position.data(), s.position.size() * sizeof(Vec3d));
+  const std::vector<Vec3d> none;
+  put(std::integral_constant<Field, Field::Velocity>{}, s.velocity);
+  put(std::integral_constant<Field, Field::AngularVelocity>{}, s.angularVelocity);
+  put(std::integral_constant<Field, Field::Force>{}, none);
+  put(std::integral_constant<Field, Field::Torque>{}, none);
+  put(std::integral_constant<Field, Field::Radius>{}, s.radius);
+  put(std::integral_constant<Field, Field::Mass>{}, s.mass);
+  put(std::integral_constant<Field, Field::Material>{}, s.material);
+  put(std::integral_constant<Field, Field::Gid>{}, gids);
   for (Field f : {Field::HistoryPartner, Field::WallKey})
     m_mem.fillBytes(m_particles.buffer(f).data(), 0xFF, m_particles.buffer(f).bytes());
   for (Field f : {Field::HistoryDisp, Field::WallDisp})
@@ -357,8 +380,8 @@ void EngineImpl<Exec>::init() {
   allocWallCandidates();
 }
 
-template <class Exec>
-void EngineImpl<Exec>::binTriangles() {
+template <class Exec, class R>
+void EngineImpl<Exec, R>::binTriangles() {
   const CellGrid& g = m_setup.grid;
   const double margin = m_setup.maxRadius + m_setup.skin;
   const std::uint32_t nc = g.numCells();
@@ -375,16 +398,16 @@ void EngineImpl<Exec>::binTriangles() {
   m_exec.forEach(nc, kernels::SortBins{m_binStart.as<Index>(), m_binItems.as<Index>()});
 }
 
-template <class Exec>
-Status EngineImpl<Exec>::nonFiniteError(Index i) const {
+template <class Exec, class R>
+Status EngineImpl<Exec, R>::nonFiniteError(Index i) const {
   const ParticleSnapshot s = snapshot(0, 0, {});
   auto vec = [&](const char* name) {
     const Vec3d v = s.find(name)->template as<Vec3d>()[i];
     return std::string(name) + " (" + std::to_string(v.x) + ", " + std::to_string(v.y) + ", " + std::to_string(v.z) + ")";
   };
-  Vec3d f, t;
-  m_mem.copyToHost(&f, m_particles.ptr<Field::Force>() + i, sizeof f);
-  m_mem.copyToHost(&t, m_particles.ptr<Field::Torque>() + i, sizeof t);
+  V f, t;
+  m_mem.copyToHost(&f, m_particles.template ptr<Field::Force>() + i, sizeof f);
+  m_mem.copyToHost(&t, m_particles.template ptr<Field::Torque>() + i, sizeof t);
   const Gid gid = s.find("id")->template as<Gid>()[i];
   std::string what;
   for (const char* name : {"position", "velocity", "angular_velocity"})
@@ -394,37 +417,39 @@ Status EngineImpl<Exec>::nonFiniteError(Index i) const {
   return numericalError("particle " + std::to_string(gid) + " has a non-finite " + what);
 }
 
-template <class Exec>
-Status EngineImpl<Exec>::deepOverlapError(Index i) const {
+template <class Exec, class R>
+Status EngineImpl<Exec, R>::deepOverlapError(Index i) const {
   Gid gid;
-  double r;
-  Vec3d x, v;
-  m_mem.copyToHost(&gid, m_particles.ptr<Field::Gid>() + i, sizeof gid);
-  m_mem.copyToHost(&r, m_particles.ptr<Field::Radius>() + i, sizeof r);
-  m_mem.copyToHost(&x, m_particles.ptr<Field::Position>() + i, sizeof x);
-  m_mem.copyToHost(&v, m_particles.ptr<Field::Velocity>() + i, sizeof v);
+  R r;
+  Vec3d x;
+  V v;
+  m_mem.copyToHost(&gid, m_particles.template ptr<Field::Gid>() + i, sizeof gid);
+  m_mem.copyToHost(&r, m_particles.template ptr<Field::Radius>() + i, sizeof r);
+  m_mem.copyToHost(&x, m_particles.template ptr<Field::Position>() + i, sizeof x);
+  m_mem.copyToHost(&v, m_particles.template ptr<Field::Velocity>() + i, sizeof v);
   char buf[512];
   std::snprintf(buf, sizeof buf,
                 "particle %llu (radius %.4g m at (%.4g, %.4g, %.4g) m, speed %.4g m/s) overlaps a neighbour or wall by more "
                 "than %.0f%% of the smaller radius: the integration has blown up (time step too large for these speeds, "
                 "or the material too soft)",
-                (unsigned long long)gid, r, x.x, x.y, x.z, norm(v), 100 * kMaxOverlapRatio);
+                (unsigned long long)gid, double(r), x.x, x.y, x.z, double(norm(v)), 100 * kMaxOverlapRatio);
   return numericalError(buf);
 }
 
-template <class Exec>
-ContactStats EngineImpl<Exec>::contactStats() const {
+template <class Exec, class R>
+ContactStats EngineImpl<Exec, R>::contactStats() const {
   // Diagnostics only (not on the step path): computed from host copies.
   const Index n = m_n;
-  std::vector<Vec3d> pos(n), vel(n), om(n);
-  std::vector<double> rad(n), mass(n);
+  std::vector<Vec3d> pos(n);
+  std::vector<V> vel(n), om(n);
+  std::vector<R> rad(n), mass(n);
   std::vector<Index> nbr(std::size_t(n) * m_nbrCap);
   std::vector<std::uint32_t> cnt(n);
-  m_mem.copyToHost(pos.data(), m_particles.ptr<Field::Position>(), n * sizeof(Vec3d));
-  m_mem.copyToHost(vel.data(), m_particles.ptr<Field::Velocity>(), n * sizeof(Vec3d));
-  m_mem.copyToHost(om.data(), m_particles.ptr<Field::AngularVelocity>(), n * sizeof(Vec3d));
-  m_mem.copyToHost(rad.data(), m_particles.ptr<Field::Radius>(), n * sizeof(double));
-  m_mem.copyToHost(mass.data(), m_particles.ptr<Field::Mass>(), n * sizeof(double));
+  m_mem.copyToHost(pos.data(), m_particles.template ptr<Field::Position>(), n * sizeof(Vec3d));
+  m_mem.copyToHost(vel.data(), m_particles.template ptr<Field::Velocity>(), n * sizeof(V));
+  m_mem.copyToHost(om.data(), m_particles.template ptr<Field::AngularVelocity>(), n * sizeof(V));
+  m_mem.copyToHost(rad.data(), m_particles.template ptr<Field::Radius>(), n * sizeof(R));
+  m_mem.copyToHost(mass.data(), m_particles.template ptr<Field::Mass>(), n * sizeof(R));
   m_mem.copyToHost(nbr.data(), m_nbr.data(), nbr.size() * sizeof(Index));
   m_mem.copyToHost(cnt.data(), m_nbrCount.data(), n * sizeof(std::uint32_t));
   ContactStats st;
@@ -432,17 +457,17 @@ ContactStats EngineImpl<Exec>::contactStats() const {
   for (Index i = 0; i < n; ++i) {
     st.translationalEnergy += 0.5 * mass[i] * norm2(vel[i]);
     st.kineticEnergy += 0.5 * mass[i] * norm2(vel[i]) + 0.5 * 0.4 * mass[i] * rad[i] * rad[i] * norm2(om[i]);
-    st.maxSpeed = std::max(st.maxSpeed, norm(vel[i]));
+    st.maxSpeed = std::max(st.maxSpeed, double(norm(vel[i])));
     for (std::uint32_t e = 0; e < std::min<std::uint32_t>(cnt[i], m_nbrCap); ++e) {
       const Index j = nbr[nbrLayout().at(i, e)];
       if (j < i) continue;
-      const double ov = rad[i] + rad[j] - norm(pos[j] - pos[i]);
+      const double ov = double(rad[i]) + double(rad[j]) - norm(pos[j] - pos[i]);
       if (ov <= 0) continue;
       ++st.particleContacts;
-      st.maxOverlapRatio = std::max(st.maxOverlapRatio, ov / std::min(rad[i], rad[j]));
+      st.maxOverlapRatio = std::max(st.maxOverlapRatio, ov / double(std::min(rad[i], rad[j])));
     }
     for (const auto& p : m_setup.planes) {
-      const double ov = rad[i] - dot(pos[i] - p.point, p.normal);
+      const double ov = double(rad[i]) - dot(pos[i] - p.point, p.normal);
       if (ov <= 0) continue;
       ++st.wallContacts;
       st.maxOverlapRatio = std::max(st.maxOverlapRatio, ov / rad[i]);

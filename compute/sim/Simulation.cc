@@ -92,23 +92,22 @@ Simulation::Simulation(const EngineSetup& setup, TimeStepInfo ts, std::unique_pt
 
 Result<std::unique_ptr<Simulation>> Simulation::create(const RunConfig& config, const SimulationOptions& options) {
   if (ErrorList errors = config.validate(); !errors.empty()) return errors.toStatus("invalid run configuration");
-  if (config.sim.precision != Precision::kDouble)
-    return invalidArgument("simulation.precision: 'float' needs the CUDA executor, which is not built into this pflow yet");
   auto ts = chooseTimeStep(config);
   if (!ts) return ts.status();
   auto setup = prepareEngineSetup(config);
   if (!setup) return setup.status();
   std::unique_ptr<Simulation> sim(new Simulation(setup.value(), ts.value(), nullptr));
+  const bool single = config.sim.precision == Precision::kFloat;
   ExecutorKind kind = options.executor;
   if (kind == ExecutorKind::kAuto) kind = cudaDeviceCount() > 0 ? ExecutorKind::kCuda : ExecutorKind::kCpu;
   if (kind == ExecutorKind::kCuda) {
-    auto engine = makeCudaEngine(std::move(setup).value(), options.device);
+    auto engine = makeCudaEngine(std::move(setup).value(), options.device, single);
     if (!engine) return engine.status();
     sim->m_engine = std::move(engine).value();
     // Kernels run asynchronously: each phase timer waits for its own work.
     sim->m_timers.setFence([e = sim->m_engine.get()] { e->fence(); });
   } else {
-    sim->m_engine = makeCpuEngine(std::move(setup).value());
+    sim->m_engine = makeCpuEngine(std::move(setup).value(), single);
   }
   sim->m_executor = kind;
   if (Status s = sim->initialise(); !s.isOk()) return s;

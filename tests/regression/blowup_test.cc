@@ -47,8 +47,8 @@ TEST(Blowup, NonFiniteValuesAreFlagged) {
   force[2].y = std::numeric_limits<double>::quiet_NaN();
   torque[3].z = std::numeric_limits<double>::infinity();
   compute::Conditions cond;
-  const compute::kernels::IntegrateArgs a{pos, vel, omega, force, torque, radius, mass, ref, {0, 0, 0}, 1e-3, &cond};
-  for (Index i = 0; i < n; ++i) compute::kernels::IntegrateSecondHalf{a}(i);
+  const compute::kernels::IntegrateArgs<double> a{pos, vel, omega, force, torque, radius, mass, ref, {0, 0, 0}, 1e-3, &cond};
+  for (Index i = 0; i < n; ++i) compute::kernels::IntegrateSecondHalf<double>{a}(i);
   EXPECT_TRUE(cond.flags & compute::kNonFinite);
   EXPECT_EQ(cond.badParticle, 2u);
 }
