@@ -88,6 +88,18 @@ compute::RunConfig tiledBed(const compute::RunConfig& bed, const compute::Partic
   return c;
 }
 
+std::vector<std::pair<std::string, double>> compulsoryTraffic(int realBytes, double candidates, double contacts) {
+  const double R = realBytes, pos = 24;  // positions are double at both precisions
+  // integrate1: read x, v, w, F, T, m, r, x_ref; write x, v, w.
+  const double integrate1 = 2 * pos + 3 * R * 4 + 2 * R + pos + 3 * R * 2;
+  // forces: own x, v, w, r, m, material, candidate count; per candidate an index and a slot byte; per contact
+  // its history read and written; F and T written; the wall kernel's two per-particle counts.
+  const double forces = pos + 8 * R + 4 + 4 + 5 * candidates + 6 * R * contacts + 6 * R + 8;
+  // integrate2: read x (finite check), v, w, F, T, m, r; write v, w.
+  const double integrate2 = pos + 3 * R * 4 + 2 * R + 3 * R * 2;
+  return {{"integrate1", integrate1}, {"forces", forces}, {"integrate2", integrate2}};
+}
+
 BedSpec bedSpecFor(std::int64_t n, bool polydisperse) {
   BedSpec s;
   s.polydisperse = polydisperse;

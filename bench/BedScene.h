@@ -2,6 +2,9 @@
 // spheres on a jittered cubic lattice that settle under gravity into a dense bed.
 #pragma once
 #include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "compute/particles/ParticleSnapshot.h"
 #include "compute/sim/RunConfig.h"
@@ -32,5 +35,10 @@ BedSpec bedSpecFor(std::int64_t n, bool polydisperse);
 // at 10^6..10^8 spheres without settling each at full size. Positions, velocities and spins are copied;
 // contact history starts empty (it rebuilds within a few steps of a resettle).
 compute::RunConfig tiledBed(const compute::RunConfig& bed, const compute::ParticleSnapshot& settled, int tx, int ty);
+
+// The fewest bytes per particle that each phase of a step must move through device memory (every array it
+// needs read once, every result written once; neighbours' data assumed to come from cache), for `realBytes`
+// of 4 (float) or 8 (double), `candidates` and `contacts` per particle. docs/performance.md derives it.
+std::vector<std::pair<std::string, double>> compulsoryTraffic(int realBytes, double candidates, double contacts);
 
 }  // namespace pflow::bench

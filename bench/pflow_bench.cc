@@ -12,6 +12,7 @@
 #include <ctime>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "bench/BedScene.h"
@@ -54,6 +55,9 @@ int main(int argc, char** argv) {
   app.add_option("--steps", steps, "timed steps")->capture_default_str();
   app.add_option("--threads", threads, "OpenMP threads (0: all cores)");
   app.add_option("--executor", executor, "cpu, cuda or auto")->capture_default_str();
+  std::string settleExecutor;
+  app.add_option("--settle-executor", settleExecutor,
+                 "executor that settles the beds (default: --executor); the timed run then starts from that state");
   app.add_option("--gpu", gpu, "CUDA device index")->capture_default_str();
   app.add_option("--lammps-ranks", lammpsRanks, "LAMMPS MPI ranks (0: as many as pflow's threads)");
   app.add_flag("--poly", poly, "polydisperse bed: radii uniform in [d/4, d/2]");
@@ -64,6 +68,13 @@ int main(int argc, char** argv) {
                  "settle a bed of about this many spheres for --settle-steps, then build each size from copies of it "
                  "and resettle those for --resettle-steps (0: settle every size itself)");
   app.add_option("--resettle-steps", resettleSteps, "steps a tiled bed settles before timing")->capture_default_str();
+  std::vector<std::string> precisions{"double"};
+  app.add_option("--precision", precisions, "double, float, or both (comma-separated)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"double", "float"}));
+  double copyBandwidth = 0;
+  app.add_option("--copy-bandwidth", copyBandwidth,
+                 "the device's measured copy bandwidth [GB/s] (pflow-gpu-bandwidth), for the achieved fraction");
   app.add_option("--device", device, "device name for the results table");
   std::string commit = shell("git rev-parse --short HEAD 2>/dev/null");
   app.add_option("--commit", commit, "commit for the results table (default: git rev-parse)");
@@ -83,9 +94,18 @@ int main(int argc, char** argv) {
   pflow::compute::SimulationOptions so;
   so.executor = kind.value();
   so.device = gpu;
+  auto settleKind = pflow::compute::parseExecutorKind(settleExecutor.empty() ? executor : settleExecutor);
+  if (!settleKind) {
+    std::fprintf(stderr, "%s\n", settleKind.status().toString().c_str());
+    return 1;
+  }
+  pflow::compute::SimulationOptions settleOptions = so;
+  settleOptions.executor = settleKind.value();
+  // Settles `cfg` for nsteps on the settling executor; hands over to the timed executor (positions,
+  // velocities and spins carried; history rebuilt within a step) when that is another one.
   auto settle = [&](const pflow::compute::RunConfig& cfg, int nsteps, double& wallOut)
       -> std::unique_ptr<pflow::compute::Simulation> {
-    auto sim = pflow::compute::Simulation::create(cfg, so);
+    auto sim = pflow::compute::Simulation::create(cfg, settleOptions);
     if (!sim) {
       std::fprintf(stderr, "%s\n", sim.status().toString().c_str());
       return nullptr;
@@ -96,7 +116,26 @@ int main(int argc, char** argv) {
       return nullptr;
     }
     wallOut = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    return std::move(sim).value();
+    if (settleOptions.executor == so.executor) return std::move(sim).value();
+    const auto state = sim.value()->snapshot();
+    pflow::compute::RunConfig moved = cfg;
+    const auto* x = state.find("position")->as<pflow::Vec3d>();
+    const auto* v = state.find("velocity")->as<pflow::Vec3d>();
+    const auto* w = state.find("angular_velocity")->as<pflow::Vec3d>();
+    const auto* id = state.find("id")->as<pflow::Gid>();
+    moved.particles.velocity.resize(state.n);
+    moved.particles.angularVelocity.resize(state.n);
+    for (std::size_t k = 0; k < state.n; ++k) {
+      moved.particles.position[id[k]] = x[k];
+      moved.particles.velocity[id[k]] = v[k];
+      moved.particles.angularVelocity[id[k]] = w[k];
+    }
+    auto timed = pflow::compute::Simulation::create(moved, so);
+    if (!timed) {
+      std::fprintf(stderr, "%s\n", timed.status().toString().c_str());
+      return nullptr;
+    }
+    return std::move(timed).value();
   };
 
   // --tile-from: settle one small bed the standard way, then build every size from copies of it.
@@ -130,6 +169,10 @@ int main(int argc, char** argv) {
       spec.threads = threads;
       cfg = pflow::bench::bedScene(spec);
     }
+    std::unique_ptr<pflow::compute::Simulation> last;
+    std::vector<std::pair<std::string, double>> rates;
+    for (const std::string& precision : precisions) {
+    cfg.sim.precision = precision == "float" ? pflow::compute::Precision::kFloat : pflow::compute::Precision::kDouble;
     double settleWall = 0;
     auto simPtr = settle(cfg, tileFrom > 0 ? resettleSteps : settleSteps, settleWall);
     if (!simPtr) return 1;
@@ -144,6 +187,7 @@ int main(int argc, char** argv) {
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
     const double rate = double(s.numParticles()) * steps / wall;
+    rates.emplace_back(precision, rate);
     nlohmann::json phases;
     for (int p = 0; p < int(pflow::compute::Phase::kCount); ++p)
       phases[pflow::compute::kPhaseNames[p]] = s.timers().seconds(pflow::compute::Phase(p));
@@ -152,22 +196,45 @@ int main(int argc, char** argv) {
         onGpu ? 0 : std::stoi(s.executorDescription().substr(s.executorDescription().find(" on ") + 4));
     const std::string execName = onGpu ? "cuda" : "cpu";
     const std::string where = onGpu ? s.executorDescription() : device;
+    // The fewest bytes each phase must move per step (docs/performance.md), and the rate achieved on them.
+    const auto traffic = pflow::bench::compulsoryTraffic(precision == "float" ? 4 : 8, before.candidatesPerParticle,
+                                                        before.coordinationNumber);
+    nlohmann::json achieved;
+    for (const auto& [phase, bytes] : traffic) {
+      const double secs = s.timers().seconds(pflow::compute::phaseByName(phase));
+      const double gbps = secs > 0 ? bytes * double(s.numParticles()) * steps / secs / 1e9 : 0.0;
+      achieved[phase] = {{"bytes_per_particle", bytes}, {"gb_per_s", gbps},
+                         {"of_copy_bandwidth", copyBandwidth > 0 ? gbps / copyBandwidth : 0.0}};
+    }
     nlohmann::json j{{"code", "pflow"}, {"executor", execName}, {"executor_description", s.executorDescription()},
-                     {"launch", s.engine().launchReport()}, {"threads", usedThreads}, {"precision", "double"},
+                     {"launch", s.engine().launchReport()}, {"threads", usedThreads},
+                     {"precision", s.engine().precisionName()},
                      {"case", caseName}, {"n", s.numParticles()}, {"settle_steps", settleSteps},
                      {"settle_s", settleWall}, {"tiled_from", tileFrom > 0 ? long(baseState.n) : 0L},
                      {"tiles", tx * ty}, {"resettle_steps", tileFrom > 0 ? resettleSteps : 0},
                      {"base_settle_s", baseSettleWall}, {"steps", steps}, {"wall_s", wall},
-                     {"particle_steps_per_s", rate}, {"phases_s", phases},
-                     {"coordination", before.coordinationNumber}, {"rebuilds", s.rebuilds() - rebuilds0},
+                     {"particle_steps_per_s", rate}, {"phases_s", phases}, {"traffic", achieved},
+                     {"copy_bandwidth_gb_per_s", copyBandwidth},
+                     {"coordination", before.coordinationNumber},
+                     {"candidates_per_particle", before.candidatesPerParticle},
+                     {"rebuilds", s.rebuilds() - rebuilds0},
                      {"history_slots", s.engine().historySlots()},
+                     {"wall_history_slots", s.engine().wallHistorySlots()},
                      {"device_bytes_per_particle", double(s.deviceBytes()) / double(s.numParticles())},
                      {"device", where}, {"commit", commit}, {"command", cmdline.str()}};
     std::printf("%s\n", j.dump().c_str());
     std::fflush(stdout);
-    std::fprintf(stderr, "| %s | %s | %s | pflow %s | double | %s | %zu | %s | %.3g | `%s` |\n", today().c_str(),
-                 commit.c_str(), where.c_str(), execName.c_str(), caseName.c_str(), s.numParticles(),
-                 onGpu ? "1 GPU" : (std::to_string(usedThreads) + " threads").c_str(), rate, cmdline.str().c_str());
+    std::fprintf(stderr, "| %s | %s | %s | pflow %s | %s | %s | %zu | %s | %.3g | `%s` |\n", today().c_str(),
+                 commit.c_str(), where.c_str(), execName.c_str(), s.engine().precisionName(), caseName.c_str(),
+                 s.numParticles(), onGpu ? "1 GPU" : (std::to_string(usedThreads) + " threads").c_str(), rate,
+                 cmdline.str().c_str());
+    last = std::move(simPtr);
+    }
+    auto& s = *last;
+    const double rate = rates.front().second;
+    const int usedThreads = s.executorKind() == pflow::compute::ExecutorKind::kCuda
+                                ? int(std::thread::hardware_concurrency())  // LAMMPS on every core of the GPU's host
+                                : std::stoi(s.executorDescription().substr(s.executorDescription().find(" on ") + 4));
 
     if (noLammps) continue;
     if (!pflow::bench::findLammps()) {
@@ -209,7 +276,8 @@ int main(int argc, char** argv) {
     nlohmann::json jl{{"code", "lammps"}, {"version", l.lammpsVersion}, {"ranks", l.ranks}, {"precision", "double"},
                       {"case", caseName}, {"n", l.atoms}, {"steps", l.steps}, {"wall_s", l.loopSeconds},
                       {"particle_steps_per_s", l.particleStepsPerSecond}, {"neighbor_builds", l.neighborBuilds},
-                      {"pflow_over_lammps", rate / l.particleStepsPerSecond}, {"device", device},
+                      {"pflow_over_lammps", rate / l.particleStepsPerSecond},
+                      {"pflow_precision", rates.front().first}, {"device", device},
                       {"commit", commit}, {"command", l.command}};
     std::printf("%s\n", jl.dump().c_str());
     std::fflush(stdout);

@@ -2,7 +2,7 @@
 # One call on the lent GPU machine (see bench/gpu/README.md): unpack the bundle built here, run the GPU
 # tests, measure the copy bandwidth and the settled-bed throughput, print a short table last.
 # Usage (from the repository root on the device machine):
-#   bash bench/gpu/device_run.sh [tests] [sanitize] [bench] [layouts]
+#   bash bench/gpu/device_run.sh [tests] [sanitize] [bench] [cpu] [layouts]
 # Logs and JSON go to $OUT (or ./out).
 set -uo pipefail
 OUT=${OUT:-out}
@@ -30,29 +30,49 @@ if has sanitize; then
   for tool in memcheck racecheck; do
     start=$SECONDS
     compute-sanitizer --tool $tool --error-exitcode 9 "$B/cuda_executor_test" \
-      --gtest_filter='CudaExecutor.SameCandidates*:CudaExecutor.BlowUp*' > "$OUT/sanitizer_$tool.log" 2>&1
+      --gtest_filter='*SameCandidates*:CudaExecutor.BlowUp*' > "$OUT/sanitizer_$tool.log" 2>&1
     rc=$?
     summary+=("compute-sanitizer $tool rc=$rc $((SECONDS - start))s $(grep -E 'ERROR SUMMARY' "$OUT/sanitizer_$tool.log" | tail -1)")
   done
 fi
-if has bench; then
+bw=0
+if has bench || has cpu; then
   "$B/pflow-gpu-bandwidth" > "$OUT/bandwidth.json" 2>&1
   summary+=("bandwidth $(cat "$OUT/bandwidth.json")")
+  bw=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["memcpy_gb_per_s"])' "$OUT/bandwidth.json" 2>/dev/null || echo 0)
+fi
+if has bench; then
   # One settled 200 000-sphere bed per polydispersity, tiled up to each size (bench/README.md).
   for poly in "" "--poly"; do
     timeout "${BENCH_TIMEOUT:-240}" "$B/pflow-bench" --executor cuda -n "${BENCH_SIZES:-1000000,4000000}" \
       --tile-from 200000 --settle-steps "${SETTLE:-30000}" --resettle-steps "${RESETTLE:-1000}" \
-      --steps "${STEPS:-1000}" --no-lammps ${BENCH_ARGS:-} --device "$dev" --commit "$commit" $poly \
+      --steps "${STEPS:-1000}" --no-lammps --precision "${PRECISIONS:-double,float}" --copy-bandwidth "$bw" \
+      ${BENCH_ARGS:-} --device "$dev" --commit "$commit" $poly \
       >> "$OUT/bench.jsonl" 2>> "$OUT/bench.log"
     summary+=("bench $poly rc=$?")
   done
+fi
+# The CPU executor (every core of the GPU's host) and LAMMPS (one rank per core) on a bed settled on the GPU.
+if has cpu; then
+  cores=$(nproc)
+  timeout "${CPU_TIMEOUT:-300}" "$B/pflow-bench" --executor cpu --settle-executor cuda -n "${CPU_SIZES:-1000000}" \
+    --tile-from 200000 --settle-steps "${SETTLE:-30000}" --resettle-steps "${RESETTLE:-1000}" --steps "${CPU_STEPS:-300}" \
+    --threads "$cores" --lammps-ranks "$cores" --precision double,float --device "$(lscpu | sed -n 's/^Model name: *//p' | head -1), $cores cores" \
+    --commit "$commit" >> "$OUT/bench.jsonl" 2>> "$OUT/bench.log"
+  summary+=("cpu+lammps rc=$?")
+fi
+if [[ -s $OUT/bench.jsonl ]]; then
   summary+=("$(python3 - "$OUT/bench.jsonl" <<'PY'
 import json, sys
 for line in open(sys.argv[1]):
     j = json.loads(line)
-    ph = " ".join(f"{k}={v:.3f}" for k, v in j["phases_s"].items())
-    print(f'{j["case"]} {j.get("precision","double")} n={j["n"]} {j["particle_steps_per_s"]:.3g} p-s/s '
-          f'{j["device_bytes_per_particle"]:.0f} B/p coord={j["coordination"]:.2f} slots={j["history_slots"]} {ph}')
+    if j.get("code") == "lammps":
+        print(f'lammps {j["case"]} n={j["n"]} ranks={j["ranks"]} {j["particle_steps_per_s"]:.3g} p-s/s pflow/lammps={j["pflow_over_lammps"]:.2f}')
+        continue
+    ph = " ".join(f"{k}={v:.3f}" for k, v in j["phases_s"].items() if v > 0)
+    bw = " ".join(f'{k}:{v["gb_per_s"]:.0f}GB/s' for k, v in j.get("traffic", {}).items())
+    print(f'{j["executor"]} {j["case"]} {j["precision"]} n={j["n"]} {j["particle_steps_per_s"]:.3g} p-s/s '
+          f'{j["device_bytes_per_particle"]:.0f} B/p coord={j["coordination"]:.2f} slots={j["history_slots"]} {ph} {bw}')
 PY
 )")
 fi

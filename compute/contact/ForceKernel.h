@@ -171,10 +171,48 @@ struct ComputeForces {
       atomicMaxU32(&a.cond->neededHistory, contacts);
     }
 
-    // ---- walls ----
-    wallForces(i, xi, vi, wi, ri, mi, Ii, params, f, tq);
-
     if (!storeOnly) {
+      a.force[i] = f;
+      a.torque[i] = tq;
+    }
+  }
+
+  PFLOW_HOSTDEVICE void flagDeep(Index i) const {
+    atomicOrU32(&a.cond->flags, kExcessiveOverlap);
+    atomicMinU32(&a.cond->deepParticle, i);
+  }
+
+  // Claims an empty slot for partner g, or returns -1 when all are taken.
+  PFLOW_HOSTDEVICE static int claimSlot(Gid* partner, int slots, Gid g) {
+    for (int k = 0; k < slots; ++k)
+      if (partner[k] == kNoGid) {
+        partner[k] = g;
+        return k;
+      }
+    return -1;
+  }
+};
+
+// Wall contact forces on one particle per thread, added to the pair forces that ComputeForces stored
+// (the same summation order as one pass). A separate kernel because its per-thread contact list
+// (kMaxWallContacts entries) needs a stack frame and registers that would slow the pair loop for
+// every particle, while only the particles near a wall have work here; the others return at once.
+template <class R>
+struct ComputeWallForces {
+  using V = Vec3<R>;
+  ForceArgs<R> a;
+
+  PFLOW_HOSTDEVICE void operator()(Index i) const {
+    if (a.planeMask[i] == 0 && a.wallCandCount[i] == 0) return;  // far from every wall (slots cleared at rebuild)
+    const ContactParams* params = a.params + std::size_t(a.material[i]) * a.numMaterials;
+    const R ri = a.radius[i], mi = a.mass[i];
+    V f = zero3<R>(), tq = zero3<R>();
+    if (!a.storeOnly) {
+      f = a.force[i];
+      tq = a.torque[i];
+    }
+    wallForces(i, a.pos[i], a.vel[i], a.omega[i], ri, mi, R(0.4) * mi * ri * ri, params, f, tq);
+    if (!a.storeOnly) {
       a.force[i] = f;
       a.torque[i] = tq;
     }
@@ -194,16 +232,6 @@ struct ComputeForces {
   PFLOW_HOSTDEVICE void flagDeep(Index i) const {
     atomicOrU32(&a.cond->flags, kExcessiveOverlap);
     atomicMinU32(&a.cond->deepParticle, i);
-  }
-
-  // Claims an empty slot for partner g, or returns -1 when all are taken.
-  PFLOW_HOSTDEVICE static int claimSlot(Gid* partner, int slots, Gid g) {
-    for (int k = 0; k < slots; ++k)
-      if (partner[k] == kNoGid) {
-        partner[k] = g;
-        return k;
-      }
-    return -1;
   }
 
   PFLOW_HOSTDEVICE void wallForces(Index i, Vec3d xi, V vi, V wi, R ri, R mi, R Ii, const ContactParams* params,

@@ -117,6 +117,7 @@ class EngineImpl final : public Engine {
   Status computeForces(double dt, double time) override {
     resetConditions();
     m_exec.forEach(m_n, kernels::ComputeForces<R>{forceArgs(dt, time, false)});
+    if (m_anyWalls) m_exec.forEach(m_n, kernels::ComputeWallForces<R>{forceArgs(dt, time, false)});
     Conditions c = readConditions();
     if (c.flags & kExcessiveOverlap) return deepOverlapError(c.deepParticle);
     if (c.flags & kTooManyWallContacts)
@@ -142,6 +143,7 @@ class EngineImpl final : public Engine {
       }
       resetConditions();
       m_exec.forEach(m_n, kernels::ComputeForces<R>{forceArgs(dt, time, true)});
+      if (m_anyWalls) m_exec.forEach(m_n, kernels::ComputeWallForces<R>{forceArgs(dt, time, true)});
       c = readConditions();
     }
     return Status::ok();
@@ -307,6 +309,7 @@ class EngineImpl final : public Engine {
   Index m_n = 0;
   Index m_numTri = 0;
   bool m_anyMeshMoves = false;
+  bool m_anyWalls = false;  // planes or triangles: the wall-force kernel runs
   bool m_binned = false;
   Index m_nbrCap = 16;
   bool m_columnMajor = Exec::kColumnMajorLists;
@@ -372,6 +375,7 @@ void EngineImpl<Exec, R>::init() {
   upload(m_triMaterial, s.triMaterial);
   upload(m_meshMotion, s.meshMotion);
   for (const auto& m : s.meshMotion) m_anyMeshMoves |= (m.angularSpeed != 0 || norm2(m.velocity) != 0);
+  m_anyWalls = m_numTri > 0 || !s.planes.empty();
   m_binStart.resize((std::size_t(s.grid.numCells()) + 1) * sizeof(Index));
   m_binCount.resize(std::size_t(s.grid.numCells()) * sizeof(std::uint32_t));
   m_wallCandCount.resize(std::max<std::size_t>(1, m_n) * sizeof(std::uint32_t));

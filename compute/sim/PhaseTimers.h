@@ -10,6 +10,12 @@ namespace pflow::compute {
 enum class Phase { kIntegrate1, kMeshes, kSort, kContacts, kForces, kIntegrate2, kOutput, kCount };
 inline constexpr const char* kPhaseNames[] = {"integrate1", "meshes", "sort", "contacts", "forces", "integrate2", "output"};
 
+inline Phase phaseByName(const std::string& name) {
+  for (int p = 0; p < int(Phase::kCount); ++p)
+    if (name == kPhaseNames[p]) return Phase(p);
+  return Phase::kCount;
+}
+
 class PhaseTimers {
  public:
   class Scope {
@@ -25,7 +31,7 @@ class PhaseTimers {
     std::chrono::steady_clock::time_point m_start;
   };
   Scope time(Phase p) { return Scope(*this, p); }
-  double seconds(Phase p) const { return m_seconds[int(p)]; }
+  double seconds(Phase p) const { return p == Phase::kCount ? 0.0 : m_seconds[int(p)]; }
   double total() const {
     double s = 0;
     for (double v : m_seconds) s += v;
