@@ -82,14 +82,14 @@ Result<RunSummary> runScene(const RunOptions& o) {
   if (!created) return created.status();
   compute::Simulation& sim = *created.value();
   const auto& ts = sim.timeStep();
-  spdlog::info("{} particles, {} planes, {} mesh(es); executor: {}", sim.numParticles(), cfg.planes.size(),
-               cfg.meshes.size(), sim.executorDescription());
+  spdlog::info("{} particles, {} planes, {} mesh(es); executor: {}, {} precision", sim.numParticles(),
+               cfg.planes.size(), cfg.meshes.size(), sim.executorDescription(), sim.engine().precisionName());
   spdlog::info("time step {:.4g} s: {}", ts.dt, ts.reason);
   for (const auto& w : ts.warnings) spdlog::warn("{}", w);
 
   RunSummary sum;
   sum.outputPath = o.outputPath.empty() ? defaultOutput(scene.value(), o.scenePath) : o.outputPath;
-  sum.executor = sim.executorDescription();
+  sum.executor = sim.executorDescription() + ", " + sim.engine().precisionName();
   sum.particles = sim.numParticles();
   if (const fs::path parent = fs::path(sum.outputPath).parent_path(); !parent.empty()) {
     std::error_code ec;

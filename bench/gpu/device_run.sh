@@ -2,7 +2,7 @@
 # One call on the lent GPU machine (see bench/gpu/README.md): unpack the bundle built here, run the GPU
 # tests, measure the copy bandwidth and the settled-bed throughput, print a short table last.
 # Usage (from the repository root on the device machine):
-#   bash bench/gpu/device_run.sh [tests] [sanitize] [bench] [cpu] [layouts]
+#   bash bench/gpu/device_run.sh [tests] [sanitize] [bench] [scaling] [largest] [cpu] [layouts]
 # Logs and JSON go to $OUT (or ./out).
 set -uo pipefail
 OUT=${OUT:-out}
@@ -36,7 +36,7 @@ if has sanitize; then
   done
 fi
 bw=0
-if has bench || has cpu; then
+if has bench || has cpu || has scaling || has largest; then
   "$B/pflow-gpu-bandwidth" > "$OUT/bandwidth.json" 2>&1
   summary+=("bandwidth $(cat "$OUT/bandwidth.json")")
   bw=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["memcpy_gb_per_s"])' "$OUT/bandwidth.json" 2>/dev/null || echo 0)
@@ -51,6 +51,20 @@ if has bench; then
       >> "$OUT/bench.jsonl" 2>> "$OUT/bench.log"
     summary+=("bench $poly rc=$?")
   done
+fi
+# Throughput against size (where one GPU saturates: the manager's --particles-per-gpu), from a 50 000 bed.
+if has scaling; then
+  timeout "${SCALING_TIMEOUT:-240}" "$B/pflow-bench" --executor cuda -n "${SCALING_SIZES:-50000,100000,200000,500000,1000000,2000000}" \
+    --tile-from 50000 --settle-steps "${SETTLE:-30000}" --resettle-steps 500 --steps 1000 --no-lammps \
+    --precision double,float --copy-bandwidth "$bw" --device "$dev" --commit "$commit" >> "$OUT/bench.jsonl" 2>> "$OUT/bench.log"
+  summary+=("scaling rc=$?")
+fi
+# The largest bed that fits (float), timed briefly.
+if has largest; then
+  timeout "${LARGEST_TIMEOUT:-300}" "$B/pflow-bench" --executor cuda -n "${LARGEST:-100000000}" --tile-from 200000 \
+    --settle-steps "${SETTLE:-30000}" --resettle-steps 300 --steps 300 --no-lammps --precision "${LARGEST_PRECISION:-float}" \
+    --copy-bandwidth "$bw" --device "$dev" --commit "$commit" >> "$OUT/bench.jsonl" 2>> "$OUT/bench.log"
+  summary+=("largest rc=$?")
 fi
 # The CPU executor (every core of the GPU's host) and LAMMPS (one rank per core) on a bed settled on the GPU.
 if has cpu; then

@@ -43,8 +43,9 @@ struct ForceArgs {
   Index nbrCapacity;
   ListLayout nbrLayout;
   int slots;
-  Gid* histPartner;
+  Gid* histPartner;      // slot fields are slot-major: [k * slotStride + i]
   Vec3<R>* histDisp;
+  std::size_t slotStride;
   // walls
   const PlaneParams* planes;
   const std::uint32_t* planeMask;  // per particle: planes within r + skin at the last rebuild
@@ -97,8 +98,8 @@ struct ComputeForces {
     std::int8_t* __restrict__ nbrSlot = a.nbrSlot + std::size_t(i) * a.nbrLayout.rowStride;
     const std::size_t col = a.nbrLayout.colStride;
     const int slots = a.slots;
-    Gid* __restrict__ partner = a.histPartner + std::size_t(i) * slots;
-    V* __restrict__ disp = a.histDisp + std::size_t(i) * slots;
+    const SlotRow<Gid> partner{a.histPartner + i, a.slotStride};
+    const SlotRow<V> disp{a.histDisp + i, a.slotStride};
     const ContactParams* __restrict__ params = a.params + std::size_t(a.material[i]) * a.numMaterials;
     const R dt = R(a.dt);
     const bool storeOnly = a.storeOnly;
@@ -183,7 +184,7 @@ struct ComputeForces {
   }
 
   // Claims an empty slot for partner g, or returns -1 when all are taken.
-  PFLOW_HOSTDEVICE static int claimSlot(Gid* partner, int slots, Gid g) {
+  PFLOW_HOSTDEVICE static int claimSlot(SlotRow<Gid> partner, int slots, Gid g) {
     for (int k = 0; k < slots; ++k)
       if (partner[k] == kNoGid) {
         partner[k] = g;
@@ -266,8 +267,8 @@ struct ComputeWallForces {
                    a.triMaterial[t], cp.feature == geometry::Feature::kFace};
     }
     if (tooMany) atomicOrU32(&a.cond->flags, kTooManyWallContacts);
-    std::uint64_t* key = a.wallKey + std::size_t(i) * a.wallSlots;
-    V* disp = a.wallDisp + std::size_t(i) * a.wallSlots;
+    const SlotRow<std::uint64_t> key{a.wallKey + i, a.slotStride};
+    const SlotRow<V> disp{a.wallDisp + i, a.slotStride};
     if (nwc == 0) {  // no wall contact; forget any that just ended
       if (a.planeMask[i] == 0 && nc == 0) return;  // far from every wall: its slots were cleared at rebuild
       for (int k = 0; k < a.wallSlots; ++k)

@@ -25,4 +25,14 @@ using Gid = std::uint64_t;    // global particle identity, stable across reorder
 using Index = std::uint32_t;  // local index, valid until the next reorder
 inline constexpr Gid kNoGid = ~Gid(0);
 inline constexpr Index kNoIndex = ~Index(0);
+
+// One particle's slots of a slot field (contact history), which is stored slot-major: slot k of particle
+// i at p[k * n + i]. A warp's 32 consecutive particles then touch 32 consecutive values of a slot, slots
+// grow by appending columns, and reordering needs scratch for one column, not for a whole slot field.
+template <class T>
+struct SlotRow {
+  T* p;                // &field[i] (slot 0 of particle i)
+  std::size_t stride;  // n, the number of particles
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T& operator[](int k) const { return p[std::size_t(k) * stride]; }
+};
 }  // namespace pflow

@@ -143,8 +143,9 @@ struct WallCandidates {
   Index* cand;               // [i * capacity + e]
   std::uint32_t* candCount;  // [i]
   std::uint32_t* planeMask;  // [i]
-  std::uint64_t* wallKey;    // [i * wallSlots + k]
+  std::uint64_t* wallKey;    // slot-major: [k * slotStride + i]
   int wallSlots;
+  std::size_t slotStride;
   Conditions* cond;
   PFLOW_HOSTDEVICE void operator()(Index i) const {
     const Vec3d x = pos[i];
@@ -170,7 +171,7 @@ struct WallCandidates {
       atomicMaxU32(&cond->neededWallCandidates, count);
       return;
     }
-    std::uint64_t* key = wallKey + std::size_t(i) * wallSlots;
+    const SlotRow<std::uint64_t> key{wallKey + i, slotStride};
     for (int k = 0; k < wallSlots; ++k) {
       if (key[k] == kNoGid) continue;
       bool near = false;

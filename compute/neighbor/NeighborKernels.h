@@ -73,8 +73,9 @@ struct BuildNeighbors {
   const Vec3d* pos;
   const R* radius;
   const Gid* gid;
-  Gid* historyPartner;  // [i * slots + k]
+  Gid* historyPartner;  // slot-major: [k * slotStride + i]
   int slots;
+  std::size_t slotStride;
   double skin;
   Index capacity;
   ListLayout layout;
@@ -90,7 +91,7 @@ struct BuildNeighbors {
     grid.coords(xi, cx, cy, cz);
     std::uint32_t count = 0;
     const std::size_t row = std::size_t(i) * layout.rowStride, col = layout.colStride;
-    Gid* partners = historyPartner + std::size_t(i) * slots;
+    const SlotRow<Gid> partners{historyPartner + i, slotStride};
     for (int dz = -1; dz <= 1; ++dz) {
       const int z = cz + dz;
       if (z < 0 || z >= grid.nz) continue;

@@ -61,16 +61,19 @@ class EngineImpl final : public Engine {
     const CellGrid& g = m_setup.grid;
     m_exec.forEach(m_n, kernels::CellKey{g, m_particles.template ptr<Field::Position>(), m_cellKey.as<std::uint32_t>()});
     m_exec.sortByKey(m_cellKey.as<std::uint32_t>(), m_n, g.numCells(), m_perm.as<Index>(), m_cellStart.as<Index>());
-    // Reorder every field of the table by the permutation, through one scratch buffer of the largest
-    // field's size (allocated once, not per field and rebuild).
+    // Reorder every field of the table by the permutation, one column at a time (a slot field is one
+    // column per slot), through one scratch buffer of the largest column (allocated once).
     std::size_t largest = 0;
-    for (const auto& f : kFieldTableOf<R>) largest = std::max(largest, m_particles.buffer(f.id).bytes());
+    for (const auto& f : kFieldTableOf<R>) largest = std::max(largest, f.elementBytes * std::size_t(m_n));
     if (m_scratch.bytes() < largest) m_scratch.resize(largest);
     for (const auto& f : kFieldTableOf<R>) {
       Buffer& field = m_particles.buffer(f.id);
-      m_exec.forEach(m_n, kernels::GatherBytes{field.template as<unsigned char>(), m_scratch.as<unsigned char>(),
-                                               m_perm.as<Index>(), m_particles.strideBytes(f)});
-      m_mem.copyWithin(field.data(), m_scratch.data(), field.bytes());
+      const std::size_t column = f.elementBytes * std::size_t(m_n);
+      for (std::size_t k = 0; k < m_particles.valuesPerParticle(f); ++k) {
+        unsigned char* data = field.template as<unsigned char>() + k * column;
+        m_exec.forEach(m_n, kernels::GatherBytes{data, m_scratch.as<unsigned char>(), m_perm.as<Index>(), f.elementBytes});
+        m_mem.copyWithin(data, m_scratch.data(), column);
+      }
     }
   }
 
@@ -89,7 +92,7 @@ class EngineImpl final : public Engine {
                                                   m_particles.template ptr<Field::Position>(), m_particles.template ptr<Field::Radius>(),
                                                   m_particles.template ptr<Field::Gid>(),
                                                   m_particles.template ptr<Field::HistoryPartner>(),
-                                                  m_particles.contactSlots(), m_setup.skin, m_nbrCap,
+                                                  m_particles.contactSlots(), m_n, m_setup.skin, m_nbrCap,
                                                   nbrLayout(), m_nbr.as<Index>(), m_nbrSlot.as<std::int8_t>(),
                                                   m_nbrCount.as<std::uint32_t>(), m_cond.as<Conditions>()});
       m_exec.forEach(m_n, kernels::WallCandidates<R>{m_setup.grid, m_planes.as<PlaneParams>(), int(m_setup.planes.size()),
@@ -98,7 +101,7 @@ class EngineImpl final : public Engine {
                                                   m_particles.template ptr<Field::Radius>(), m_setup.skin, m_wallCap,
                                                   m_wallCand.as<Index>(), m_wallCandCount.as<std::uint32_t>(),
                                                   m_planeMask.as<std::uint32_t>(), m_particles.template ptr<Field::WallKey>(),
-                                                  m_particles.wallSlots(), m_cond.as<Conditions>()});
+                                                  m_particles.wallSlots(), m_n, m_cond.as<Conditions>()});
       const Conditions c = readConditions();
       if (!(c.flags & (kNeighborOverflow | kWallCandidateOverflow))) break;
       if (c.flags & kNeighborOverflow) {
@@ -275,6 +278,7 @@ class EngineImpl final : public Engine {
     a.slots = m_particles.contactSlots();
     a.histPartner = m_particles.template ptr<Field::HistoryPartner>();
     a.histDisp = m_particles.template ptr<Field::HistoryDisp>();
+    a.slotStride = m_n;
     a.planes = m_planes.as<PlaneParams>();
     a.planeMask = m_planeMask.as<std::uint32_t>();
     a.triVerts = m_triVerts.as<Vec3d>();

@@ -165,7 +165,8 @@ int runRankZero(const worker::WorkerOptions& o, int ranks) {
   auto created = compute::Simulation::create(cfg, so);
   if (!created) return fail(created.status().code() == StatusCode::kInvalidArgument ? 1 : 3, created.status().message());
   compute::Simulation& sim = *created.value();
-  const std::string executorNote = sim.executorDescription() + " (device " + device.node + ":" + device.kind + ":" +
+  const std::string executorNote = sim.executorDescription() + ", " + sim.engine().precisionName() + " (device " +
+                                   device.node + ":" + device.kind + ":" +
                                    std::to_string(device.index) +
                                    "; " + std::to_string(ranks) + " rank(s))";
   spdlog::info("job {}: {} particles, executor {}", o.jobId, sim.numParticles(), executorNote);
