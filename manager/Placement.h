@@ -21,7 +21,9 @@
 namespace pflow::manager {
 
 struct PlacementThresholds {
-  std::uint64_t particlesPerGpu = 250000;     // enough to keep one GPU busy (to be measured on the H100)
+  // Enough to keep one GPU busy: measured on an H100 (bench/RESULTS.md, "Throughput against size"), one GPU
+  // reaches 83-89 % of its large-bed throughput at 10^6 spheres, and under half of it below 2*10^5.
+  std::uint64_t particlesPerGpu = 1000000;
   std::uint64_t particlesPerCpuSlot = 50000;  // enough to keep one CPU slot busy
   double memoryHeadroom = 0.9;                // usable fraction of a device's memory
 };

@@ -29,7 +29,15 @@ std::vector<DeviceKey> gpus(const std::string& node, std::vector<int> idx) {
   return out;
 }
 
-const PlacementThresholds kTh;  // 250000 per GPU, 50000 per CPU slot
+// 250000 per GPU, 50000 per CPU slot: set here, not taken from the defaults (which are measurements), so
+// these tests pin the rule.
+PlacementThresholds testThresholds() {
+  PlacementThresholds t;
+  t.particlesPerGpu = 250000;
+  t.particlesPerCpuSlot = 50000;
+  return t;
+}
+const PlacementThresholds kTh = testThresholds();
 
 TEST(Placement, CountIsParticlesOverThresholdRoundedDown) {
   const std::vector<NodeView> nodes{node("a", 8)};
