@@ -59,21 +59,26 @@ if has scaling; then
     --precision double,float --copy-bandwidth "$bw" --device "$dev" --commit "$commit" >> "$OUT/bench.jsonl" 2>> "$OUT/bench.log"
   summary+=("scaling rc=$?")
 fi
-# The largest bed that fits (float), timed briefly.
+# The largest beds that fit, one per precision (LARGEST="float:N double:N"), timed briefly.
 if has largest; then
-  timeout "${LARGEST_TIMEOUT:-300}" "$B/pflow-bench" --executor cuda -n "${LARGEST:-100000000}" --tile-from 200000 \
-    --settle-steps "${SETTLE:-30000}" --resettle-steps 300 --steps 300 --no-lammps --precision "${LARGEST_PRECISION:-float}" \
-    --copy-bandwidth "$bw" --device "$dev" --commit "$commit" >> "$OUT/bench.jsonl" 2>> "$OUT/bench.log"
-  summary+=("largest rc=$?")
+  for spec in ${LARGEST:-float:100000000}; do
+    timeout "${LARGEST_TIMEOUT:-300}" "$B/pflow-bench" --executor cuda -n "${spec#*:}" --tile-from 200000 \
+      --settle-steps "${SETTLE:-30000}" --resettle-steps 300 --steps 300 --no-lammps --precision "${spec%%:*}" \
+      --copy-bandwidth "$bw" --device "$dev" --commit "$commit" >> "$OUT/bench.jsonl" 2>> "$OUT/bench.log"
+    summary+=("largest $spec rc=$?")
+  done
 fi
 # The CPU executor (every core of the GPU's host) and LAMMPS (one rank per core) on a bed settled on the GPU.
 if has cpu; then
   cores=$(nproc)
-  timeout "${CPU_TIMEOUT:-300}" "$B/pflow-bench" --executor cpu --settle-executor cuda -n "${CPU_SIZES:-1000000}" \
-    --tile-from 200000 --settle-steps "${SETTLE:-30000}" --resettle-steps "${RESETTLE:-1000}" --steps "${CPU_STEPS:-300}" \
-    --threads "$cores" --lammps-ranks "$cores" --precision double,float --device "$(lscpu | sed -n 's/^Model name: *//p' | head -1), $cores cores" \
-    --commit "$commit" >> "$OUT/bench.jsonl" 2>> "$OUT/bench.log"
-  summary+=("cpu+lammps rc=$?")
+  for poly in ${CPU_BEDS:-"" "--poly"}; do
+    timeout "${CPU_TIMEOUT:-300}" "$B/pflow-bench" --executor cpu --settle-executor cuda -n "${CPU_SIZES:-1000000}" \
+      --tile-from 200000 --settle-steps "${SETTLE:-30000}" --resettle-steps "${RESETTLE:-1000}" --steps "${CPU_STEPS:-300}" \
+      --threads "$cores" --lammps-ranks "$cores" --precision double,float $poly \
+      --device "$(lscpu | sed -n 's/^Model name: *//p' | head -1), $cores cores" \
+      --commit "$commit" >> "$OUT/bench.jsonl" 2>> "$OUT/bench.log"
+    summary+=("cpu+lammps $poly rc=$?")
+  done
 fi
 if [[ -s $OUT/bench.jsonl ]]; then
   summary+=("$(python3 - "$OUT/bench.jsonl" <<'PY'

@@ -31,4 +31,13 @@ struct Conditions {
   std::uint32_t deepParticle = kNoIndex; // lowest local index with an excessive overlap
 };
 
+namespace kernels {
+// Resets the flags on the device: a launch queued behind the previous phase, not a host copy that
+// would wait for it.
+struct ResetConditions {
+  Conditions* cond;
+  PFLOW_HOSTDEVICE void operator()(Index) const { *cond = Conditions{}; }
+};
+}  // namespace kernels
+
 }  // namespace pflow::compute

@@ -241,10 +241,7 @@ class EngineImpl final : public Engine {
   ListLayout nbrLayout() const { return m_columnMajor ? ListLayout::columnMajor(m_n) : ListLayout::rowMajor(m_nbrCap); }
   void allocWallCandidates() { m_wallCand.resize(std::max<std::size_t>(1, std::size_t(m_n) * m_wallCap) * sizeof(Index)); }
   void binTriangles();
-  void resetConditions() {
-    Conditions c;
-    m_mem.copyFromHost(m_cond.data(), &c, sizeof c);
-  }
+  void resetConditions() { m_exec.forEach(1, kernels::ResetConditions{m_cond.as<Conditions>()}); }
   Conditions readConditions() const {
     Conditions c;
     m_mem.copyToHost(&c, m_cond.data(), sizeof c);
