@@ -43,7 +43,7 @@ struct ForceArgs {
   Index nbrCapacity;
   ListLayout nbrLayout;
   int slots;
-  Gid* histPartner;      // slot fields are slot-major: [k * slotStride + i]
+  PartnerId* histPartner;  // slot fields are slot-major: [k * slotStride + i]
   Vec3<R>* histDisp;
   std::size_t slotStride;
   // walls
@@ -98,7 +98,7 @@ struct ComputeForces {
     std::int8_t* __restrict__ nbrSlot = a.nbrSlot + std::size_t(i) * a.nbrLayout.rowStride;
     const std::size_t col = a.nbrLayout.colStride;
     const int slots = a.slots;
-    const SlotRow<Gid> partner{a.histPartner + i, a.slotStride};
+    const SlotRow<PartnerId> partner{a.histPartner + i, a.slotStride};
     const SlotRow<V> disp{a.histDisp + i, a.slotStride};
     const ContactParams* __restrict__ params = a.params + std::size_t(a.material[i]) * a.numMaterials;
     const R dt = R(a.dt);
@@ -125,7 +125,7 @@ struct ComputeForces {
       int slot = nbrSlot[e * col];
       if (d2 >= rs * rs) {
         if (slot >= 0) {  // the contact has ended: forget its history
-          partner[slot] = kNoGid;
+          partner[slot] = kNoPartner;
           nbrSlot[e * col] = -1;
         }
         continue;
@@ -184,10 +184,10 @@ struct ComputeForces {
   }
 
   // Claims an empty slot for partner g, or returns -1 when all are taken.
-  PFLOW_HOSTDEVICE static int claimSlot(SlotRow<Gid> partner, int slots, Gid g) {
+  PFLOW_HOSTDEVICE static int claimSlot(SlotRow<PartnerId> partner, int slots, Gid g) {
     for (int k = 0; k < slots; ++k)
-      if (partner[k] == kNoGid) {
-        partner[k] = g;
+      if (partner[k] == kNoPartner) {
+        partner[k] = PartnerId(g);
         return k;
       }
     return -1;

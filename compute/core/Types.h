@@ -25,6 +25,11 @@ using Gid = std::uint64_t;    // global particle identity, stable across reorder
 using Index = std::uint32_t;  // local index, valid until the next reorder
 inline constexpr Gid kNoGid = ~Gid(0);
 inline constexpr Index kNoIndex = ~Index(0);
+// A history slot's partner: the partner's gid in 32 bits (runs hold fewer than 2^32 - 1 particles; the
+// setup refuses more), kNoPartner when the slot is empty.
+using PartnerId = std::uint32_t;
+inline constexpr PartnerId kNoPartner = ~PartnerId(0);
+inline constexpr Gid kMaxParticles = Gid(kNoPartner);
 
 // One particle's slots of a slot field (contact history), which is stored slot-major: slot k of particle
 // i at p[k * n + i]. A warp's 32 consecutive particles then touch 32 consecutive values of a slot, slots

@@ -21,7 +21,7 @@ struct IntegrateArgs {
   const Vec3<R>* torque;
   const R* radius;
   const R* mass;
-  const Vec3d* refPos;  // positions at the last neighbour rebuild
+  Vec3f* moved;  // displacement since the last neighbour rebuild (float: it only feeds the skin test)
   Vec3d gravity;
   double dt;
   Conditions* cond;
@@ -43,11 +43,13 @@ struct IntegrateFirstHalf {
   PFLOW_HOSTDEVICE double operator()(Index i) const {
     Vec3<R> v, w;
     a.halfKick(i, v, w);
-    const Vec3d x = a.pos[i] + a.dt * vcast<double>(v);
+    const Vec3d dx = a.dt * vcast<double>(v);
     a.vel[i] = v;
-    a.pos[i] = x;
+    a.pos[i] = a.pos[i] + dx;
     a.omega[i] = w;
-    return norm2(x - a.refPos[i]);
+    const Vec3f moved = a.moved[i] + vcast<float>(dx);
+    a.moved[i] = moved;
+    return double(norm2(moved));
   }
 };
 

@@ -56,11 +56,6 @@ struct GatherBytes {
   }
 };
 
-struct CopyPositions {
-  const Vec3d* src;
-  Vec3d* dst;
-  PFLOW_HOSTDEVICE void operator()(Index i) const { dst[i] = src[i]; }
-};
 
 // Candidates j of particle i with |x_i - x_j| < r_i + r_j + skin, in fixed-stride rows of `capacity`.
 // Each candidate's history slot (the slot of i holding j's gid, or -1) is resolved here, so the
@@ -73,7 +68,7 @@ struct BuildNeighbors {
   const Vec3d* pos;
   const R* radius;
   const Gid* gid;
-  Gid* historyPartner;  // slot-major: [k * slotStride + i]
+  PartnerId* historyPartner;  // slot-major: [k * slotStride + i]
   int slots;
   std::size_t slotStride;
   double skin;
@@ -91,7 +86,7 @@ struct BuildNeighbors {
     grid.coords(xi, cx, cy, cz);
     std::uint32_t count = 0;
     const std::size_t row = std::size_t(i) * layout.rowStride, col = layout.colStride;
-    const SlotRow<Gid> partners{historyPartner + i, slotStride};
+    const SlotRow<PartnerId> partners{historyPartner + i, slotStride};
     for (int dz = -1; dz <= 1; ++dz) {
       const int z = cz + dz;
       if (z < 0 || z >= grid.nz) continue;
@@ -109,7 +104,7 @@ struct BuildNeighbors {
             if (count < capacity) {
               nbr[row + count * col] = j;
               std::int8_t slot = -1;
-              const Gid g = gid[j];
+              const PartnerId g = PartnerId(gid[j]);
               for (int k = 0; k < slots; ++k)
                 if (partners[k] == g) slot = std::int8_t(k);
               nbrSlot[row + count * col] = slot;
@@ -126,10 +121,10 @@ struct BuildNeighbors {
       return;
     }
     for (int k = 0; k < slots; ++k) {
-      if (partners[k] == kNoGid) continue;
+      if (partners[k] == kNoPartner) continue;
       bool candidate = false;
       for (std::uint32_t e = 0; e < count && !candidate; ++e) candidate = nbrSlot[row + e * col] == k;
-      if (!candidate) partners[k] = kNoGid;
+      if (!candidate) partners[k] = kNoPartner;
     }
   }
 };

@@ -16,7 +16,7 @@ void ParticleData<R>::resizeSlots(Multiplicity kind, int newSlots) {
     const std::size_t column = f.elementBytes * std::size_t(m_n);
     Buffer& b = m_fields[int(f.id)];
     b.growKeep(column * std::size_t(newSlots));
-    // Empty slots: partner/key bytes 0xFF (kNoGid), displacements 0.
+    // Empty slots: partner/key bytes 0xFF (kNoPartner, kNoGid), displacements 0.
     const unsigned char fill = (f.id == Field::HistoryPartner || f.id == Field::WallKey) ? 0xFF : 0x00;
     const std::size_t keep = column * std::size_t(oldSlots);
     m_space->fillBytes(static_cast<unsigned char*>(b.data()) + keep, fill, b.bytes() - keep);

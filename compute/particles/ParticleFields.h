@@ -31,7 +31,7 @@ enum class Multiplicity : std::uint8_t { kOne, kContactSlots, kWallSlots };
   X(Mass,            "mass",               Real,          kOne,          "kg",    kMigrate | kGhost)                    \
   X(Material,        "material",           std::int32_t,  kOne,          "",      kSnapshot | kMigrate | kGhost)        \
   X(Gid,             "id",                 Gid,           kOne,          "",      kSnapshot | kMigrate | kGhost)        \
-  X(HistoryPartner,  "history_partner",    Gid,           kContactSlots, "",      kMigrate)                             \
+  X(HistoryPartner,  "history_partner",    PartnerId,     kContactSlots, "",      kMigrate)                             \
   X(HistoryDisp,     "history_disp",       Real3,         kContactSlots, "m",     kMigrate)                             \
   X(WallKey,         "wall_key",           std::uint64_t, kWallSlots,    "",      kMigrate)                             \
   X(WallDisp,        "wall_disp",          Real3,         kWallSlots,    "m",     kMigrate)
@@ -63,6 +63,7 @@ template <> constexpr ScalarType scalarTypeOf<float>() { return ScalarType::kF32
 template <> constexpr ScalarType scalarTypeOf<Vec3f>() { return ScalarType::kF32; }
 template <> constexpr ScalarType scalarTypeOf<std::int32_t>() { return ScalarType::kI32; }
 template <> constexpr ScalarType scalarTypeOf<std::uint64_t>() { return ScalarType::kU64; }
+template <> constexpr ScalarType scalarTypeOf<std::uint32_t>() { return ScalarType::kU32; }
 
 struct FieldInfo {
   Field id;

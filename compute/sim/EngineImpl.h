@@ -79,7 +79,7 @@ class EngineImpl final : public Engine {
 
   Status buildContacts() override {
     // Positions and vertices now are the reference for the skin criterion.
-    m_exec.forEach(m_n, kernels::CopyPositions{m_particles.template ptr<Field::Position>(), m_refPos.as<Vec3d>()});
+    m_mem.fillBytes(m_moved.data(), 0, m_moved.bytes());
     // Static meshes are binned once; moving ones at every rebuild, from where they are now.
     if (m_numTri && (m_anyMeshMoves || !m_binned)) {
       m_mem.copyWithin(m_triRebuild.data(), m_triVerts.data(), m_triVerts.bytes());
@@ -131,14 +131,15 @@ class EngineImpl final : public Engine {
     // the slots and store the displacements that found no slot.
     while (c.flags & (kHistoryOverflow | kWallHistoryOverflow)) {
       if (c.flags & kHistoryOverflow) {
-        const int grown = std::max<int>(m_particles.contactSlots() + 4, int(c.neededHistory) + 2);
+        // One spare slot: slots are carried by every particle, so headroom costs n times over.
+        const int grown = std::max<int>(m_particles.contactSlots() + 1, int(c.neededHistory) + 1);
         if (grown > 127)
           return Status(StatusCode::kResourceExhausted,
                         "a particle has " + std::to_string(c.neededHistory) + " simultaneous contacts, above the 127-slot limit");
         m_particles.resizeSlots(Multiplicity::kContactSlots, grown);
       }
       if (c.flags & kWallHistoryOverflow) {
-        const int grown = std::max<int>(m_particles.wallSlots() + 2, int(c.neededWallHistory) + 1);
+        const int grown = std::max<int>(m_particles.wallSlots() + 1, int(c.neededWallHistory) + 1);
         if (grown > 32)
           return Status(StatusCode::kResourceExhausted, "a particle has " + std::to_string(c.neededWallHistory) +
                                                             " simultaneous wall contacts, above the 32-slot limit");
@@ -254,7 +255,7 @@ class EngineImpl final : public Engine {
     return {m_particles.template ptr<Field::Position>(), m_particles.template ptr<Field::Velocity>(),
             m_particles.template ptr<Field::AngularVelocity>(), m_particles.template ptr<Field::Force>(),
             m_particles.template ptr<Field::Torque>(), m_particles.template ptr<Field::Radius>(), m_particles.template ptr<Field::Mass>(),
-            m_refPos.as<Vec3d>(), m_setup.gravity, dt, m_cond.as<Conditions>()};
+            m_moved.as<Vec3f>(), m_setup.gravity, dt, m_cond.as<Conditions>()};
   }
   kernels::ForceArgs<R> forceArgs(double dt, double time, bool storeOnly) {
     kernels::ForceArgs<R> a{};
@@ -316,7 +317,7 @@ class EngineImpl final : public Engine {
   bool m_columnMajor = Exec::kColumnMajorLists;
   Index m_wallCap = 4;
   std::size_t m_rebuilds = 0;
-  Buffer m_refPos{m_mem, 0}, m_cellKey{m_mem, 0}, m_perm{m_mem, 0}, m_cellStart{m_mem, 0}, m_scratch{m_mem, 0};
+  Buffer m_moved{m_mem, 0}, m_cellKey{m_mem, 0}, m_perm{m_mem, 0}, m_cellStart{m_mem, 0}, m_scratch{m_mem, 0};
   Buffer m_nbr{m_mem, 0}, m_nbrSlot{m_mem, 0}, m_nbrCount{m_mem, 0};
   Buffer m_planes{m_mem, 0}, m_triRef{m_mem, 0}, m_triVerts{m_mem, 0}, m_triRebuild{m_mem, 0};
   Buffer m_triMesh{m_mem, 0}, m_triMaterial{m_mem, 0}, m_meshMotion{m_mem, 0};
@@ -360,7 +361,7 @@ void EngineImpl<Exec, R>::init() {
   for (Field f : {Field::HistoryDisp, Field::WallDisp})
     m_mem.fillBytes(m_particles.buffer(f).data(), 0, m_particles.buffer(f).bytes());
 
-  m_refPos.resize(std::size_t(m_n) * sizeof(Vec3d));
+  m_moved.resize(std::size_t(m_n) * sizeof(Vec3f));
   m_cellKey.resize(std::size_t(m_n) * sizeof(std::uint32_t));
   m_perm.resize(std::size_t(m_n) * sizeof(Index));
   m_cellStart.resize((std::size_t(s.grid.numCells()) + 1) * sizeof(Index));
@@ -479,11 +480,13 @@ ContactStats EngineImpl<Exec, R>::contactStats() const {
     }
   }
   st.coordinationNumber = n ? 2.0 * double(st.particleContacts) / n : 0.0;
-  for (Field f : {Field::HistoryPartner, Field::WallKey}) {
-    std::vector<Gid> keys(m_particles.buffer(f).bytes() / sizeof(Gid));
-    m_mem.copyToHost(keys.data(), m_particles.buffer(f).data(), keys.size() * sizeof(Gid));
-    for (Gid k : keys) st.historyEntries += k != kNoGid;
-  }
+  auto occupied = [&]<class T>(Field f, T empty) {
+    std::vector<T> keys(m_particles.buffer(f).bytes() / sizeof(T));
+    m_mem.copyToHost(keys.data(), m_particles.buffer(f).data(), keys.size() * sizeof(T));
+    for (T k : keys) st.historyEntries += k != empty;
+  };
+  occupied(Field::HistoryPartner, kNoPartner);
+  occupied(Field::WallKey, kNoGid);
   return st;
 }
 

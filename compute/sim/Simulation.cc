@@ -148,6 +148,9 @@ Result<EngineSetup> prepareEngineSetup(const RunConfig& c) {
   s.wallHistorySlots = c.sim.wallHistorySlots;
   s.threads = c.sim.threads;
 
+  if (n >= kMaxParticles)
+    return invalidArgument("particles: " + std::to_string(n) + " particles, at most " + std::to_string(kMaxParticles - 1) +
+                           " in one run (history slots key partners by 32-bit id)");
   if (c.planes.size() > std::size_t(kMaxPlanes))
     return invalidArgument("geometry: " + std::to_string(c.planes.size()) + " planes, at most " +
                            std::to_string(kMaxPlanes) + " infinite planes are supported; use a box or mesh for more walls");

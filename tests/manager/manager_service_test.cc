@@ -31,6 +31,7 @@ class ManagerServiceTest : public ::testing::Test {
     store = std::move(s.value());
     ManagerOptions options;
     options.managerAddress = "127.0.0.1:50051";
+    options.thresholds.particlesPerGpu = 250000;  // the rule under test, not the measured default
     auto m = Manager::create(options, clock, *store, agents, frontend);
     ASSERT_TRUE(m);
     manager = std::move(m.value());

@@ -22,6 +22,7 @@ class ManagerTest : public ::testing::Test {
   void SetUp() override {
     options.managerAddress = "mgr:50051";
     options.backendAddress = "backend:50053";
+    options.thresholds.particlesPerGpu = 250000;  // the rule under test, not the measured default
     auto s = JobStore::open(":memory:");
     ASSERT_TRUE(s);
     store = std::move(s.value());
@@ -493,6 +494,7 @@ class ManagerRestartTest : public ManagerTest {
                                                      ::testing::UnitTest::GetInstance()->current_test_info()->name() + ".db");
     cleanup();
     options.managerAddress = "mgr:50051";
+    options.thresholds.particlesPerGpu = 250000;  // the rule under test, not the measured default
     reopen();
   }
   void TearDown() override {

@@ -42,12 +42,13 @@ TEST(Blowup, TimeStepFarTooLargeIsReported) {
 TEST(Blowup, NonFiniteValuesAreFlagged) {
   const int n = 4;
   Vec3d pos[n] = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0}}, vel[n] = {}, omega[n] = {}, force[n] = {},
-        torque[n] = {}, ref[n] = {};
+        torque[n] = {};
+  Vec3f moved[n] = {};
   double radius[n] = {1, 1, 1, 1}, mass[n] = {1, 1, 1, 1};
   force[2].y = std::numeric_limits<double>::quiet_NaN();
   torque[3].z = std::numeric_limits<double>::infinity();
   compute::Conditions cond;
-  const compute::kernels::IntegrateArgs<double> a{pos, vel, omega, force, torque, radius, mass, ref, {0, 0, 0}, 1e-3, &cond};
+  const compute::kernels::IntegrateArgs<double> a{pos, vel, omega, force, torque, radius, mass, moved, {0, 0, 0}, 1e-3, &cond};
   for (Index i = 0; i < n; ++i) compute::kernels::IntegrateSecondHalf<double>{a}(i);
   EXPECT_TRUE(cond.flags & compute::kNonFinite);
   EXPECT_EQ(cond.badParticle, 2u);
