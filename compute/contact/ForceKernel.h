@@ -43,9 +43,9 @@ struct ForceArgs {
   Index nbrCapacity;
   ListLayout nbrLayout;
   int slots;
-  PartnerId* histPartner;  // slot fields are slot-major: [k * slotStride + i]
+  PartnerId* histPartner;
   Vec3<R>* histDisp;
-  std::size_t slotStride;
+  SlotLayout histLayout;
   // walls
   const PlaneParams* planes;
   const std::uint32_t* planeMask;  // per particle: planes within r + skin at the last rebuild
@@ -59,6 +59,7 @@ struct ForceArgs {
   int wallSlots;
   std::uint64_t* wallKey;
   Vec3<R>* wallDisp;
+  SlotLayout wallLayout;
   // parameters
   const ContactParams* params;  // [matI * numMaterials + matJ]
   int numMaterials;
@@ -98,8 +99,8 @@ struct ComputeForces {
     std::int8_t* __restrict__ nbrSlot = a.nbrSlot + std::size_t(i) * a.nbrLayout.rowStride;
     const std::size_t col = a.nbrLayout.colStride;
     const int slots = a.slots;
-    const SlotRow<PartnerId> partner{a.histPartner + i, a.slotStride};
-    const SlotRow<V> disp{a.histDisp + i, a.slotStride};
+    const SlotRow<PartnerId> partner = a.histLayout.at(a.histPartner, i);
+    const SlotRow<V> disp = a.histLayout.at(a.histDisp, i);
     const ContactParams* __restrict__ params = a.params + std::size_t(a.material[i]) * a.numMaterials;
     const R dt = R(a.dt);
     const bool storeOnly = a.storeOnly;
@@ -267,8 +268,8 @@ struct ComputeWallForces {
                    a.triMaterial[t], cp.feature == geometry::Feature::kFace};
     }
     if (tooMany) atomicOrU32(&a.cond->flags, kTooManyWallContacts);
-    const SlotRow<std::uint64_t> key{a.wallKey + i, a.slotStride};
-    const SlotRow<V> disp{a.wallDisp + i, a.slotStride};
+    const SlotRow<std::uint64_t> key = a.wallLayout.at(a.wallKey, i);
+    const SlotRow<V> disp = a.wallLayout.at(a.wallDisp, i);
     if (nwc == 0) {  // no wall contact; forget any that just ended
       if (a.planeMask[i] == 0 && nc == 0) return;  // far from every wall: its slots were cleared at rebuild
       for (int k = 0; k < a.wallSlots; ++k)

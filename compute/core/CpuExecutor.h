@@ -13,6 +13,7 @@ class CpuExecutor {
  public:
   static constexpr const char* kName = "cpu";
   static constexpr bool kColumnMajorLists = false;  // each core walks its own candidate rows
+  static constexpr bool kSlotMajor = false;         // and its particles' history slots (SlotLayout)
   explicit CpuExecutor(int threads = 0);
   // Below this many iterations a loop runs on the calling thread: waking a team costs more.
   static constexpr Index kMinParallel = 512;

@@ -31,13 +31,21 @@ using PartnerId = std::uint32_t;
 inline constexpr PartnerId kNoPartner = ~PartnerId(0);
 inline constexpr Gid kMaxParticles = Gid(kNoPartner);
 
-// One particle's slots of a slot field (contact history), which is stored slot-major: slot k of particle
-// i at p[k * n + i]. A warp's 32 consecutive particles then touch 32 consecutive values of a slot, slots
-// grow by appending columns, and reordering needs scratch for one column, not for a whole slot field.
+// One particle's slots of a slot field (contact history): slot k of particle i at p[i * row + k * col].
 template <class T>
 struct SlotRow {
-  T* p;                // &field[i] (slot 0 of particle i)
-  std::size_t stride;  // n, the number of particles
+  T* p;                // slot 0 of particle i
+  std::size_t stride;  // between consecutive slots
   PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T& operator[](int k) const { return p[std::size_t(k) * stride]; }
+};
+
+// How a slot field is laid out, chosen by the executor: slot-major on the GPU (row 1, col n: a warp's 32
+// consecutive particles touch 32 consecutive values of a slot, slots grow by appending columns, reorder
+// needs one column of scratch), particle-major on the CPU (row = slots, col 1: a core walks one
+// particle's slots in one or two cache lines).
+struct SlotLayout {
+  std::size_t row = 1, col = 1;
+  template <class T>
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE SlotRow<T> at(T* base, Index i) const { return {base + std::size_t(i) * row, col}; }
 };
 }  // namespace pflow

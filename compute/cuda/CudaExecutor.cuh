@@ -97,6 +97,7 @@ class CudaExecutor {
  public:
   static constexpr const char* kName = "cuda";
   static constexpr bool kColumnMajorLists = true;  // a warp reads 32 consecutive candidate words
+  static constexpr bool kSlotMajor = true;         // and 32 consecutive values of a history slot (SlotLayout)
   // `threads` is the OpenMP setting of the CPU executor; the CUDA executor runs on the current device.
   explicit CudaExecutor(int threads = 0);
   ~CudaExecutor();

@@ -143,9 +143,9 @@ struct WallCandidates {
   Index* cand;               // [i * capacity + e]
   std::uint32_t* candCount;  // [i]
   std::uint32_t* planeMask;  // [i]
-  std::uint64_t* wallKey;    // slot-major: [k * slotStride + i]
+  std::uint64_t* wallKey;
   int wallSlots;
-  std::size_t slotStride;
+  SlotLayout slotLayout;
   Conditions* cond;
   PFLOW_HOSTDEVICE void operator()(Index i) const {
     const Vec3d x = pos[i];
@@ -171,7 +171,7 @@ struct WallCandidates {
       atomicMaxU32(&cond->neededWallCandidates, count);
       return;
     }
-    const SlotRow<std::uint64_t> key{wallKey + i, slotStride};
+    const SlotRow<std::uint64_t> key = slotLayout.at(wallKey, i);
     for (int k = 0; k < wallSlots; ++k) {
       if (key[k] == kNoGid) continue;
       bool near = false;

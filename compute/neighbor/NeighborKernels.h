@@ -68,9 +68,9 @@ struct BuildNeighbors {
   const Vec3d* pos;
   const R* radius;
   const Gid* gid;
-  PartnerId* historyPartner;  // slot-major: [k * slotStride + i]
+  PartnerId* historyPartner;
   int slots;
-  std::size_t slotStride;
+  SlotLayout slotLayout;
   double skin;
   Index capacity;
   ListLayout layout;
@@ -86,7 +86,7 @@ struct BuildNeighbors {
     grid.coords(xi, cx, cy, cz);
     std::uint32_t count = 0;
     const std::size_t row = std::size_t(i) * layout.rowStride, col = layout.colStride;
-    const SlotRow<PartnerId> partners{historyPartner + i, slotStride};
+    const SlotRow<PartnerId> partners = slotLayout.at(historyPartner, i);
     for (int dz = -1; dz <= 1; ++dz) {
       const int z = cz + dz;
       if (z < 0 || z >= grid.nz) continue;

@@ -1,5 +1,8 @@
 #include "compute/particles/ParticleData.h"
 
+#include <algorithm>
+#include <vector>
+
 
 namespace pflow::compute {
 
@@ -7,19 +10,31 @@ template <class R>
 void ParticleData<R>::resizeSlots(Multiplicity kind, int newSlots) {
   const int oldSlots = kind == Multiplicity::kContactSlots ? m_contactSlots : m_wallSlots;
   if (newSlots == oldSlots) return;
-  // Slot fields are slot-major (one column of n values per slot), so growing appends empty columns and
-  // every existing slot stays where it is; all on the device.
   if (newSlots < oldSlots) return;  // slots only grow
   for (int k = 0; k < kNumFields; ++k) {
     const FieldInfo& f = kTable[k];
     if (f.multiplicity != kind) continue;
-    const std::size_t column = f.elementBytes * std::size_t(m_n);
-    Buffer& b = m_fields[int(f.id)];
-    b.growKeep(column * std::size_t(newSlots));
     // Empty slots: partner/key bytes 0xFF (kNoPartner, kNoGid), displacements 0.
     const unsigned char fill = (f.id == Field::HistoryPartner || f.id == Field::WallKey) ? 0xFF : 0x00;
-    const std::size_t keep = column * std::size_t(oldSlots);
-    m_space->fillBytes(static_cast<unsigned char*>(b.data()) + keep, fill, b.bytes() - keep);
+    Buffer& b = m_fields[int(f.id)];
+    if (m_slotMajor) {
+      // One column of n values per slot: growing appends empty columns, every slot stays in place; on the
+      // device.
+      const std::size_t column = f.elementBytes * std::size_t(m_n);
+      b.growKeep(column * std::size_t(newSlots));
+      const std::size_t keep = column * std::size_t(oldSlots);
+      m_space->fillBytes(static_cast<unsigned char*>(b.data()) + keep, fill, b.bytes() - keep);
+    } else {
+      // Particle-major (host memory on the CPU executor): re-stride every particle's row.
+      const std::size_t oldStride = f.elementBytes * std::size_t(oldSlots);
+      const std::size_t newStride = f.elementBytes * std::size_t(newSlots);
+      std::vector<unsigned char> oldHost(oldStride * m_n), newHost(newStride * m_n, fill);
+      m_space->copyToHost(oldHost.data(), b.data(), oldHost.size());
+      for (Index i = 0; i < m_n; ++i)
+        std::copy_n(oldHost.data() + i * oldStride, oldStride, newHost.data() + i * newStride);
+      b.resize(newHost.size());
+      m_space->copyFromHost(b.data(), newHost.data(), newHost.size());
+    }
   }
   (kind == Multiplicity::kContactSlots ? m_contactSlots : m_wallSlots) = newSlots;
 }

@@ -22,9 +22,11 @@ class ParticleData {
   int contactSlots() const { return m_contactSlots; }
   int wallSlots() const { return m_wallSlots; }
 
-  // Allocates every field for n particles (contents undefined).
-  void allocate(Index n, int contactSlots, int wallSlots) {
+  // Allocates every field for n particles (contents undefined); slot fields slot-major or particle-major
+  // (SlotLayout, chosen by the executor).
+  void allocate(Index n, int contactSlots, int wallSlots, bool slotMajor) {
     m_n = n;
+    m_slotMajor = slotMajor;
     m_contactSlots = contactSlots;
     m_wallSlots = wallSlots;
     for (int k = 0; k < kNumFields; ++k) m_fields[k].resize(fieldBytes(kTable[k], n));
@@ -45,6 +47,11 @@ class ParticleData {
   template <Field F> Type<F>* ptr() { return m_fields[int(F)].template as<Type<F>>(); }
   template <Field F> const Type<F>* ptr() const { return m_fields[int(F)].template as<Type<F>>(); }
   const FieldInfo& info(Field f) const { return kTable[int(f)]; }
+  bool slotMajor() const { return m_slotMajor; }
+  SlotLayout layout(Multiplicity kind) const {
+    if (m_slotMajor) return {1, m_n};
+    return {kind == Multiplicity::kWallSlots ? std::size_t(m_wallSlots) : std::size_t(m_contactSlots), 1};
+  }
   Buffer& buffer(Field f) { return m_fields[int(f)]; }
   const Buffer& buffer(Field f) const { return m_fields[int(f)]; }
 
@@ -63,6 +70,7 @@ class ParticleData {
   Index m_n = 0;
   int m_contactSlots = 0;
   int m_wallSlots = 0;
+  bool m_slotMajor = false;
   std::array<Buffer, kNumFields> m_fields;
 };
 

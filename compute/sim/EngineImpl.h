@@ -61,17 +61,22 @@ class EngineImpl final : public Engine {
     const CellGrid& g = m_setup.grid;
     m_exec.forEach(m_n, kernels::CellKey{g, m_particles.template ptr<Field::Position>(), m_cellKey.as<std::uint32_t>()});
     m_exec.sortByKey(m_cellKey.as<std::uint32_t>(), m_n, g.numCells(), m_perm.as<Index>(), m_cellStart.as<Index>());
-    // Reorder every field of the table by the permutation, one column at a time (a slot field is one
-    // column per slot), through one scratch buffer of the largest column (allocated once).
+    // Reorder every field of the table by the permutation through one scratch buffer (allocated once):
+    // slot-major slot fields one column (slot) at a time, so the scratch is one column of the widest
+    // field; particle-major ones a whole row per particle, so the scratch is the largest field.
+    const bool byColumn = m_particles.slotMajor();
     std::size_t largest = 0;
-    for (const auto& f : kFieldTableOf<R>) largest = std::max(largest, f.elementBytes * std::size_t(m_n));
+    for (const auto& f : kFieldTableOf<R>)
+      largest = std::max(largest, byColumn ? f.elementBytes * std::size_t(m_n) : m_particles.buffer(f.id).bytes());
     if (m_scratch.bytes() < largest) m_scratch.resize(largest);
     for (const auto& f : kFieldTableOf<R>) {
       Buffer& field = m_particles.buffer(f.id);
-      const std::size_t column = f.elementBytes * std::size_t(m_n);
-      for (std::size_t k = 0; k < m_particles.valuesPerParticle(f); ++k) {
+      const std::size_t columns = byColumn ? m_particles.valuesPerParticle(f) : 1;
+      const std::size_t stride = byColumn ? f.elementBytes : m_particles.strideBytes(f);
+      const std::size_t column = stride * std::size_t(m_n);
+      for (std::size_t k = 0; k < columns; ++k) {
         unsigned char* data = field.template as<unsigned char>() + k * column;
-        m_exec.forEach(m_n, kernels::GatherBytes{data, m_scratch.as<unsigned char>(), m_perm.as<Index>(), f.elementBytes});
+        m_exec.forEach(m_n, kernels::GatherBytes{data, m_scratch.as<unsigned char>(), m_perm.as<Index>(), stride});
         m_mem.copyWithin(data, m_scratch.data(), column);
       }
     }
@@ -92,7 +97,8 @@ class EngineImpl final : public Engine {
                                                   m_particles.template ptr<Field::Position>(), m_particles.template ptr<Field::Radius>(),
                                                   m_particles.template ptr<Field::Gid>(),
                                                   m_particles.template ptr<Field::HistoryPartner>(),
-                                                  m_particles.contactSlots(), m_n, m_setup.skin, m_nbrCap,
+                                                  m_particles.contactSlots(),
+                                                  m_particles.layout(Multiplicity::kContactSlots), m_setup.skin, m_nbrCap,
                                                   nbrLayout(), m_nbr.as<Index>(), m_nbrSlot.as<std::int8_t>(),
                                                   m_nbrCount.as<std::uint32_t>(), m_cond.as<Conditions>()});
       m_exec.forEach(m_n, kernels::WallCandidates<R>{m_setup.grid, m_planes.as<PlaneParams>(), int(m_setup.planes.size()),
@@ -101,7 +107,8 @@ class EngineImpl final : public Engine {
                                                   m_particles.template ptr<Field::Radius>(), m_setup.skin, m_wallCap,
                                                   m_wallCand.as<Index>(), m_wallCandCount.as<std::uint32_t>(),
                                                   m_planeMask.as<std::uint32_t>(), m_particles.template ptr<Field::WallKey>(),
-                                                  m_particles.wallSlots(), m_n, m_cond.as<Conditions>()});
+                                                  m_particles.wallSlots(), m_particles.layout(Multiplicity::kWallSlots),
+                                                  m_cond.as<Conditions>()});
       const Conditions c = readConditions();
       if (!(c.flags & (kNeighborOverflow | kWallCandidateOverflow))) break;
       if (c.flags & kNeighborOverflow) {
@@ -276,7 +283,7 @@ class EngineImpl final : public Engine {
     a.slots = m_particles.contactSlots();
     a.histPartner = m_particles.template ptr<Field::HistoryPartner>();
     a.histDisp = m_particles.template ptr<Field::HistoryDisp>();
-    a.slotStride = m_n;
+    a.histLayout = m_particles.layout(Multiplicity::kContactSlots);
     a.planes = m_planes.as<PlaneParams>();
     a.planeMask = m_planeMask.as<std::uint32_t>();
     a.triVerts = m_triVerts.as<Vec3d>();
@@ -289,6 +296,7 @@ class EngineImpl final : public Engine {
     a.wallSlots = m_particles.wallSlots();
     a.wallKey = m_particles.template ptr<Field::WallKey>();
     a.wallDisp = m_particles.template ptr<Field::WallDisp>();
+    a.wallLayout = m_particles.layout(Multiplicity::kWallSlots);
     a.params = m_params.as<ContactParams>();
     a.numMaterials = m_setup.numMaterials;
     a.dt = dt;
@@ -331,7 +339,7 @@ void EngineImpl<Exec, R>::init() {
   const EngineSetup& s = m_setup;
   m_n = Index(s.position.size());
   m_numTri = Index(s.triMesh.size());
-  m_particles.allocate(m_n, s.historySlots, s.wallHistorySlots);
+  m_particles.allocate(m_n, s.historySlots, s.wallHistorySlots, Exec::kSlotMajor);
   if (const char* layout = std::getenv("PFLOW_LIST_LAYOUT")) m_columnMajor = std::string(layout) == "column";
   std::vector<Gid> gids(m_n);
   for (Index i = 0; i < m_n; ++i) gids[i] = i;

@@ -16,7 +16,7 @@ namespace pflow::compute {
 
 // ---------------------------------------------------------------------------------------------
 // The step loop. One velocity-Verlet step, top to bottom, a timer per phase.
-Status Simulation::step() {
+Status Simulation::stepPhases() {
   const double dt = m_timeStep.dt, tNext = double(m_step + 1) * dt;
   double moved, meshMoved;
   { auto t = m_timers.time(Phase::kIntegrate1); moved = std::sqrt(m_engine->integrateFirstHalf(dt)); }
@@ -38,6 +38,16 @@ Status Simulation::rebuild() {
   return Status::ok();
 }
 // ---------------------------------------------------------------------------------------------
+
+// A step, with a device allocation that fails (growing history slots or candidate rows beyond the
+// device's memory) reported as an error of the step instead of escaping as an exception.
+Status Simulation::step() {
+  try {
+    return stepPhases();
+  } catch (const std::exception& e) {
+    return withStep(Status(StatusCode::kResourceExhausted, e.what()));
+  }
+}
 
 // History slots grow on demand (never silently): say so once per growth.
 void Simulation::reportSlotGrowth() {
@@ -110,7 +120,11 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const RunConfig& config, 
     sim->m_engine = makeCpuEngine(std::move(setup).value(), single);
   }
   sim->m_executor = kind;
-  if (Status s = sim->initialise(); !s.isOk()) return s;
+  try {
+    if (Status s = sim->initialise(); !s.isOk()) return s;
+  } catch (const std::exception& e) {
+    return Status(StatusCode::kResourceExhausted, e.what());
+  }
   return sim;
 }
 

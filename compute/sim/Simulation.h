@@ -59,6 +59,7 @@ class Simulation {
 
  private:
   Simulation(const EngineSetup& setup, TimeStepInfo ts, std::unique_ptr<Engine> engine);
+  Status stepPhases();  // the step loop itself (Simulation.cc, top of the file)
   Status initialise();
   Status rebuild();
   Status withStep(Status s) const;
