@@ -90,8 +90,8 @@ compute::RunConfig tiledBed(const compute::RunConfig& bed, const compute::Partic
 
 std::vector<std::pair<std::string, double>> compulsoryTraffic(int realBytes, double candidates, double contacts) {
   const double R = realBytes, pos = 24;  // positions are double at both precisions
-  // integrate1: read x, v, w, F, T, m, r, x_ref; write x, v, w.
-  const double integrate1 = 2 * pos + 3 * R * 4 + 2 * R + pos + 3 * R * 2;
+  // integrate1: read x, v, w, F, T, m, r and the float displacement since rebuild; write x, v, w and it.
+  const double integrate1 = 2 * pos + 3 * R * 4 + 2 * R + 2 * 12 + 3 * R * 2;
   // forces: own x, v, w, r, m, material, candidate count; per candidate an index and a slot byte; per contact
   // its history read and written; F and T written; the wall kernel's two per-particle counts.
   const double forces = pos + 8 * R + 4 + 4 + 5 * candidates + 6 * R * contacts + 6 * R + 8;
