@@ -12,22 +12,26 @@ namespace pflow::frontend {
 
 namespace {
 
-// Device bytes per particle: every field of the table (slot fields times their initial slot count), the reorder
-// scratch (one copy of the largest field), cell key and permutation, and neighbour rows of about 16 candidates of
-// an index and a history slot each, plus the wall-candidate rows. An estimate: slots and rows grow on demand.
+// Device bytes per particle on the GPU: every field of the table at the run's precision (slot fields times
+// their initial slot count), the reorder scratch (one column of the widest field: slot fields are
+// slot-major there), the displacement since rebuild, cell key and permutation, and neighbour rows of about
+// 16 candidates of an index and a history slot each, plus the wall-candidate rows. An estimate: slots and
+// rows grow on demand (docs/performance.md, "Memory per particle", has the measured figures).
 double bytesPerParticle(const compute::SimulationSettings& sim) {
-  double bytes = 0, largest = 0;
-  for (const auto& f : compute::kFieldTable) {
+  double bytes = 0, widest = 0;
+  const compute::FieldInfo* table = compute::fieldTable(sim.precision == compute::Precision::kFloat);
+  for (int k = 0; k < compute::kNumFields; ++k) {
+    const auto& f = table[k];
     const double slots = f.multiplicity == compute::Multiplicity::kContactSlots ? sim.historySlots
                          : f.multiplicity == compute::Multiplicity::kWallSlots  ? sim.wallHistorySlots
                                                                                 : 1;
     bytes += double(f.elementBytes) * slots;
-    largest = std::max(largest, double(f.elementBytes) * slots);
+    widest = std::max(widest, double(f.elementBytes));
   }
-  const double cellSort = 4 + 4 + 4;                           // key, permutation, position copy index
+  const double cellSort = 4 + 4 + 12;                              // key, permutation, displacement since rebuild
   const double neighbours = 16 * (sizeof(pflow::Index) + 1) + 4;  // candidates, slot bytes, count
-  const double walls = 8 * sizeof(pflow::Index) + 4 + 4;     // wall candidates, count, plane mask
-  return bytes + largest + cellSort + neighbours + walls;
+  const double walls = 4 * sizeof(pflow::Index) + 4 + 4;          // wall candidates, count, plane mask
+  return bytes + widest + cellSort + neighbours + walls;
 }
 
 }  // namespace

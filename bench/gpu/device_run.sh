@@ -71,7 +71,9 @@ fi
 # The CPU executor (every core of the GPU's host) and LAMMPS (one rank per core) on a bed settled on the GPU.
 if has cpu; then
   cores=$(nproc)
-  for poly in ${CPU_BEDS:-"" "--poly"}; do
+  for bed in ${CPU_BEDS:-mono poly}; do
+    poly=""
+    [[ $bed == poly ]] && poly=--poly
     timeout "${CPU_TIMEOUT:-300}" "$B/pflow-bench" --executor cpu --settle-executor cuda -n "${CPU_SIZES:-1000000}" \
       --tile-from 200000 --settle-steps "${SETTLE:-30000}" --resettle-steps "${RESETTLE:-1000}" --steps "${CPU_STEPS:-300}" \
       --threads "$cores" --lammps-ranks "$cores" --precision double,float $poly \

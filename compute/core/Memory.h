@@ -3,11 +3,19 @@
 #pragma once
 #include <cstddef>
 #include <cstring>
+#include <stdexcept>
 #include <utility>
 
 namespace pflow::compute {
 
 // Where a Buffer lives. The CPU executor's is host memory; the CUDA executor's is cudaMalloc'd.
+// A device allocation that did not fit (the message gives the sizes). The step loop reports it as
+// RESOURCE_EXHAUSTED; any other exception from a device is an internal error.
+class OutOfDeviceMemory : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 class MemorySpace {
  public:
   virtual ~MemorySpace() = default;

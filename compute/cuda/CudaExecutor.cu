@@ -17,7 +17,7 @@ void* CudaMemory::allocate(std::size_t bytes) {
     cudaGetLastError();  // clear the sticky-free error state of a failed allocation
     std::size_t freeBytes = 0, total = 0;
     cudaMemGetInfo(&freeBytes, &total);
-    throw std::runtime_error("CUDA out of memory: allocating " + std::to_string(bytes) + " B with " +
+    throw OutOfDeviceMemory("CUDA out of memory: allocating " + std::to_string(bytes) + " B with " +
                              std::to_string(bytesInUse()) + " B in use by this run and " + std::to_string(freeBytes) +
                              " B free of " + std::to_string(total) + " B (" + cudaGetErrorString(e) + ")");
   }

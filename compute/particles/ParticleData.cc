@@ -32,8 +32,9 @@ void ParticleData<R>::resizeSlots(Multiplicity kind, int newSlots) {
       m_space->copyToHost(oldHost.data(), b.data(), oldHost.size());
       for (Index i = 0; i < m_n; ++i)
         std::copy_n(oldHost.data() + i * oldStride, oldStride, newHost.data() + i * newStride);
-      b.resize(newHost.size());
-      m_space->copyFromHost(b.data(), newHost.data(), newHost.size());
+      Buffer grown(*m_space, newHost.size());  // allocated before the old one goes: a failure loses nothing
+      m_space->copyFromHost(grown.data(), newHost.data(), newHost.size());
+      b.swap(grown);
     }
   }
   (kind == Multiplicity::kContactSlots ? m_contactSlots : m_wallSlots) = newSlots;

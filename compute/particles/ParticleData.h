@@ -55,8 +55,8 @@ class ParticleData {
   Buffer& buffer(Field f) { return m_fields[int(f)]; }
   const Buffer& buffer(Field f) const { return m_fields[int(f)]; }
 
-  // Changes the number of slots of one slot kind, keeping every particle's existing slots and
-  // marking the new ones empty (partner / key = kNoGid, displacement 0).
+  // Grows the slots of one slot kind (never shrinks), keeping every particle's existing slots and
+  // marking the new ones empty (partner kNoPartner, wall key kNoGid, displacement 0).
   void resizeSlots(Multiplicity kind, int newSlots);
 
   std::size_t bytesPerParticle() const {

@@ -5,8 +5,13 @@
 #include <numbers>
 
 #include "common/Log.h"
+#include "compute/core/Memory.h"
 
 namespace pflow::compute {
+
+namespace {
+Status fromException();  // the exception in flight as a Status (below)
+}  // namespace
 
 #define PFLOW_RETURN_IF_ERROR(expr)         \
   do {                                      \
@@ -39,15 +44,30 @@ Status Simulation::rebuild() {
 }
 // ---------------------------------------------------------------------------------------------
 
-// A step, with a device allocation that fails (growing history slots or candidate rows beyond the
-// device's memory) reported as an error of the step instead of escaping as an exception.
+// A step, with an exception from the engine reported as an error of that step instead of escaping:
+// an allocation that does not fit (history slots or candidate rows grown beyond the device's memory) as
+// RESOURCE_EXHAUSTED, anything else (a CUDA fault) as INTERNAL.
 Status Simulation::step() {
   try {
     return stepPhases();
-  } catch (const std::exception& e) {
-    return withStep(Status(StatusCode::kResourceExhausted, e.what()));
+  } catch (...) {
+    return withStep(fromException());
   }
 }
+
+namespace {
+Status fromException() {
+  try {
+    throw;
+  } catch (const OutOfDeviceMemory& e) {
+    return Status(StatusCode::kResourceExhausted, e.what());
+  } catch (const std::bad_alloc&) {
+    return Status(StatusCode::kResourceExhausted, "host memory exhausted");
+  } catch (const std::exception& e) {
+    return Status(StatusCode::kInternal, e.what());
+  }
+}
+}  // namespace
 
 // History slots grow on demand (never silently): say so once per growth.
 void Simulation::reportSlotGrowth() {
@@ -117,13 +137,17 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const RunConfig& config, 
     // Kernels run asynchronously: each phase timer waits for its own work.
     sim->m_timers.setFence([e = sim->m_engine.get()] { e->fence(); });
   } else {
-    sim->m_engine = makeCpuEngine(std::move(setup).value(), single);
+    try {
+      sim->m_engine = makeCpuEngine(std::move(setup).value(), single);
+    } catch (...) {
+      return fromException();
+    }
   }
   sim->m_executor = kind;
   try {
     if (Status s = sim->initialise(); !s.isOk()) return s;
-  } catch (const std::exception& e) {
-    return Status(StatusCode::kResourceExhausted, e.what());
+  } catch (...) {
+    return fromException();
   }
   return sim;
 }

@@ -54,5 +54,36 @@ TEST(Blowup, NonFiniteValuesAreFlagged) {
   EXPECT_EQ(cond.badParticle, 2u);
 }
 
+// The skin test's float accumulator of the displacement since rebuild rounds each sum away from zero:
+// it never under-reads, however slowly a particle creeps (a plain float sum stops growing once a step is
+// below half a unit in the last place), and it over-reads by at most one unit in the last place per step.
+TEST(SkinTest, CreepingParticleIsNeverUnderRead) {
+  constexpr Index n = 1;
+  Vec3d pos[n] = {{0.5, 0.5, 0.5}}, force[n] = {}, torque[n] = {};
+  const double dt = 1e-6, speed = 1.5e-6;  // 1.5e-12 m per step, below half an ulp of 6e-5 m (3.6e-12 m)
+  Vec3d vel[n] = {{speed, 0, 0}}, omega[n] = {};
+  double radius[n] = {1e-3}, mass[n] = {1e-5};
+  Vec3f moved[n] = {};
+  compute::Conditions cond;
+  const compute::kernels::IntegrateArgs<double> a{pos, vel, omega, force, torque, radius, mass, moved, {0, 0, 0}, dt, &cond};
+  const long steps = 60'000'000;  // 9e-5 m in all: the plain float sum stops growing near 6.1e-5 m
+  double d2 = 0;
+  for (long k = 0; k < steps; ++k) d2 = compute::kernels::IntegrateFirstHalf<double>{a}(0);
+  const double truth = speed * dt * double(steps), read = std::sqrt(d2);
+  const float f = float(read);
+  const double ulp = double(std::nextafter(f, 1.0f)) - double(f);
+  std::printf("creeping: read %.6g m, true %.6g m (bound %.6g m)\n", read, truth, truth + double(steps) * ulp);
+  EXPECT_GE(read, truth * (1 - 1e-12));
+  EXPECT_LE(read, truth + double(steps) * ulp);
+
+  // At a speed where a step moves many units in the last place, the reading is close to the truth.
+  moved[0] = {0, 0, 0};
+  vel[0] = {0.01, 0, 0};  // 1e-8 m per step
+  for (long k = 0; k < 10'000; ++k) d2 = compute::kernels::IntegrateFirstHalf<double>{a}(0);
+  std::printf("moving: read %.9g m, true %.9g m\n", std::sqrt(d2), 0.01 * dt * 1e4);
+  EXPECT_GE(std::sqrt(d2), 1e-4 * (1 - 1e-12));
+  EXPECT_LE(std::sqrt(d2), 1e-4 * (1 + 1e-3));
+}
+
 }  // namespace
 }  // namespace pflow::test
