@@ -157,7 +157,7 @@ struct ComputeForces {
       s.effMass = mi * mj / (mi + mj);
       if (pp.rollingFriction > 0) {
         const R Ij = R(0.4) * mj * rj * rj;
-        s.effInertia = Ii / (R(1) + Ii / Ij);  // not Ii*Ij/(Ii+Ij): that product underflows in float below ~10 um
+        s.effInertia = Ii * (Ij / (Ii + Ij));  // not Ii*Ij/(Ii+Ij): that product underflows in float below ~10 um
       } else {
         s.effInertia = R(0);  // unused without rolling resistance
       }
