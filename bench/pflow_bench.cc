@@ -33,6 +33,12 @@ std::string shell(const char* cmd) {
   return out;
 }
 
+// OpenMP threads of a CPU run, from its executor description ("OpenMP on N thread(s)").
+int threadsOf(const pflow::compute::Simulation& s) {
+  const std::string d = s.executorDescription();
+  return std::stoi(d.substr(d.find(" on ") + 4));
+}
+
 std::string today() {
   std::time_t t = std::time(nullptr);
   char buf[16];
@@ -192,8 +198,7 @@ int main(int argc, char** argv) {
     for (int p = 0; p < int(pflow::compute::Phase::kCount); ++p)
       phases[pflow::compute::kPhaseNames[p]] = s.timers().seconds(pflow::compute::Phase(p));
     const bool onGpu = s.executorKind() == pflow::compute::ExecutorKind::kCuda;
-    const int usedThreads =
-        onGpu ? 0 : std::stoi(s.executorDescription().substr(s.executorDescription().find(" on ") + 4));
+    const int usedThreads = onGpu ? 0 : threadsOf(s);
     const std::string execName = onGpu ? "cuda" : "cpu";
     const std::string where = onGpu ? s.executorDescription() : device;
     // The fewest bytes each phase must move per step (docs/performance.md), and the rate achieved on them.
@@ -232,9 +237,10 @@ int main(int argc, char** argv) {
     }
     auto& s = *last;
     const double rate = rates.front().second;
+    // LAMMPS on as many ranks as pflow had threads, or on every core of the host of a GPU run.
     const int usedThreads = s.executorKind() == pflow::compute::ExecutorKind::kCuda
-                                ? int(std::thread::hardware_concurrency())  // LAMMPS on every core of the GPU's host
-                                : std::stoi(s.executorDescription().substr(s.executorDescription().find(" on ") + 4));
+                                ? int(std::thread::hardware_concurrency())
+                                : threadsOf(s);
 
     if (noLammps) continue;
     if (!pflow::bench::findLammps()) {

@@ -21,6 +21,12 @@ inline constexpr int kMaxWallContacts = 16;  // simultaneous wall contacts of on
 
 namespace kernels {
 
+// An overlap beyond kMaxOverlapRatio: the run stops, naming the lowest such particle.
+PFLOW_HOSTDEVICE inline void flagDeepOverlap(Conditions* cond, Index i) {
+  atomicOrU32(&cond->flags, kExcessiveOverlap);
+  atomicMinU32(&cond->deepParticle, i);
+}
+
 // R: the run's precision. Positions are double at both precisions and the contact geometry (separation,
 // distance, overlap, closest point on a wall) is computed in double from them; the physics (relative
 // velocities, forces, torques, history) runs in R.
@@ -179,10 +185,7 @@ struct ComputeForces {
     }
   }
 
-  PFLOW_HOSTDEVICE void flagDeep(Index i) const {
-    atomicOrU32(&a.cond->flags, kExcessiveOverlap);
-    atomicMinU32(&a.cond->deepParticle, i);
-  }
+  PFLOW_HOSTDEVICE void flagDeep(Index i) const { flagDeepOverlap(a.cond, i); }
 
   // Claims an empty slot for partner g, or returns -1 when all are taken.
   PFLOW_HOSTDEVICE static int claimSlot(SlotRow<PartnerId> partner, int slots, Gid g) {
@@ -231,10 +234,7 @@ struct ComputeWallForces {
     return false;
   }
 
-  PFLOW_HOSTDEVICE void flagDeep(Index i) const {
-    atomicOrU32(&a.cond->flags, kExcessiveOverlap);
-    atomicMinU32(&a.cond->deepParticle, i);
-  }
+  PFLOW_HOSTDEVICE void flagDeep(Index i) const { flagDeepOverlap(a.cond, i); }
 
   PFLOW_HOSTDEVICE void wallForces(Index i, Vec3d xi, V vi, V wi, R ri, R mi, R Ii, const ContactParams* params,
                                    V& f, V& tq) const {

@@ -46,7 +46,6 @@ class ParticleData {
   template <Field F> using Type = typename FieldType<F, R>::type;
   template <Field F> Type<F>* ptr() { return m_fields[int(F)].template as<Type<F>>(); }
   template <Field F> const Type<F>* ptr() const { return m_fields[int(F)].template as<Type<F>>(); }
-  const FieldInfo& info(Field f) const { return kTable[int(f)]; }
   bool slotMajor() const { return m_slotMajor; }
   SlotLayout layout(Multiplicity kind) const {
     if (m_slotMajor) return {1, m_n};
@@ -58,12 +57,6 @@ class ParticleData {
   // Grows the slots of one slot kind (never shrinks), keeping every particle's existing slots and
   // marking the new ones empty (partner kNoPartner, wall key kNoGid, displacement 0).
   void resizeSlots(Multiplicity kind, int newSlots);
-
-  std::size_t bytesPerParticle() const {
-    std::size_t b = 0;
-    for (int k = 0; k < kNumFields; ++k) b += strideBytes(kTable[k]);
-    return b;
-  }
 
  private:
   MemorySpace* m_space;

@@ -41,6 +41,9 @@ struct EngineSetup {
   int historySlots = 8;
   int wallHistorySlots = 4;
   int threads = 0;
+  // Data layouts: the executor's own, or forced to the GPU's (column-major candidate rows, slot-major
+  // history) or the CPU's, so the CPU executor can be compared with itself across layouts in tests.
+  enum class Layout { kExecutor, kGpu, kCpu } layout = Layout::kExecutor;
 };
 
 struct ContactStats {
@@ -66,6 +69,8 @@ class Engine {
   // rebuild (particles and mesh vertices), for the skin criterion.
   virtual double integrateFirstHalf(double dt) = 0;
   virtual double moveMeshes(double time) = 0;
+  // A rebuild is sortByCell then buildContacts, always both: buildContacts restarts the skin reference,
+  // which the sort does not carry through the reorder.
   virtual void sortByCell() = 0;
   virtual Status buildContacts() = 0;
   virtual Status computeForces(double dt, double time) = 0;

@@ -59,9 +59,6 @@ class EngineImpl final : public Engine {
 
   void sortByCell() override {
     const CellGrid& g = m_setup.grid;
-    // The displacement since rebuild is not a field of the table (it is not reordered): a sort starts a
-    // new reference, as buildContacts does.
-    m_mem.fillBytes(m_moved.data(), 0, m_moved.bytes());
     m_exec.forEach(m_n, kernels::CellKey{g, m_particles.template ptr<Field::Position>(), m_cellKey.as<std::uint32_t>()});
     m_exec.sortByKey(m_cellKey.as<std::uint32_t>(), m_n, g.numCells(), m_perm.as<Index>(), m_cellStart.as<Index>());
     // Reorder every field of the table by the permutation through one scratch buffer (allocated once):
@@ -86,7 +83,9 @@ class EngineImpl final : public Engine {
   }
 
   Status buildContacts() override {
-    // Positions and vertices now are the reference for the skin criterion.
+    // Positions and vertices now are the reference for the skin criterion. The displacement since rebuild
+    // is not a field of the table (sortByCell does not reorder it): valid because a sort is always
+    // followed by this (Engine.h).
     m_mem.fillBytes(m_moved.data(), 0, m_moved.bytes());
     // Static meshes are binned once; moving ones at every rebuild, from where they are now.
     if (m_numTri && (m_anyMeshMoves || !m_binned)) {
@@ -342,12 +341,13 @@ void EngineImpl<Exec, R>::init() {
   const EngineSetup& s = m_setup;
   m_n = Index(s.position.size());
   m_numTri = Index(s.triMesh.size());
-  // The executor's layouts; PFLOW_LIST_LAYOUT=row|column and PFLOW_SLOT_LAYOUT=particle|slot override them
-  // (measurements, and CI running the GPU's layouts on the CPU).
+  // The executor's layouts, unless the setup asks for another executor's (tests), or PFLOW_LIST_LAYOUT=
+  // row|column and PFLOW_SLOT_LAYOUT=particle|slot override them (measurements).
   bool slotMajor = Exec::kSlotMajor;
+  if (s.layout != EngineSetup::Layout::kExecutor) slotMajor = m_columnMajor = s.layout == EngineSetup::Layout::kGpu;
   if (const char* layout = std::getenv("PFLOW_SLOT_LAYOUT")) slotMajor = std::string(layout) == "slot";
-  m_particles.allocate(m_n, s.historySlots, s.wallHistorySlots, slotMajor);
   if (const char* layout = std::getenv("PFLOW_LIST_LAYOUT")) m_columnMajor = std::string(layout) == "column";
+  m_particles.allocate(m_n, s.historySlots, s.wallHistorySlots, slotMajor);
   std::vector<Gid> gids(m_n);
   for (Index i = 0; i < m_n; ++i) gids[i] = i;
   // Host values (double) converted to the field's type at the run's precision; empty = zero.

@@ -126,6 +126,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const RunConfig& config, 
   if (!ts) return ts.status();
   auto setup = prepareEngineSetup(config);
   if (!setup) return setup.status();
+  setup.value().layout = options.layout;
   std::unique_ptr<Simulation> sim(new Simulation(setup.value(), ts.value(), nullptr));
   const bool single = config.sim.precision == Precision::kFloat;
   ExecutorKind kind = options.executor;

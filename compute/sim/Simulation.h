@@ -20,6 +20,7 @@ enum class ExecutorKind { kCpu, kCuda, kAuto };
 struct SimulationOptions {
   ExecutorKind executor = ExecutorKind::kCpu;
   int device = 0;  // CUDA device index (of the visible ones)
+  EngineSetup::Layout layout = EngineSetup::Layout::kExecutor;  // tests: another executor's data layouts
 };
 
 // "cpu" | "cuda" | "auto" -> kind; an error naming the flag otherwise.

@@ -20,8 +20,8 @@ namespace {
 using compute::ExecutorKind;
 
 // The executor under test: CUDA where a device is visible. Without one the tests skip, unless
-// PFLOW_GPU_TESTS_ON_CPU=1 asks to run the CPU against itself: a check of the scenes and of the
-// assertions that do not compare executors, on a machine without a GPU.
+// PFLOW_GPU_TESTS_ON_CPU=1 asks to run the CPU with the GPU's data layouts against the CPU with its own:
+// the scenes, the layouts and every assertion checked on a machine without a GPU.
 ExecutorKind underTest() {
   if (compute::cudaDeviceCount() > 0) return ExecutorKind::kCuda;
   const char* self = std::getenv("PFLOW_GPU_TESTS_ON_CPU");
@@ -30,12 +30,21 @@ ExecutorKind underTest() {
 #define SKIP_WITHOUT_GPU() \
   if (underTest() == ExecutorKind::kAuto) GTEST_SKIP() << "no CUDA device"
 
-std::unique_ptr<compute::Simulation> make(const compute::RunConfig& c, ExecutorKind kind) {
+std::unique_ptr<compute::Simulation> make(const compute::RunConfig& c, ExecutorKind kind,
+                                          compute::EngineSetup::Layout layout = compute::EngineSetup::Layout::kExecutor) {
   compute::SimulationOptions o;
   o.executor = kind;
+  o.layout = layout;
   auto sim = compute::Simulation::create(c, o);
   EXPECT_TRUE(sim.isOk()) << sim.status().toString();
   return sim.isOk() ? std::move(sim).value() : nullptr;
+}
+
+// The simulation under test: on the GPU, or (PFLOW_GPU_TESTS_ON_CPU=1) the CPU executor with the GPU's
+// data layouts (column-major candidate rows, slot-major history), so the comparisons with the CPU
+// reference still compare two different code paths.
+std::unique_ptr<compute::Simulation> makeUnderTest(const compute::RunConfig& c) {
+  return make(c, underTest(), compute::EngineSetup::Layout::kGpu);
 }
 
 // Per gid: the named Vec3d field of a snapshot.
@@ -108,7 +117,7 @@ TEST_P(CudaVsCpu, SameCandidatesForcesAndTrajectories) {
   auto cfg = denseCluster(4000, 7);
   cfg.sim.precision = GetParam();
   auto cpu = make(cfg, ExecutorKind::kCpu);
-  auto gpu = make(cfg, underTest());
+  auto gpu = makeUnderTest(cfg);
   ASSERT_TRUE(cpu && gpu);
   if (underTest() == ExecutorKind::kCuda) {
     EXPECT_NE(gpu->executorDescription().find("CUDA"), std::string::npos) << gpu->executorDescription();
@@ -181,7 +190,7 @@ TEST_P(CudaVsCpu, ImpactsMatchCpuAcrossRestitution) {
     c.sim.dt = 2e-9;
     c.sim.duration = 1;
     auto cpu = make(c, ExecutorKind::kCpu);
-    auto gpu = make(c, underTest());
+    auto gpu = makeUnderTest(c);
     ASSERT_TRUE(cpu && gpu);
     // 4e-5 s: the 1e-5 m gap closes in 2.6e-6 s (sphere-plane) and the Hertz contacts last about 8e-6 s
     // (sphere-plane) and 6e-6 s (sphere-sphere), so both have ended.
@@ -227,7 +236,7 @@ TEST(CudaExecutor, SettledBedStatisticsMatchCpu) {
   cfg.materials[0].restitution = 0.3;
   cfg.materials[0].rollingFriction = 0.05;
   auto cpu = make(cfg, ExecutorKind::kCpu);
-  auto gpu = make(cfg, underTest());
+  auto gpu = makeUnderTest(cfg);
   ASSERT_TRUE(cpu && gpu);
   ASSERT_TRUE(gpu->runSteps(30000).isOk());
   ASSERT_TRUE(cpu->runSteps(30000).isOk());
@@ -241,7 +250,7 @@ TEST(CudaExecutor, SettledBedStatisticsMatchCpu) {
   EXPECT_LT(gpu->contactStats().maxOverlapRatio, 0.01);
 
   cfg.sim.precision = compute::Precision::kFloat;
-  auto gpuFloat = make(cfg, underTest());
+  auto gpuFloat = makeUnderTest(cfg);
   ASSERT_TRUE(gpuFloat);
   ASSERT_TRUE(gpuFloat->runSteps(30000).isOk());
   const auto f = bedStats(*gpuFloat, Lx, Ly, spec.diameter);
@@ -263,7 +272,7 @@ TEST(CudaExecutor, BlowUpIsReported) {
   c.planes = {plane({0, 0, 0}, {0, 0, 1}, 0, "floor")};
   c.sim.dt = 3 * compute::rayleighTime(r, 2800, 4.8e10, 0.2);
   c.sim.duration = 2000 * *c.sim.dt;
-  auto gpu = make(c, underTest());
+  auto gpu = makeUnderTest(c);
   ASSERT_TRUE(gpu);
   const Status s = gpu->runUntil(c.sim.duration);
   ASSERT_FALSE(s.isOk());
