@@ -419,6 +419,19 @@ void Loader::parseParticleSet(const YAML::Node& item, const std::string& path, L
                f->find("solid_fraction")->loc);
       return;
     }
+    // A lattice without a count fills the region: refuse before generating when that would pass the limit
+    // (the sites are tested one by one against the region and the walls, which takes long for millions).
+    if (method == "lattice" && !lattice.count) {
+      const double spacing = lattice.spacing > 0 ? lattice.spacing : 2.1 * size->maxRadius();
+      const bool hcp = lattice.packing == LatticeOptions::Packing::kHexagonalClosePacked;
+      const double sites = regionVolume / (spacing * spacing * spacing * (hcp ? std::sqrt(0.5) : 1.0));
+      if (sites + double(m_config.particles.size()) > double(m_options.maxParticles)) {
+        badValue(path, "fills its region with about " + num(sites) + " lattice particles; the limit is " +
+                           std::to_string(m_options.maxParticles) + " in all (give a count or a larger spacing)",
+                 f->loc);
+        return;
+      }
+    }
 
     // Keep clear of earlier sets and of every wall.
     if (!m_clearance) m_clearance = std::make_shared<WallClearance>(m_config.planes, m_config.meshes);  // walls are final here

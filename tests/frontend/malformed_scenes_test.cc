@@ -118,6 +118,10 @@ TEST_F(MalformedScenes, EachGivesItsPreciseMessage) {
       {"fractions not summing to 1", scene("  - {method: random, count: 10, region: {box: {min: [0, 0, 0], max: [0.01, 0.01, 0.01]}}, size: {distribution: discrete, radii: [0.001, 0.0005], fractions: [0.5, 0.6]}}\n"),
        {"particles[0].size.fractions: sum to 1.1; fractions by number must sum to 1 within 1e-6"}},
       {"missing region", scene("  - {method: random, count: 10, size: 0.001}\n"), {"particles[0].region: required key 'region' is missing"}},
+      // A lattice without a count fills its region: one of 10^6 sites, over the limit of 10^5, is refused before
+      // a site is generated (found by the fuzzer as a 30 s input).
+      {"lattice filling a region beyond the limit", scene("  - {method: lattice, region: {box: {min: [0, 0, 0], max: [1, 1, 1]}}, size: 0.004, lattice: {spacing: 0.01}}\n"),
+       {"particles[0]: fills its region with about 1e+06 lattice particles; the limit is 100000 in all (give a count or a larger spacing)"}},
       {"inverted region", scene("  - {method: random, count: 10, size: 0.001, region: {box: {min: [0, 0, 0], max: [0.01, -0.01, 0.01]}}}\n"),
        {"particles[0].region.box: max [0.01, -0.01, 0.01] must be > min [0, 0, 0] on every axis"}},
       {"region names an unknown wall", scene("  - {method: random, count: 10, size: 0.001, region: {mesh: bim}}\n", "  - {name: bin, box: {min: [0, 0, 0], max: [0.1, 0.1, 0.1]}}\n"),
