@@ -2,7 +2,7 @@
 # One call on the lent GPU machine (see bench/gpu/README.md): unpack the bundle built here, run the GPU
 # tests, measure the copy bandwidth and the settled-bed throughput, print a short table last.
 # Usage (from the repository root on the device machine):
-#   bash bench/gpu/device_run.sh [tests] [sanitize] [bench] [scaling] [largest] [cpu] [layouts]
+#   bash bench/gpu/device_run.sh [tests] [sanitize] [bench] [scaling] [largest] [cpu] [cpuab] [layouts]
 # Logs and JSON go to $OUT (or ./out).
 set -uo pipefail
 OUT=${OUT:-out}
@@ -81,6 +81,29 @@ if has cpu; then
       --commit "$commit" >> "$OUT/bench.jsonl" 2>> "$OUT/bench.log"
     summary+=("cpu+lammps $poly rc=$?")
   done
+fi
+# The CPU executor's A/B on the 10^6 mono bed: NUMA first touch (PFLOW_FIRST_TOUCH), thread pinning
+# (OMP_PROC_BIND/OMP_PLACES) and dynamic chunks (PFLOW_DYNAMIC_CHUNK), LAMMPS once, and the topology.
+if has cpuab; then
+  cores=$(nproc)
+  { lscpu; ls -d /sys/devices/system/node/node* 2>/dev/null; cat /sys/devices/system/node/node*/cpulist 2>/dev/null; } > "$OUT/topology.txt"
+  summary+=("topology: $(lscpu | grep -E '^(Model name|Socket|Core|Thread|NUMA node\(s\)|L3)' | tr -s ' ' | tr '\n' ';')")
+  ab() {  # label, env..., -- extra args
+    local label=$1; shift
+    local envs=()
+    while [[ $1 != -- ]]; do envs+=("$1"); shift; done
+    shift
+    env "${envs[@]}" "$B/pflow-bench" --executor cpu --settle-executor cuda -n "${CPU_SIZES:-1000000}" --tile-from 200000 \
+      --settle-steps "${SETTLE:-30000}" --resettle-steps "${RESETTLE:-1000}" --steps "${CPU_STEPS:-300}" \
+      --precision "${AB_PRECISIONS:-double}" --device "$(lscpu | sed -n 's/^Model name: *//p' | head -1), $cores cores ($label)" \
+      --commit "$commit" "$@" >> "$OUT/bench.jsonl" 2>> "$OUT/bench.log"
+    summary+=("cpuab $label rc=$?")
+  }
+  ab "first touch off" PFLOW_FIRST_TOUCH=0 -- --threads "$cores" --no-lammps
+  ab "first touch" PFLOW_DUMMY=1 -- --threads "$cores" --lammps-ranks "$cores"
+  ab "first touch, pinned" OMP_PROC_BIND=close OMP_PLACES=cores -- --threads "$cores" --no-lammps
+  ab "first touch, pinned, dynamic 256" OMP_PROC_BIND=close OMP_PLACES=cores PFLOW_DYNAMIC_CHUNK=256 -- --threads "$cores" --no-lammps
+  ab "first touch, pinned, half the threads" OMP_PROC_BIND=spread OMP_PLACES=cores -- --threads $((cores / 2)) --no-lammps
 fi
 if [[ -s $OUT/bench.jsonl ]]; then
   summary+=("$(python3 - "$OUT/bench.jsonl" <<'PY'

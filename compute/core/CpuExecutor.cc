@@ -3,13 +3,17 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cstdlib>
 
 #include <string>
 #include <vector>
 
 namespace pflow::compute {
 
-CpuExecutor::CpuExecutor(int threads) : m_threads(threads > 0 ? threads : omp_get_max_threads()) {}
+CpuExecutor::CpuExecutor(int threads)
+    : m_threads(threads > 0 ? threads : omp_get_max_threads()), m_memory(m_threads) {
+  if (const char* chunk = std::getenv("PFLOW_DYNAMIC_CHUNK")) m_dynamicChunk = std::max(0, std::atoi(chunk));
+}
 
 std::string CpuExecutor::description() const {
   return "OpenMP on " + std::to_string(m_threads) + " thread(s)";

@@ -22,9 +22,16 @@ class CpuExecutor {
   int threads() const { return m_threads; }
   std::string description() const;
 
-  // f(i) for i in [0, n).
+  // f(i) for i in [0, n). Static schedule: thread t always works on the same share of the particles,
+  // the share it first touched (HostMemory), so it stays in that core's caches and NUMA node.
+  // PFLOW_DYNAMIC_CHUNK=N hands out chunks of N iterations instead, for measurements.
   template <class F>
   void forEach(Index n, const F& f) const {
+    if (m_dynamicChunk > 0) {
+#pragma omp parallel for schedule(dynamic, m_dynamicChunk) num_threads(m_threads) if (n >= kMinParallel)
+      for (std::int64_t i = 0; i < static_cast<std::int64_t>(n); ++i) f(static_cast<Index>(i));
+      return;
+    }
 #pragma omp parallel for schedule(static) num_threads(m_threads) if (n >= kMinParallel)
     for (std::int64_t i = 0; i < static_cast<std::int64_t>(n); ++i) f(static_cast<Index>(i));
   }
@@ -60,8 +67,9 @@ class CpuExecutor {
   void synchronize() const {}
 
  private:
-  HostMemory m_memory;
   int m_threads;
+  int m_dynamicChunk = 0;
+  HostMemory m_memory;
 };
 
 }  // namespace pflow::compute

@@ -39,15 +39,24 @@ class MemorySpace {
   std::size_t m_peakBytes = 0;
 };
 
-// Host memory, 64-byte aligned.
+// Host memory, 64-byte aligned. Large blocks are first touched, copied and filled by `threads` OpenMP
+// threads in equal contiguous shares, the way the executor's static loops later walk them: each page
+// then lives on the NUMA node of the core that works on it (the kernel places a page where it is first
+// written). PFLOW_FIRST_TOUCH=0 turns the parallel first touch off (for measurements).
 class HostMemory final : public MemorySpace {
  public:
+  explicit HostMemory(int threads = 1);
   void* allocate(std::size_t bytes) override;
   void deallocate(void* p) override;
-  void copyToHost(void* d, const void* s, std::size_t b) override { if (b) std::memcpy(d, s, b); }
-  void copyFromHost(void* d, const void* s, std::size_t b) override { if (b) std::memcpy(d, s, b); }
-  void copyWithin(void* d, const void* s, std::size_t b) override { if (b) std::memcpy(d, s, b); }
-  void fillBytes(void* d, unsigned char v, std::size_t b) override { if (b) std::memset(d, v, b); }
+  void copyToHost(void* d, const void* s, std::size_t b) override { copy(d, s, b); }
+  void copyFromHost(void* d, const void* s, std::size_t b) override { copy(d, s, b); }
+  void copyWithin(void* d, const void* s, std::size_t b) override { copy(d, s, b); }
+  void fillBytes(void* d, unsigned char v, std::size_t b) override;
+
+ private:
+  void copy(void* d, const void* s, std::size_t b) const;
+  int m_threads;
+  bool m_firstTouch;
 };
 
 // An untyped, owning buffer in one MemorySpace.
