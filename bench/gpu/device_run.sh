@@ -99,11 +99,13 @@ if has cpuab; then
       --commit "$commit" "$@" >> "$OUT/bench.jsonl" 2>> "$OUT/bench.log"
     summary+=("cpuab $label rc=$?")
   }
+  ab "default" PFLOW_DUMMY=1 -- --threads "$cores" --lammps-ranks "$cores"
+  ab "pinned" OMP_PROC_BIND=close OMP_PLACES=cores -- --threads "$cores" --no-lammps
+  ab "chunk 64" PFLOW_DYNAMIC_CHUNK=64 -- --threads "$cores" --no-lammps
+  ab "chunk 1024" PFLOW_DYNAMIC_CHUNK=1024 -- --threads "$cores" --no-lammps
+  ab "static" PFLOW_DYNAMIC_CHUNK=0 -- --threads "$cores" --no-lammps
   ab "first touch off" PFLOW_FIRST_TOUCH=0 -- --threads "$cores" --no-lammps
-  ab "first touch" PFLOW_DUMMY=1 -- --threads "$cores" --lammps-ranks "$cores"
-  ab "first touch, pinned" OMP_PROC_BIND=close OMP_PLACES=cores -- --threads "$cores" --no-lammps
-  ab "first touch, pinned, dynamic 256" OMP_PROC_BIND=close OMP_PLACES=cores PFLOW_DYNAMIC_CHUNK=256 -- --threads "$cores" --no-lammps
-  ab "first touch, pinned, half the threads" OMP_PROC_BIND=spread OMP_PLACES=cores -- --threads $((cores / 2)) --no-lammps
+  CPU_SIZES=4000000 ab "default" PFLOW_DUMMY=1 -- --threads "$cores" --lammps-ranks "$cores"
 fi
 if [[ -s $OUT/bench.jsonl ]]; then
   summary+=("$(python3 - "$OUT/bench.jsonl" <<'PY'

@@ -88,6 +88,7 @@ struct WallContact {
 
 template <class R>
 struct ComputeForces {
+  static constexpr bool kVariableCost = true;  // work per particle varies (CpuExecutor::forEach)
   using V = Vec3<R>;
   ForceArgs<R> a;
 
@@ -204,6 +205,7 @@ struct ComputeForces {
 // every particle, while only the particles near a wall have work here; the others return at once.
 template <class R>
 struct ComputeWallForces {
+  static constexpr bool kVariableCost = true;  // work per particle varies (CpuExecutor::forEach)
   using V = Vec3<R>;
   ForceArgs<R> a;
 

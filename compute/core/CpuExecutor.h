@@ -22,12 +22,15 @@ class CpuExecutor {
   int threads() const { return m_threads; }
   std::string description() const;
 
-  // f(i) for i in [0, n). Static schedule: thread t always works on the same share of the particles,
-  // the share it first touched (HostMemory), so it stays in that core's caches and NUMA node.
-  // PFLOW_DYNAMIC_CHUNK=N hands out chunks of N iterations instead, for measurements.
+  // f(i) for i in [0, n). Streaming kernels (the same work per item) run a static schedule: thread t
+  // always works on the same share of the particles, the share it first touched (HostMemory), so it
+  // stays in that core's caches and NUMA node. Kernels whose cost per item varies (contacts, forces;
+  // they declare kVariableCost) hand out chunks of 256 items to whichever thread is free: on the 16
+  // cores of the GPU host that made the forces phase 1.5x faster than static shares (bench/RESULTS.md),
+  // whose slowest thread sets the pace. PFLOW_DYNAMIC_CHUNK=N sets the chunk (0: static everywhere).
   template <class F>
   void forEach(Index n, const F& f) const {
-    if (m_dynamicChunk > 0) {
+    if (variableCost<F>() && m_dynamicChunk > 0) {
 #pragma omp parallel for schedule(dynamic, m_dynamicChunk) num_threads(m_threads) if (n >= kMinParallel)
       for (std::int64_t i = 0; i < static_cast<std::int64_t>(n); ++i) f(static_cast<Index>(i));
       return;
@@ -67,8 +70,13 @@ class CpuExecutor {
   void synchronize() const {}
 
  private:
+  template <class F>
+  static constexpr bool variableCost() {
+    if constexpr (requires { F::kVariableCost; }) return F::kVariableCost;
+    else return false;
+  }
   int m_threads;
-  int m_dynamicChunk = 0;
+  int m_dynamicChunk = 256;
   HostMemory m_memory;
 };
 

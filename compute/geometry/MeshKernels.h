@@ -130,6 +130,7 @@ struct SortBins {
 // R: the precision of the radii.
 template <class R>
 struct WallCandidates {
+  static constexpr bool kVariableCost = true;  // work per particle varies (CpuExecutor::forEach)
   CellGrid grid;
   const PlaneParams* planes;
   int numPlanes;

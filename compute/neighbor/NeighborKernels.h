@@ -63,6 +63,7 @@ struct GatherBytes {
 // beyond the skin, so the contact has ended) are cleared. R: the precision of the radii.
 template <class R>
 struct BuildNeighbors {
+  static constexpr bool kVariableCost = true;  // work per particle varies (CpuExecutor::forEach)
   CellGrid grid;
   const Index* cellStart;  // numCells + 1
   const Vec3d* pos;
