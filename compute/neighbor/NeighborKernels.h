@@ -79,6 +79,11 @@ struct BuildNeighbors {
   std::int8_t* nbrSlot;     // [layout.at(i, e)]
   std::uint32_t* nbrCount;  // [i]
   Conditions* cond;
+  // Ghosts (distributed runs; null otherwise): local particles ghostBase + ghostItems[k] for k in
+  // [ghostCellStart[c], ghostCellStart[c + 1]) lie in cell c. Candidates of the owned particles only.
+  const Index* ghostCellStart = nullptr;
+  const Index* ghostItems = nullptr;
+  Index ghostBase = 0;
 
   PFLOW_HOSTDEVICE void operator()(Index i) const {
     const Vec3d xi = pos[i];
@@ -98,10 +103,9 @@ struct BuildNeighbors {
           const int x = cx + dx;
           if (x < 0 || x >= grid.nx) continue;
           const std::uint32_t c = grid.index(x, y, z);
-          for (Index j = cellStart[c]; j < cellStart[c + 1]; ++j) {
-            if (j == i) continue;
+          auto consider = [&](Index j) {
             const double cut = ri + double(radius[j]);
-            if (norm2(pos[j] - xi) >= cut * cut) continue;
+            if (norm2(pos[j] - xi) >= cut * cut) return;
             if (count < capacity) {
               nbr[row + count * col] = j;
               std::int8_t slot = -1;
@@ -111,7 +115,11 @@ struct BuildNeighbors {
               nbrSlot[row + count * col] = slot;
             }
             ++count;
-          }
+          };
+          for (Index j = cellStart[c]; j < cellStart[c + 1]; ++j)
+            if (j != i) consider(j);
+          if (ghostCellStart)
+            for (Index k = ghostCellStart[c]; k < ghostCellStart[c + 1]; ++k) consider(ghostBase + ghostItems[k]);
         }
       }
     }

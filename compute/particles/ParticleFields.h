@@ -15,16 +15,17 @@ namespace pflow::compute {
 enum FieldFlags : std::uint32_t {
   kSnapshot = 1u << 0,  // written to snapshot files
   kMigrate = 1u << 1,   // travels with a particle that changes rank
-  kGhost = 1u << 2,     // sent to neighbouring ranks' halos every step
+  kGhost = 1u << 2,     // what a ghost (a copy in a neighbouring rank's halo) holds, sent at each rebuild
+  kRefresh = 1u << 3,   // refreshed in the ghosts every step between rebuilds
 };
 
 enum class Multiplicity : std::uint8_t { kOne, kContactSlots, kWallSlots };
 
 // clang-format off
 #define PFLOW_PARTICLE_FIELDS(X)                                                                                       \
-  X(Position,        "position",           Vec3d,         kOne,          "m",     kSnapshot | kMigrate | kGhost)        \
-  X(Velocity,        "velocity",           Real3,         kOne,          "m/s",   kSnapshot | kMigrate | kGhost)        \
-  X(AngularVelocity, "angular_velocity",   Real3,         kOne,          "rad/s", kSnapshot | kMigrate | kGhost)        \
+  X(Position,        "position",           Vec3d,         kOne,          "m",     kSnapshot | kMigrate | kGhost | kRefresh) \
+  X(Velocity,        "velocity",           Real3,         kOne,          "m/s",   kSnapshot | kMigrate | kGhost | kRefresh) \
+  X(AngularVelocity, "angular_velocity",   Real3,         kOne,          "rad/s", kSnapshot | kMigrate | kGhost | kRefresh) \
   X(Force,           "force",              Real3,         kOne,          "N",     kSnapshot)                            \
   X(Torque,          "torque",             Real3,         kOne,          "N m",   0)                                    \
   X(Radius,          "radius",             Real,          kOne,          "m",     kSnapshot | kMigrate | kGhost)        \

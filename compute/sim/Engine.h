@@ -17,8 +17,10 @@ namespace pflow::compute {
 
 // Everything an engine needs, prepared on the host from a validated RunConfig.
 struct EngineSetup {
-  // particles, in input order; gid = position in these arrays
+  // particles, in input order; gid = position in these arrays unless `gid` is given (a rank of a
+  // distributed run holds only its own particles, with their global ids)
   std::vector<Vec3d> position, velocity, angularVelocity;
+  std::vector<Gid> gid;
   std::vector<double> radius, mass;
   std::vector<std::int32_t> material;
   // walls
@@ -46,6 +48,12 @@ struct EngineSetup {
   enum class Layout { kExecutor, kGpu, kCpu } layout = Layout::kExecutor;
 };
 
+// `count` rows packed by Engine::pack, as received from one rank.
+struct PackedRows {
+  const std::byte* data;
+  Index count;
+};
+
 struct ContactStats {
   std::size_t particleContacts = 0;  // pairs in contact (each counted once)
   std::size_t wallContacts = 0;
@@ -63,7 +71,8 @@ class Engine {
   virtual ~Engine() = default;
   virtual std::string executorDescription() const = 0;
   virtual const char* precisionName() const = 0;  // "float" or "double" (simulation.precision)
-  virtual std::size_t size() const = 0;
+  virtual std::size_t size() const = 0;    // particles this engine owns (integrates, outputs)
+  virtual std::size_t ghosts() const = 0;  // copies of other ranks' particles within reach (distributed runs)
 
   // Phases, in step order. The first two return the largest squared displacement since the last
   // rebuild (particles and mesh vertices), for the skin criterion.
@@ -87,6 +96,27 @@ class Engine {
   virtual int wallHistorySlots() const = 0;
   // Every neighbour candidate pair (i, j) as global ids, sorted (diagnostics and executor comparisons).
   virtual std::vector<std::pair<Gid, Gid>> candidatePairs() const = 0;
+  // ---- Distributed runs (compute/mpi). Local rows are the owned particles [0, size()), then the ghosts
+  // [size(), size() + ghosts()): read-only copies of other ranks' particles, candidates of owned ones.
+  // A rebuild there is: dropGhosts, keepOwned + appendOwned (migration), sortByCell, setGhosts,
+  // buildContacts; between rebuilds refreshGhosts after integrateFirstHalf. Packed rows are field by
+  // field (each a block of `count` values; slot-major slot fields slot by slot), in this engine's layout:
+  // every rank of a run runs the same executor and precision with the same slot counts (ensureSlots).
+  virtual std::size_t rowBytes(std::uint32_t fieldFlags) const = 0;
+  // The fields carrying `fieldFlags` (kMigrate, kGhost, kRefresh) of local rows `rows`, packed on the device.
+  virtual void pack(const std::vector<Index>& rows, std::uint32_t fieldFlags, std::vector<std::byte>& out) const = 0;
+  // The owned particles become rows `keep` (ascending or not), in that order; ghosts are dropped.
+  virtual void keepOwned(const std::vector<Index>& keep) = 0;
+  // Appends owned particles: blocks packed with kMigrate (every field that travels); ghosts are dropped.
+  virtual void appendOwned(const std::vector<PackedRows>& blocks) = 0;
+  // Replaces the ghosts by blocks packed with kGhost, in order, and bins them into cells.
+  virtual void setGhosts(const std::vector<PackedRows>& blocks) = 0;
+  // Overwrites the ghosts' kRefresh fields (position, velocities): blocks as in setGhosts, same rows.
+  virtual void refreshGhosts(const std::vector<PackedRows>& blocks) = 0;
+  virtual void dropGhosts() = 0;
+  // Grows the history slots to at least these counts (ranks agree on them before exchanging rows).
+  virtual void ensureSlots(int contactSlots, int wallSlots) = 0;
+
   // Waits for the device's queued work (phase timers call it so each phase is timed whole).
   virtual void fence() const = 0;
   // How the executor chose its launch configuration (CUDA: measured block size per kernel); empty on the CPU.

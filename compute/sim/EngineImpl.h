@@ -41,13 +41,14 @@ class EngineImpl final : public Engine {
 
   std::string executorDescription() const override { return m_exec.description(); }
   const char* precisionName() const override { return sizeof(R) == 4 ? "float" : "double"; }
-  std::size_t size() const override { return m_n; }
+  std::size_t size() const override { return m_owned; }
+  std::size_t ghosts() const override { return m_n - m_owned; }
   int historySlots() const override { return m_particles.contactSlots(); }
   int wallHistorySlots() const override { return m_particles.wallSlots(); }
   std::size_t deviceBytes() const override { return m_mem.bytesInUse(); }
 
   double integrateFirstHalf(double dt) override {
-    return m_exec.maxOf(m_n, kernels::IntegrateFirstHalf<R>{integrateArgs(dt)});
+    return m_exec.maxOf(m_owned, kernels::IntegrateFirstHalf<R>{integrateArgs(dt)});
   }
 
   double moveMeshes(double time) override {
@@ -58,28 +59,80 @@ class EngineImpl final : public Engine {
   }
 
   void sortByCell() override {
+    // Ghosts are dropped before a rebuild (Engine.h): only owned particles are sorted.
     const CellGrid& g = m_setup.grid;
+    m_n = m_owned;
+    m_particles.resize(m_n);
     m_exec.forEach(m_n, kernels::CellKey{g, m_particles.template ptr<Field::Position>(), m_cellKey.as<std::uint32_t>()});
     m_exec.sortByKey(m_cellKey.as<std::uint32_t>(), m_n, g.numCells(), m_perm.as<Index>(), m_cellStart.as<Index>());
-    // Reorder every field of the table by the permutation through one scratch buffer (allocated once):
-    // slot-major slot fields one column (slot) at a time, so the scratch is one column of the widest
-    // field; particle-major ones a whole row per particle, so the scratch is the largest field.
-    const bool byColumn = m_particles.slotMajor();
-    std::size_t largest = 0;
+    reorder(m_perm.as<Index>(), m_n);
+  }
+
+  // ---- distributed runs (Engine.h) ----
+  std::size_t rowBytes(std::uint32_t flags) const override {
+    std::size_t b = 0;
     for (const auto& f : kFieldTableOf<R>)
-      largest = std::max(largest, byColumn ? f.elementBytes * std::size_t(m_n) : m_particles.buffer(f.id).bytes());
-    if (m_scratch.bytes() < largest) m_scratch.resize(largest);
-    for (const auto& f : kFieldTableOf<R>) {
-      Buffer& field = m_particles.buffer(f.id);
-      const std::size_t columns = byColumn ? m_particles.valuesPerParticle(f) : 1;
-      const std::size_t stride = byColumn ? f.elementBytes : m_particles.strideBytes(f);
-      const std::size_t column = stride * std::size_t(m_n);
-      for (std::size_t k = 0; k < columns; ++k) {
-        unsigned char* data = field.template as<unsigned char>() + k * column;
-        m_exec.forEach(m_n, kernels::GatherBytes{data, m_scratch.as<unsigned char>(), m_perm.as<Index>(), stride});
-        m_mem.copyWithin(data, m_scratch.data(), column);
-      }
+      if (f.flags & flags) b += m_particles.strideBytes(f);
+    return b;
+  }
+  void pack(const std::vector<Index>& rows, std::uint32_t flags, std::vector<std::byte>& out) const override {
+    // Field by field, each a block of rows.size() values (slot fields slot by slot when slot-major),
+    // gathered on the device into one staging buffer, then one copy to the host.
+    const Index count = Index(rows.size());
+    out.resize(rowBytes(flags) * count);
+    if (!count) return;
+    m_stage.resize(std::max(m_stage.bytes(), out.size()));
+    m_rowsBuf.resize(std::max(m_rowsBuf.bytes(), count * sizeof(Index)));
+    m_mem.copyFromHost(m_rowsBuf.data(), rows.data(), count * sizeof(Index));
+    std::size_t at = 0;
+    forEachBlock(flags, count, [&](const unsigned char* field, std::size_t stride) {
+      m_exec.forEach(count, kernels::GatherBytes{field, m_stage.as<unsigned char>() + at, m_rowsBuf.as<Index>(), stride});
+      at += stride * count;
+    });
+    m_mem.copyToHost(out.data(), m_stage.data(), out.size());
+  }
+  void keepOwned(const std::vector<Index>& keep) override {
+    m_n = m_owned;
+    const Index count = Index(keep.size());
+    m_rowsBuf.resize(std::max(m_rowsBuf.bytes(), std::max<std::size_t>(1, count) * sizeof(Index)));
+    m_mem.copyFromHost(m_rowsBuf.data(), keep.data(), count * sizeof(Index));
+    reorder(m_rowsBuf.as<Index>(), count);
+    m_owned = m_n = count;
+    m_particles.resize(m_n);
+    sizeLocalBuffers();
+  }
+  void appendOwned(const std::vector<PackedRows>& blocks) override {
+    m_n = m_owned;
+    for (const PackedRows& b : blocks) unpack(b.data, b.count, kMigrate);
+    m_owned = m_n;
+    sizeLocalBuffers();
+  }
+  void setGhosts(const std::vector<PackedRows>& blocks) override {
+    m_n = m_owned;
+    for (const PackedRows& b : blocks) unpack(b.data, b.count, kGhost);
+    sizeLocalBuffers();
+    // The ghosts' cell list (their data stays in arrival order: refreshes arrive in that order).
+    const Index count = m_n - m_owned;
+    const CellGrid& g = m_setup.grid;
+    m_ghostCellStart.resize(std::max(m_ghostCellStart.bytes(), (std::size_t(g.numCells()) + 1) * sizeof(Index)));
+    m_ghostItems.resize(std::max(m_ghostItems.bytes(), std::max<std::size_t>(1, count) * sizeof(Index)));
+    m_exec.forEach(count, kernels::CellKey{g, m_particles.template ptr<Field::Position>() + m_owned, m_cellKey.as<std::uint32_t>()});
+    m_exec.sortByKey(m_cellKey.as<std::uint32_t>(), count, g.numCells(), m_ghostItems.as<Index>(), m_ghostCellStart.as<Index>());
+  }
+  void refreshGhosts(const std::vector<PackedRows>& blocks) override {
+    Index first = m_owned;
+    for (const PackedRows& b : blocks) {
+      copyIn(b.data, first, b.count, kRefresh);
+      first += b.count;
     }
+  }
+  void dropGhosts() override {
+    m_n = m_owned;
+    m_particles.resize(m_n);
+  }
+  void ensureSlots(int contactSlots, int wallSlots) override {
+    if (contactSlots > m_particles.contactSlots()) m_particles.resizeSlots(Multiplicity::kContactSlots, contactSlots);
+    if (wallSlots > m_particles.wallSlots()) m_particles.resizeSlots(Multiplicity::kWallSlots, wallSlots);
   }
 
   Status buildContacts() override {
@@ -95,15 +148,21 @@ class EngineImpl final : public Engine {
     }
     for (;;) {
       resetConditions();
-      m_exec.forEach(m_n, kernels::BuildNeighbors<R>{m_setup.grid, m_cellStart.as<Index>(),
+      kernels::BuildNeighbors<R> build{m_setup.grid, m_cellStart.as<Index>(),
                                                   m_particles.template ptr<Field::Position>(), m_particles.template ptr<Field::Radius>(),
                                                   m_particles.template ptr<Field::Gid>(),
                                                   m_particles.template ptr<Field::HistoryPartner>(),
                                                   m_particles.contactSlots(),
                                                   m_particles.layout(Multiplicity::kContactSlots), m_setup.skin, m_nbrCap,
                                                   nbrLayout(), m_nbr.as<Index>(), m_nbrSlot.as<std::int8_t>(),
-                                                  m_nbrCount.as<std::uint32_t>(), m_cond.as<Conditions>()});
-      m_exec.forEach(m_n, kernels::WallCandidates<R>{m_setup.grid, m_planes.as<PlaneParams>(), int(m_setup.planes.size()),
+                                                  m_nbrCount.as<std::uint32_t>(), m_cond.as<Conditions>()};
+      if (m_n > m_owned) {
+        build.ghostCellStart = m_ghostCellStart.as<Index>();
+        build.ghostItems = m_ghostItems.as<Index>();
+        build.ghostBase = m_owned;
+      }
+      m_exec.forEach(m_owned, build);
+      m_exec.forEach(m_owned, kernels::WallCandidates<R>{m_setup.grid, m_planes.as<PlaneParams>(), int(m_setup.planes.size()),
                                                   m_numTri ? m_binStart.as<Index>() : nullptr, m_binItems.as<Index>(),
                                                   m_triVerts.as<Vec3d>(), m_particles.template ptr<Field::Position>(),
                                                   m_particles.template ptr<Field::Radius>(), m_setup.skin, m_wallCap,
@@ -128,8 +187,8 @@ class EngineImpl final : public Engine {
 
   Status computeForces(double dt, double time) override {
     resetConditions();
-    m_exec.forEach(m_n, kernels::ComputeForces<R>{forceArgs(dt, time, false)});
-    if (m_anyWalls) m_exec.forEach(m_n, kernels::ComputeWallForces<R>{forceArgs(dt, time, false)});
+    m_exec.forEach(m_owned, kernels::ComputeForces<R>{forceArgs(dt, time, false)});
+    if (m_anyWalls) m_exec.forEach(m_owned, kernels::ComputeWallForces<R>{forceArgs(dt, time, false)});
     Conditions c = readConditions();
     if (c.flags & kExcessiveOverlap) return deepOverlapError(c.deepParticle);
     if (c.flags & kTooManyWallContacts)
@@ -155,8 +214,8 @@ class EngineImpl final : public Engine {
         m_particles.resizeSlots(Multiplicity::kWallSlots, grown);
       }
       resetConditions();
-      m_exec.forEach(m_n, kernels::ComputeForces<R>{forceArgs(dt, time, true)});
-      if (m_anyWalls) m_exec.forEach(m_n, kernels::ComputeWallForces<R>{forceArgs(dt, time, true)});
+      m_exec.forEach(m_owned, kernels::ComputeForces<R>{forceArgs(dt, time, true)});
+      if (m_anyWalls) m_exec.forEach(m_owned, kernels::ComputeWallForces<R>{forceArgs(dt, time, true)});
       c = readConditions();
     }
     return Status::ok();
@@ -164,7 +223,7 @@ class EngineImpl final : public Engine {
 
   Status integrateSecondHalf(double dt) override {
     resetConditions();
-    m_exec.forEach(m_n, kernels::IntegrateSecondHalf<R>{integrateArgs(dt)});
+    m_exec.forEach(m_owned, kernels::IntegrateSecondHalf<R>{integrateArgs(dt)});
     const Conditions c = readConditions();
     if (c.flags & kNonFinite) return nonFiniteError(c.badParticle);
     return Status::ok();
@@ -174,13 +233,13 @@ class EngineImpl final : public Engine {
     ParticleSnapshot s;
     s.step = step;
     s.time = time;
-    s.n = m_n;
+    s.n = m_owned;
     // Output is double at both precisions (one file layout): float fields are widened on the host.
     for (const auto& f : kFieldTableOf<R>) {
       if (!(f.flags & kSnapshot)) continue;
       if (!fields.empty() && std::find(fields.begin(), fields.end(), f.name) == fields.end()) continue;
       SnapshotArray a{f.name, f.scalar, f.components, f.unit, {}};
-      a.data.resize(m_particles.fieldBytes(f, m_n));
+      a.data.resize(m_particles.fieldBytes(f, m_owned));
       m_mem.copyToHost(a.data.data(), m_particles.buffer(f.id).data(), a.data.size());
       if (f.scalar == ScalarType::kF32) {
         const std::size_t values = a.data.size() / sizeof(float);
@@ -219,14 +278,14 @@ class EngineImpl final : public Engine {
   ContactStats contactStats() const override;
 
   std::vector<std::pair<Gid, Gid>> candidatePairs() const override {
-    std::vector<Index> nbr(std::size_t(m_n) * m_nbrCap);
-    std::vector<std::uint32_t> cnt(m_n);
+    std::vector<Index> nbr(std::size_t(m_owned) * m_nbrCap);
+    std::vector<std::uint32_t> cnt(m_owned);
     std::vector<Gid> gid(m_n);
     m_mem.copyToHost(nbr.data(), m_nbr.data(), nbr.size() * sizeof(Index));
     m_mem.copyToHost(cnt.data(), m_nbrCount.data(), cnt.size() * sizeof(std::uint32_t));
     m_mem.copyToHost(gid.data(), m_particles.template ptr<Field::Gid>(), gid.size() * sizeof(Gid));
     std::vector<std::pair<Gid, Gid>> pairs;
-    for (Index i = 0; i < m_n; ++i)
+    for (Index i = 0; i < m_owned; ++i)
       for (std::uint32_t e = 0; e < std::min<std::uint32_t>(cnt[i], m_nbrCap); ++e)
         pairs.emplace_back(gid[i], gid[nbr[nbrLayout().at(i, e)]]);
     std::sort(pairs.begin(), pairs.end());
@@ -243,13 +302,82 @@ class EngineImpl final : public Engine {
  private:
   void init();
   void allocNeighbors() {
-    m_nbr.resize(std::size_t(m_n) * m_nbrCap * sizeof(Index));
-    m_nbrSlot.resize(std::size_t(m_n) * m_nbrCap * sizeof(std::int8_t));
+    m_nbr.resize(std::max<std::size_t>(1, std::size_t(m_owned) * m_nbrCap) * sizeof(Index));
+    m_nbrSlot.resize(std::max<std::size_t>(1, std::size_t(m_owned) * m_nbrCap) * sizeof(std::int8_t));
   }
   // Candidate rows: the executor's preferred layout (PFLOW_LIST_LAYOUT=row|column overrides it, for
   // measurements).
-  ListLayout nbrLayout() const { return m_columnMajor ? ListLayout::columnMajor(m_n) : ListLayout::rowMajor(m_nbrCap); }
-  void allocWallCandidates() { m_wallCand.resize(std::max<std::size_t>(1, std::size_t(m_n) * m_wallCap) * sizeof(Index)); }
+  ListLayout nbrLayout() const { return m_columnMajor ? ListLayout::columnMajor(m_owned) : ListLayout::rowMajor(m_nbrCap); }
+  void allocWallCandidates() { m_wallCand.resize(std::max<std::size_t>(1, std::size_t(m_owned) * m_wallCap) * sizeof(Index)); }
+
+  // Every field of the table (all of its slots) reordered so that new row k = old row perm[k], k < count
+  // (perm on the device), through one scratch buffer: slot-major slot fields one column at a time.
+  void reorder(const Index* perm, Index count) {
+    const bool byColumn = m_particles.slotMajor();
+    std::size_t largest = 0;
+    for (const auto& f : kFieldTableOf<R>)
+      largest = std::max(largest, f.elementBytes * (byColumn ? 1 : m_particles.valuesPerParticle(f)) * std::size_t(count));
+    if (m_scratch.bytes() < largest) m_scratch.resize(largest);
+    for (const auto& f : kFieldTableOf<R>) {
+      Buffer& field = m_particles.buffer(f.id);
+      const bool columns = byColumn && f.multiplicity != Multiplicity::kOne;
+      const std::size_t blocks = columns ? m_particles.valuesPerParticle(f) : 1;
+      const std::size_t stride = columns ? f.elementBytes : m_particles.strideBytes(f);
+      for (std::size_t k = 0; k < blocks; ++k) {
+        unsigned char* data = field.template as<unsigned char>() + k * m_particles.columnBytes(f);
+        m_exec.forEach(count, kernels::GatherBytes{data, m_scratch.as<unsigned char>(), perm, stride});
+        m_mem.copyWithin(data, m_scratch.data(), stride * std::size_t(count));
+      }
+    }
+  }
+  // Calls f(first byte of row 0, stride) for each block of the fields carrying `flags`: one per field,
+  // or one per slot of a slot-major slot field. The packed layout of pack/unpack.
+  template <class F>
+  void forEachBlock(std::uint32_t flags, Index, const F& f) const {
+    for (const auto& fi : kFieldTableOf<R>) {
+      if (!(fi.flags & flags)) continue;
+      const Buffer& field = m_particles.buffer(fi.id);
+      const bool columns = m_particles.slotMajor() && fi.multiplicity != Multiplicity::kOne;
+      const std::size_t blocks = columns ? m_particles.valuesPerParticle(fi) : 1;
+      const std::size_t stride = columns ? fi.elementBytes : m_particles.strideBytes(fi);
+      for (std::size_t k = 0; k < blocks; ++k)
+        f(const_cast<unsigned char*>(field.template as<unsigned char>()) + k * m_particles.columnBytes(fi), stride);
+    }
+  }
+  // Appends `count` rows of the fields carrying `flags` (packed by pack()) after the first m_n rows.
+  void unpack(const std::byte* data, Index count, std::uint32_t flags) {
+    const Index first = m_n;
+    m_n += count;
+    m_particles.resize(m_n);
+    copyIn(data, first, count, flags);
+  }
+  // Overwrites rows [first, first + count) of the fields carrying `flags` with packed data.
+  void copyIn(const std::byte* data, Index first, Index count, std::uint32_t flags) {
+    if (!count) return;
+    const std::size_t bytes = rowBytes(flags) * count;
+    m_stage.resize(std::max(m_stage.bytes(), bytes));
+    m_mem.copyFromHost(m_stage.data(), data, bytes);
+    std::size_t at = 0;
+    forEachBlock(flags, count, [&](unsigned char* field, std::size_t stride) {
+      m_mem.copyWithin(field + stride * first, m_stage.as<unsigned char>() + at, stride * count);
+      at += stride * count;
+    });
+  }
+  // Per-particle work buffers sized for the current counts (kept when big enough).
+  void sizeLocalBuffers() {
+    auto atLeast = [](Buffer& b, std::size_t bytes) {
+      if (b.bytes() < bytes) b.resize(bytes + bytes / 4);
+    };
+    const std::size_t n = std::max<Index>(1, m_n);
+    atLeast(m_moved, n * sizeof(Vec3f));
+    atLeast(m_cellKey, n * sizeof(std::uint32_t));
+    atLeast(m_perm, n * sizeof(Index));
+    atLeast(m_nbrCount, n * sizeof(std::uint32_t));
+    atLeast(m_wallCandCount, n * sizeof(std::uint32_t));
+    atLeast(m_planeMask, n * sizeof(std::uint32_t));
+    if (m_nbr.bytes() < std::size_t(m_owned) * m_nbrCap * sizeof(Index) || m_columnMajor) allocNeighbors();
+    if (m_wallCand.bytes() < std::size_t(m_owned) * m_wallCap * sizeof(Index)) allocWallCandidates();
+  }
   void binTriangles();
   void resetConditions() { m_exec.forEach(1, kernels::ResetConditions{m_cond.as<Conditions>()}); }
   Conditions readConditions() const {
@@ -318,7 +446,8 @@ class EngineImpl final : public Engine {
   MemorySpace& m_mem;
   ParticleData<R> m_particles;
   EngineSetup m_setup;
-  Index m_n = 0;
+  Index m_n = 0;      // local particles: the owned ones, then ghosts (distributed runs)
+  Index m_owned = 0;
   Index m_numTri = 0;
   bool m_anyMeshMoves = false;
   bool m_anyWalls = false;  // planes or triangles: the wall-force kernel runs
@@ -334,12 +463,14 @@ class EngineImpl final : public Engine {
   Buffer m_binStart{m_mem, 0}, m_binItems{m_mem, 0}, m_binCount{m_mem, 0};
   Buffer m_wallCand{m_mem, 0}, m_wallCandCount{m_mem, 0}, m_planeMask{m_mem, 0};
   Buffer m_params{m_mem, 0}, m_cond{m_mem, sizeof(Conditions)};
+  Buffer m_ghostCellStart{m_mem, 0}, m_ghostItems{m_mem, 0};
+  mutable Buffer m_stage{m_mem, 0}, m_rowsBuf{m_mem, 0};  // pack/unpack staging
 };
 
 template <class Exec, class R>
 void EngineImpl<Exec, R>::init() {
   const EngineSetup& s = m_setup;
-  m_n = Index(s.position.size());
+  m_n = m_owned = Index(s.position.size());
   m_numTri = Index(s.triMesh.size());
   // The executor's layouts, unless the setup asks for another executor's (tests), or PFLOW_LIST_LAYOUT=
   // row|column and PFLOW_SLOT_LAYOUT=particle|slot override them (measurements).
@@ -349,7 +480,7 @@ void EngineImpl<Exec, R>::init() {
   if (const char* layout = std::getenv("PFLOW_LIST_LAYOUT")) m_columnMajor = std::string(layout) == "column";
   m_particles.allocate(m_n, s.historySlots, s.wallHistorySlots, slotMajor);
   std::vector<Gid> gids(m_n);
-  for (Index i = 0; i < m_n; ++i) gids[i] = i;
+  for (Index i = 0; i < m_n; ++i) gids[i] = s.gid.empty() ? Gid(i) : s.gid[i];
   // Host values (double) converted to the field's type at the run's precision; empty = zero.
   auto put = [&]<Field F, class T>(std::integral_constant<Field, F>, const std::vector<T>& src) {
     using Dst = typename ParticleData<R>::template Type<F>;
@@ -460,17 +591,19 @@ Status EngineImpl<Exec, R>::deepOverlapError(Index i) const {
 template <class Exec, class R>
 ContactStats EngineImpl<Exec, R>::contactStats() const {
   // Diagnostics only (not on the step path): computed from host copies.
-  const Index n = m_n;
-  std::vector<Vec3d> pos(n);
-  std::vector<V> vel(n), om(n);
-  std::vector<R> rad(n), mass(n);
+  // Owned particles [0, n); their candidates may be ghosts [n, m_n). A pair across ranks is counted by
+  // both ranks count a pair that spans two: these statistics are per rank.
+  const Index n = m_owned;
+  std::vector<Vec3d> pos(m_n);
+  std::vector<V> vel(m_n), om(m_n);
+  std::vector<R> rad(m_n), mass(m_n);
   std::vector<Index> nbr(std::size_t(n) * m_nbrCap);
   std::vector<std::uint32_t> cnt(n);
-  m_mem.copyToHost(pos.data(), m_particles.template ptr<Field::Position>(), n * sizeof(Vec3d));
-  m_mem.copyToHost(vel.data(), m_particles.template ptr<Field::Velocity>(), n * sizeof(V));
-  m_mem.copyToHost(om.data(), m_particles.template ptr<Field::AngularVelocity>(), n * sizeof(V));
-  m_mem.copyToHost(rad.data(), m_particles.template ptr<Field::Radius>(), n * sizeof(R));
-  m_mem.copyToHost(mass.data(), m_particles.template ptr<Field::Mass>(), n * sizeof(R));
+  m_mem.copyToHost(pos.data(), m_particles.template ptr<Field::Position>(), m_n * sizeof(Vec3d));
+  m_mem.copyToHost(vel.data(), m_particles.template ptr<Field::Velocity>(), m_n * sizeof(V));
+  m_mem.copyToHost(om.data(), m_particles.template ptr<Field::AngularVelocity>(), m_n * sizeof(V));
+  m_mem.copyToHost(rad.data(), m_particles.template ptr<Field::Radius>(), m_n * sizeof(R));
+  m_mem.copyToHost(mass.data(), m_particles.template ptr<Field::Mass>(), m_n * sizeof(R));
   m_mem.copyToHost(nbr.data(), m_nbr.data(), nbr.size() * sizeof(Index));
   m_mem.copyToHost(cnt.data(), m_nbrCount.data(), n * sizeof(std::uint32_t));
   ContactStats st;
@@ -498,7 +631,11 @@ ContactStats EngineImpl<Exec, R>::contactStats() const {
   auto occupied = [&]<class T>(Field f, T empty) {
     std::vector<T> keys(m_particles.buffer(f).bytes() / sizeof(T));
     m_mem.copyToHost(keys.data(), m_particles.buffer(f).data(), keys.size() * sizeof(T));
-    for (T k : keys) st.historyEntries += k != empty;
+    const FieldInfo& info = kFieldTableOf<R>[int(f)];
+    const SlotLayout layout = m_particles.layout(info.multiplicity);
+    for (Index i = 0; i < n; ++i)  // owned particles only (ghost and spare rows hold nothing)
+      for (std::size_t k = 0; k < m_particles.valuesPerParticle(info); ++k)
+        st.historyEntries += keys[std::size_t(i) * layout.row + k * layout.col] != empty;
   };
   occupied(Field::HistoryPartner, kNoPartner);
   occupied(Field::WallKey, kNoGid);

@@ -7,8 +7,9 @@
 
 namespace pflow::compute {
 
-enum class Phase { kIntegrate1, kMeshes, kSort, kContacts, kForces, kIntegrate2, kOutput, kCount };
-inline constexpr const char* kPhaseNames[] = {"integrate1", "meshes", "sort", "contacts", "forces", "integrate2", "output"};
+// migrate and halo: distributed runs only (particles changing rank at rebuilds; ghosts).
+enum class Phase { kIntegrate1, kMeshes, kMigrate, kSort, kHalo, kContacts, kForces, kIntegrate2, kOutput, kCount };
+inline constexpr const char* kPhaseNames[] = {"integrate1", "meshes", "migrate", "sort", "halo", "contacts", "forces", "integrate2", "output"};
 
 inline Phase phaseByName(const std::string& name) {
   for (int p = 0; p < int(Phase::kCount); ++p)

@@ -26,19 +26,27 @@ Status Simulation::stepPhases() {
   double moved, meshMoved;
   { auto t = m_timers.time(Phase::kIntegrate1); moved = std::sqrt(m_engine->integrateFirstHalf(dt)); }
   { auto t = m_timers.time(Phase::kMeshes);     meshMoved = std::sqrt(m_engine->moveMeshes(tNext)); }
-  if (2 * moved > m_skin || moved + meshMoved > m_skin) PFLOW_RETURN_IF_ERROR(rebuild());
-  { auto t = m_timers.time(Phase::kForces);     PFLOW_RETURN_IF_ERROR(m_engine->computeForces(dt, tNext)); }
-  { auto t = m_timers.time(Phase::kIntegrate2); PFLOW_RETURN_IF_ERROR(m_engine->integrateSecondHalf(dt)); }
+  Status s;
+  if (m_domain->anyRebuild(2 * moved > m_skin || moved + meshMoved > m_skin)) s = rebuild();
+  else { auto t = m_timers.time(Phase::kHalo); s = m_domain->refreshGhosts(*m_engine); }
+  if (s.isOk()) { auto t = m_timers.time(Phase::kForces);     s = m_engine->computeForces(dt, tNext); }
+  if (s.isOk()) { auto t = m_timers.time(Phase::kIntegrate2); s = m_engine->integrateSecondHalf(dt); }
+  PFLOW_RETURN_IF_ERROR(m_domain->agree(s));  // every rank stops on any rank's error
   reportSlotGrowth();
   ++m_step;
   m_time = tNext;
   return Status::ok();
 }
 
-// Neighbour rebuild: sort particles by cell (reordering every field), then candidate lists.
+// Neighbour rebuild: particles to the ranks that own them, sort by cell (reordering every field), the
+// ghosts, then candidate lists. One process: the sort and the lists.
 Status Simulation::rebuild() {
+  const double cost = m_timers.seconds(Phase::kContacts) + m_timers.seconds(Phase::kForces);
+  { auto t = m_timers.time(Phase::kMigrate);  PFLOW_RETURN_IF_ERROR(m_domain->migrate(*m_engine, cost - m_costMark)); }
   { auto t = m_timers.time(Phase::kSort);     m_engine->sortByCell(); }
+  { auto t = m_timers.time(Phase::kHalo);     PFLOW_RETURN_IF_ERROR(m_domain->exchangeGhosts(*m_engine)); }
   { auto t = m_timers.time(Phase::kContacts); PFLOW_RETURN_IF_ERROR(m_engine->buildContacts()); }
+  m_costMark = m_timers.seconds(Phase::kContacts) + m_timers.seconds(Phase::kForces);
   ++m_rebuilds;
   return Status::ok();
 }
@@ -91,8 +99,9 @@ Status Simulation::withStep(Status s) const {
 Status Simulation::initialise() {
   m_historySlots = m_engine->historySlots();
   m_wallHistorySlots = m_engine->wallHistorySlots();
-  PFLOW_RETURN_IF_ERROR(rebuild());
-  PFLOW_RETURN_IF_ERROR(m_engine->computeForces(0.0, 0.0));
+  Status s = rebuild();
+  if (s.isOk()) s = m_engine->computeForces(0.0, 0.0);
+  PFLOW_RETURN_IF_ERROR(m_domain->agree(s));
   reportSlotGrowth();
   return Status::ok();
 }
@@ -127,7 +136,10 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const RunConfig& config, 
   auto setup = prepareEngineSetup(config);
   if (!setup) return setup.status();
   setup.value().layout = options.layout;
+  std::shared_ptr<Domain> domain = options.domain ? options.domain : std::make_shared<Domain>();
+  if (Status s = domain->partition(setup.value()); !s.isOk()) return s;
   std::unique_ptr<Simulation> sim(new Simulation(setup.value(), ts.value(), nullptr));
+  sim->m_domain = std::move(domain);
   const bool single = config.sim.precision == Precision::kFloat;
   ExecutorKind kind = options.executor;
   if (kind == ExecutorKind::kAuto) kind = cudaDeviceCount() > 0 ? ExecutorKind::kCuda : ExecutorKind::kCpu;

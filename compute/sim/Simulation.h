@@ -7,6 +7,7 @@
 #include <string>
 
 #include "common/Status.h"
+#include "compute/sim/Domain.h"
 #include "compute/sim/Engine.h"
 #include "compute/sim/PhaseTimers.h"
 #include "compute/sim/RunConfig.h"
@@ -21,6 +22,8 @@ struct SimulationOptions {
   ExecutorKind executor = ExecutorKind::kCpu;
   int device = 0;  // CUDA device index (of the visible ones)
   EngineSetup::Layout layout = EngineSetup::Layout::kExecutor;  // tests: another executor's data layouts
+  // How the run is split across processes (compute/mpi's MpiDomain); null: one process.
+  std::shared_ptr<Domain> domain;
 };
 
 // "cpu" | "cuda" | "auto" -> kind; an error naming the flag otherwise.
@@ -44,11 +47,17 @@ class Simulation {
   const TimeStepInfo& timeStep() const { return m_timeStep; }
   const CellGrid& grid() const { return m_grid; }
   double skin() const { return m_skin; }
-  std::size_t numParticles() const { return m_engine->size(); }
+  std::size_t numParticles() const { return m_engine->size(); }  // on this rank
+  const Domain& domain() const { return *m_domain; }
   std::int64_t rebuilds() const { return m_rebuilds; }
 
-  // Host copy of the particles now: the fields named (scene output.fields), or every snapshot field.
-  ParticleSnapshot snapshot(const std::vector<std::string>& fields = {}) const { return m_engine->snapshot(m_step, m_time, fields); }
+  // Host copy of the particles now: the fields named (scene output.fields), or every snapshot field. In a
+  // distributed run every rank calls it and rank 0 gets all particles, ordered by id; `localOnly`: this
+  // rank's own particles, no communication.
+  ParticleSnapshot snapshot(const std::vector<std::string>& fields = {}, bool localOnly = false) const {
+    ParticleSnapshot s = m_engine->snapshot(m_step, m_time, fields);
+    return localOnly ? s : m_domain->gather(std::move(s));
+  }
   GeometrySnapshot geometry() const { return m_engine->geometry(); }
   ContactStats contactStats() const { return m_engine->contactStats(); }
   const PhaseTimers& timers() const { return m_timers; }
@@ -70,7 +79,9 @@ class Simulation {
   double m_skin;    // neighbour skin [m]
   TimeStepInfo m_timeStep;
   std::unique_ptr<Engine> m_engine;
+  std::shared_ptr<Domain> m_domain;
   PhaseTimers m_timers;
+  double m_costMark = 0;  // contacts + forces seconds at the last rebuild (the domain's cost measure)
   std::int64_t m_step = 0;
   double m_time = 0;
   std::int64_t m_rebuilds = 0;

@@ -1,0 +1,331 @@
+#include "compute/mpi/MpiDomain.h"
+
+#include <algorithm>
+#include <climits>
+#include <cstring>
+#include <numeric>
+#include <stdexcept>
+
+#include "common/Log.h"
+#include "compute/particles/ParticleFields.h"
+#include "compute/sim/Engine.h"
+
+namespace pflow::compute {
+
+namespace {
+// Cells of `grid` that share a face, edge or corner with cell (cx, cy, cz), itself included.
+template <class F>
+void forNeighbourCells(const CellGrid& g, int cx, int cy, int cz, const F& f) {
+  for (int z = std::max(0, cz - 1); z <= std::min(g.nz - 1, cz + 1); ++z)
+    for (int y = std::max(0, cy - 1); y <= std::min(g.ny - 1, cy + 1); ++y)
+      for (int x = std::max(0, cx - 1); x <= std::min(g.nx - 1, cx + 1); ++x) f(g.index(x, y, z));
+}
+
+Vec3d cellCentre(const CellGrid& g, std::uint32_t c) {
+  const std::uint32_t x = c % std::uint32_t(g.nx), y = (c / std::uint32_t(g.nx)) % std::uint32_t(g.ny),
+                      z = c / (std::uint32_t(g.nx) * std::uint32_t(g.ny));
+  return g.lo + g.cellSize * Vec3d{x + 0.5, y + 0.5, z + 0.5};
+}
+}  // namespace
+
+Result<MpiDomainOptions::Strategy> parseStrategy(const std::string& name, const std::string& field) {
+  if (name == "sfc") return MpiDomainOptions::Strategy::kSfc;
+  if (name == "multisection") return MpiDomainOptions::Strategy::kMultiSection;
+  return invalidArgument(field + ": '" + name + "' is not one of sfc, multisection");
+}
+
+MpiDomain::MpiDomain(MPI_Comm comm, MpiDomainOptions options) : m_comm(comm), m_options(options) {
+  MPI_Comm_rank(m_comm, &m_rank);
+  MPI_Comm_size(m_comm, &m_size);
+}
+
+// ---- decomposition ----------------------------------------------------------------------------
+
+Status MpiDomain::decompose(const std::vector<Vec3d>& pos, const std::vector<double>& w) {
+  const std::uint32_t cells = m_grid.numCells();
+  if (m_options.strategy == MpiDomainOptions::Strategy::kSfc) {
+    // The patent's: per-cell weights summed over ranks, contiguous ranges along the Morton curve.
+    std::vector<double> weight(cells, 0.0);
+    for (std::size_t i = 0; i < pos.size(); ++i) weight[m_grid.cellOf(pos[i])] += w[i];
+    MPI_Allreduce(MPI_IN_PLACE, weight.data(), int(cells), MPI_DOUBLE, MPI_SUM, m_comm);
+    auto d = decomp::SfcDecomposition::build(m_grid, weight, m_size);
+    if (!d) return d.status();
+    m_decomp = std::make_unique<decomp::SfcDecomposition>(std::move(d).value());
+    auto* sfc = static_cast<decomp::SfcDecomposition*>(m_decomp.get());
+    m_cellOwner.resize(cells);
+    for (int z = 0; z < m_grid.nz; ++z)
+      for (int y = 0; y < m_grid.ny; ++y)
+        for (int x = 0; x < m_grid.nx; ++x) m_cellOwner[m_grid.index(x, y, z)] = sfc->ownerOfCell(x, y, z);
+  } else {
+    // FDPS's: cuts at weighted quantiles of a sample (at most ~2^16 points over all ranks).
+    long long n = (long long)pos.size(), total = 0;
+    MPI_Allreduce(&n, &total, 1, MPI_LONG_LONG, MPI_SUM, m_comm);
+    const std::size_t every = std::max<long long>(1, total / 65536);
+    std::vector<double> mine;  // x, y, z, w per sample
+    for (std::size_t i = 0; i < pos.size(); i += every) mine.insert(mine.end(), {pos[i].x, pos[i].y, pos[i].z, w[i] * double(every)});
+    int count = int(mine.size());
+    std::vector<int> counts(m_size), displs(m_size, 0);
+    MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, m_comm);
+    for (int r = 1; r < m_size; ++r) displs[r] = displs[r - 1] + counts[r - 1];
+    std::vector<double> all(std::size_t(displs.back() + counts.back()));
+    MPI_Allgatherv(mine.data(), count, MPI_DOUBLE, all.data(), counts.data(), displs.data(), MPI_DOUBLE, m_comm);
+    std::vector<Vec3d> samples;
+    std::vector<double> weights;
+    for (std::size_t k = 0; k + 3 < all.size(); k += 4) {
+      samples.push_back({all[k], all[k + 1], all[k + 2]});
+      weights.push_back(all[k + 3]);
+    }
+    const Vec3d hi = m_grid.lo + m_grid.cellSize * Vec3d{double(m_grid.nx), double(m_grid.ny), double(m_grid.nz)};
+    auto d = decomp::MultiSectionDecomposition::build(samples, weights, m_size, m_grid.lo, hi);
+    if (!d) return d.status();
+    m_decomp = std::make_unique<decomp::MultiSectionDecomposition>(std::move(d).value());
+    m_cellOwner.resize(cells);
+    for (std::uint32_t c = 0; c < cells; ++c) m_cellOwner[c] = m_decomp->ownerOf(cellCentre(m_grid, c));
+  }
+  return Status::ok();
+}
+
+Status MpiDomain::partition(EngineSetup& s) {
+  // Every rank holds the whole scene here, so the first decomposition needs no reduction of positions:
+  // each rank weighs only the particles r, r + size, ... and the sum over ranks counts each once.
+  m_grid = s.grid;
+  const std::size_t n = s.position.size();
+  std::vector<Vec3d> pos;
+  std::vector<double> w;
+  for (std::size_t i = std::size_t(m_rank); i < n; i += std::size_t(m_size)) {
+    pos.push_back(s.position[i]);
+    w.push_back(1.0);
+  }
+  if (Status st = decompose(pos, w); !st.isOk()) return st;
+  // Keep this rank's particles, with their scene index as global id.
+  std::vector<std::size_t> mine;
+  for (std::size_t i = 0; i < n; ++i)
+    if (m_cellOwner[m_grid.cellOf(s.position[i])] == m_rank) mine.push_back(i);
+  auto keep = [&](auto& v) {
+    if (v.empty()) return;
+    std::remove_reference_t<decltype(v)> kept;
+    kept.reserve(mine.size());
+    for (std::size_t i : mine) kept.push_back(v[i]);
+    v = std::move(kept);
+  };
+  keep(s.position);
+  keep(s.velocity);
+  keep(s.angularVelocity);
+  keep(s.radius);
+  keep(s.mass);
+  keep(s.material);
+  s.gid.assign(mine.begin(), mine.end());
+  m_ownedPerRank.assign(static_cast<std::size_t>(m_size), 0);
+  long long owned = (long long)mine.size();
+  MPI_Allgather(&owned, 1, MPI_LONG_LONG, m_ownedPerRank.data(), 1, MPI_LONG_LONG, m_comm);
+  spdlog::debug("rank {}: {} of {} particles ({} decomposition)", m_rank, mine.size(), n, m_decomp->name());
+  return Status::ok();
+}
+
+// ---- the step's collectives --------------------------------------------------------------------
+
+bool MpiDomain::anyRebuild(bool local) {
+  int any = local ? 1 : 0;
+  MPI_Allreduce(MPI_IN_PLACE, &any, 1, MPI_INT, MPI_LOR, m_comm);
+  return any != 0;
+}
+
+double MpiDomain::sum(double local) {
+  MPI_Allreduce(MPI_IN_PLACE, &local, 1, MPI_DOUBLE, MPI_SUM, m_comm);
+  return local;
+}
+
+Status MpiDomain::agree(Status local) {
+  int failing = local.isOk() ? INT_MAX : m_rank;
+  MPI_Allreduce(MPI_IN_PLACE, &failing, 1, MPI_INT, MPI_MIN, m_comm);
+  if (failing == INT_MAX) return Status::ok();
+  // The lowest failing rank's error, with its rank named, on every rank.
+  int code = int(local.code());
+  std::string message = local.message();
+  MPI_Bcast(&code, 1, MPI_INT, failing, m_comm);
+  int length = int(message.size());
+  MPI_Bcast(&length, 1, MPI_INT, failing, m_comm);
+  message.resize(std::size_t(length));
+  MPI_Bcast(message.data(), length, MPI_CHAR, failing, m_comm);
+  return Status(StatusCode(code), "rank " + std::to_string(failing) + ": " + message);
+}
+
+// ---- particle exchange -------------------------------------------------------------------------
+
+std::vector<Vec3d> MpiDomain::positions(Engine& engine) const {
+  const ParticleSnapshot s = engine.snapshot(0, 0, {"position"});
+  const SnapshotArray* a = s.find("position");
+  return std::vector<Vec3d>(a->as<Vec3d>(), a->as<Vec3d>() + s.n);
+}
+
+std::vector<int> MpiDomain::packFor(Engine& engine, const std::vector<std::vector<Index>>& to, std::uint32_t flags) {
+  std::vector<int> counts(static_cast<std::size_t>(m_size), 0);
+  m_out.clear();
+  for (int r = 0; r < m_size; ++r) {
+    counts[r] = int(to[r].size());
+    if (to[r].empty()) continue;
+    engine.pack(to[r], flags, m_one);
+    m_out.insert(m_out.end(), m_one.begin(), m_one.end());
+  }
+  return counts;
+}
+
+std::vector<PackedRows> MpiDomain::exchange(const std::vector<std::byte>& out, const std::vector<int>& counts,
+                                            std::size_t rowBytes, std::vector<int>& recvCounts, bool countsKnown) {
+  // The count matrix: each rank learns how many rows every other rank sends it.
+  if (!countsKnown) {
+    recvCounts.assign(static_cast<std::size_t>(m_size), 0);
+    MPI_Alltoall(counts.data(), 1, MPI_INT, recvCounts.data(), 1, MPI_INT, m_comm);
+  }
+  std::size_t inRows = 0;
+  for (int c : recvCounts) inRows += std::size_t(c);
+  m_in.resize(inRows * rowBytes);
+  std::vector<MPI_Request> requests;
+  std::vector<PackedRows> blocks;
+  std::size_t at = 0;
+  for (int r = 0; r < m_size; ++r) {
+    const std::size_t bytes = std::size_t(recvCounts[r]) * rowBytes;
+    if (bytes) {
+      if (bytes > std::size_t(INT_MAX)) throw std::runtime_error("a halo or migration message above 2 GiB");
+      blocks.push_back({m_in.data() + at, Index(recvCounts[r])});
+      requests.emplace_back();
+      MPI_Irecv(m_in.data() + at, int(bytes), MPI_BYTE, r, 0, m_comm, &requests.back());
+    }
+    at += bytes;
+  }
+  at = 0;
+  for (int r = 0; r < m_size; ++r) {
+    const std::size_t bytes = std::size_t(counts[r]) * rowBytes;
+    if (bytes) {
+      requests.emplace_back();
+      MPI_Isend(out.data() + at, int(bytes), MPI_BYTE, r, 0, m_comm, &requests.back());
+    }
+    at += bytes;
+  }
+  MPI_Waitall(int(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+  return blocks;
+}
+
+Status MpiDomain::migrate(Engine& engine, double cost) {
+  engine.dropGhosts();
+  // Rows travel in the engine's layout: every rank with the same slot counts.
+  int slots[2] = {engine.historySlots(), engine.wallHistorySlots()};
+  MPI_Allreduce(MPI_IN_PLACE, slots, 2, MPI_INT, MPI_MAX, m_comm);
+  engine.ensureSlots(slots[0], slots[1]);
+
+  std::vector<Vec3d> pos = positions(engine);
+  const std::size_t n = pos.size();
+
+  // Cost per particle, smoothed over rebuilds; rebalance when the busiest rank is above tolerance.
+  if (m_options.cost == MpiDomainOptions::Cost::kCount) cost = double(n);
+  const double measured = n ? cost / double(n) : 0.0;
+  m_costPerParticle = m_costPerParticle > 0 ? m_options.smoothing * measured + (1 - m_options.smoothing) * m_costPerParticle
+                                            : measured;
+  std::vector<double> rankCost(static_cast<std::size_t>(m_size));
+  const double mine = m_costPerParticle * double(n);
+  MPI_Allgather(&mine, 1, MPI_DOUBLE, rankCost.data(), 1, MPI_DOUBLE, m_comm);
+  m_lastImbalance = decomp::imbalance(rankCost);
+  if (m_options.rebalance && m_lastImbalance > 1 + m_options.tolerance) {
+    // Every rank's particles weighted by its measured cost per particle (a rank with no cost yet by the
+    // mean), so dense, contact-rich regions count for more than loose ones.
+    long long total = 0, owned = (long long)n;
+    MPI_Allreduce(&owned, &total, 1, MPI_LONG_LONG, MPI_SUM, m_comm);
+    const double sumCost = std::accumulate(rankCost.begin(), rankCost.end(), 0.0);
+    const double meanPerParticle = total ? sumCost / double(total) : 0.0;
+    const double w = m_costPerParticle > 0 ? m_costPerParticle : (meanPerParticle > 0 ? meanPerParticle : 1.0);
+    if (Status s = decompose(pos, std::vector<double>(n, w)); !s.isOk()) return s;
+    ++m_rebalances;
+    spdlog::debug("rank {}: rebalanced ({:.3f} > 1 + {:.3f})", m_rank, m_lastImbalance, m_options.tolerance);
+  }
+
+  // Every particle to the owner of its cell now, however far it went since the last rebuild.
+  std::vector<std::vector<Index>> leaving(static_cast<std::size_t>(m_size));
+  std::vector<Index> stay;
+  stay.reserve(n);
+  for (Index i = 0; i < Index(n); ++i) {
+    const int owner = m_cellOwner[m_grid.cellOf(pos[i])];
+    if (owner == m_rank) stay.push_back(i);
+    else leaving[std::size_t(owner)].push_back(i);
+  }
+  const std::vector<int> counts = packFor(engine, leaving, kMigrate);
+  m_migratedOut += (long long)(n - stay.size());
+  std::vector<int> recvCounts;
+  const std::vector<PackedRows> in = exchange(m_out, counts, engine.rowBytes(kMigrate), recvCounts, false);
+  engine.keepOwned(stay);
+  engine.appendOwned(in);
+  long long owned = (long long)engine.size();
+  m_ownedPerRank.assign(static_cast<std::size_t>(m_size), 0);
+  MPI_Allgather(&owned, 1, MPI_LONG_LONG, m_ownedPerRank.data(), 1, MPI_LONG_LONG, m_comm);
+  return Status::ok();
+}
+
+Status MpiDomain::exchangeGhosts(Engine& engine) {
+  // Each owned particle goes to every other rank that owns one of the 27 cells around its own (the
+  // particles are sorted by cell, so the set is computed once per cell).
+  const std::vector<Vec3d> pos = positions(engine);
+  m_haloRows.assign(static_cast<std::size_t>(m_size), {});
+  std::uint32_t lastCell = ~0u;
+  std::vector<int> dest;
+  for (Index i = 0; i < Index(pos.size()); ++i) {
+    int cx, cy, cz;
+    m_grid.coords(pos[i], cx, cy, cz);
+    const std::uint32_t c = m_grid.index(cx, cy, cz);
+    if (c != lastCell) {
+      dest.clear();
+      forNeighbourCells(m_grid, cx, cy, cz, [&](std::uint32_t nc) {
+        const int o = m_cellOwner[nc];
+        if (o != m_rank && std::find(dest.begin(), dest.end(), o) == dest.end()) dest.push_back(o);
+      });
+      lastCell = c;
+    }
+    for (int d : dest) m_haloRows[std::size_t(d)].push_back(i);
+  }
+  m_haloSend = packFor(engine, m_haloRows, kGhost);
+  engine.setGhosts(exchange(m_out, m_haloSend, engine.rowBytes(kGhost), m_haloRecv, false));
+  return Status::ok();
+}
+
+Status MpiDomain::refreshGhosts(Engine& engine) {
+  packFor(engine, m_haloRows, kRefresh);
+  engine.refreshGhosts(exchange(m_out, m_haloSend, engine.rowBytes(kRefresh), m_haloRecv, true));
+  return Status::ok();
+}
+
+ParticleSnapshot MpiDomain::gather(ParticleSnapshot local) {
+  // Every array gathered to rank 0 (ranks produce the same arrays in the same order), then ordered by id.
+  int n = int(local.n);
+  std::vector<int> counts(static_cast<std::size_t>(m_size)), displs(static_cast<std::size_t>(m_size), 0);
+  MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, m_comm);
+  long long total = 0;
+  for (int r = 0; r < m_size; ++r) total += counts[r];
+  ParticleSnapshot all;
+  all.step = local.step;
+  all.time = local.time;
+  all.n = m_rank == 0 ? std::size_t(total) : 0;
+  for (SnapshotArray& a : local.arrays) {
+    const std::size_t row = local.n ? a.data.size() / local.n : std::size_t(a.components) * scalarBytesOf(a.type);
+    std::vector<int> bytes(static_cast<std::size_t>(m_size)), at(static_cast<std::size_t>(m_size), 0);
+    for (int r = 0; r < m_size; ++r) bytes[r] = int(std::size_t(counts[r]) * row);
+    for (int r = 1; r < m_size; ++r) at[r] = at[r - 1] + bytes[r - 1];
+    SnapshotArray g{a.name, a.type, a.components, a.unit, {}};
+    if (m_rank == 0) g.data.resize(std::size_t(total) * row);
+    MPI_Gatherv(a.data.data(), int(a.data.size()), MPI_BYTE, g.data.data(), bytes.data(), at.data(), MPI_BYTE, 0, m_comm);
+    all.arrays.push_back(std::move(g));
+  }
+  if (m_rank != 0) return all;
+  const SnapshotArray* ids = all.find("id");
+  if (!ids) return all;
+  std::vector<std::size_t> order(all.n);
+  std::iota(order.begin(), order.end(), std::size_t(0));
+  const Gid* id = ids->as<Gid>();
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return id[a] < id[b]; });
+  for (SnapshotArray& a : all.arrays) {
+    const std::size_t row = all.n ? a.data.size() / all.n : 0;
+    std::vector<std::byte> sorted(a.data.size());
+    for (std::size_t k = 0; k < all.n; ++k) std::memcpy(sorted.data() + k * row, a.data.data() + order[k] * row, row);
+    a.data = std::move(sorted);
+  }
+  return all;
+}
+
+}  // namespace pflow::compute

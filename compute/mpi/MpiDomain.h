@@ -1,0 +1,95 @@
+// A run split across MPI ranks, each owning the particles in its cells (issue 6; the seed patent's
+// decomposition, FDPS's multi-section as the alternative). Host orchestration around the engine's
+// device-side packing: every exchange is a count matrix (MPI_Alltoall) followed by non-blocking
+// point-to-point messages between the ranks that have something to send.
+//
+// Ownership is by cell of the engine's grid: the decomposition assigns each cell to a rank, a particle
+// belongs to the owner of its cell, and a rank's ghosts are the other ranks' particles in the 27 cells
+// around its own (the cells are at least one contact range wide, so every candidate is among them).
+// Contact forces come from full candidate lists, so ghosts are read-only: no force travels back.
+#pragma once
+#include <mpi.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "compute/decomp/Decomposition.h"
+#include "compute/neighbor/CellGrid.h"
+#include "compute/sim/Domain.h"
+#include "compute/sim/Engine.h"
+
+namespace pflow::compute {
+
+struct MpiDomainOptions {
+  enum class Strategy { kSfc, kMultiSection } strategy = Strategy::kSfc;
+  // Rebalance on a rebuild when the busiest rank's smoothed cost exceeds the mean by this fraction.
+  double tolerance = 0.05;
+  bool rebalance = true;
+  // Weight of the newest cost measurement in the smoothed cost per particle (1: no smoothing).
+  double smoothing = 0.5;
+  // What a rank's cost is: the measured seconds of its contact and force phases (the default), or its
+  // particle count (deterministic: tests, and machines whose timings are noise, e.g. oversubscribed).
+  enum class Cost { kMeasured, kCount } cost = Cost::kMeasured;
+};
+
+// "sfc" | "multisection"; an error naming `field` otherwise.
+Result<MpiDomainOptions::Strategy> parseStrategy(const std::string& name, const std::string& field);
+
+class MpiDomain final : public Domain {
+ public:
+  explicit MpiDomain(MPI_Comm comm, MpiDomainOptions options = {});
+
+  int rank() const override { return m_rank; }
+  int ranks() const override { return m_size; }
+  Status partition(EngineSetup& setup) override;
+  bool anyRebuild(bool local) override;
+  Status migrate(Engine& engine, double cost) override;
+  Status exchangeGhosts(Engine& engine) override;
+  Status refreshGhosts(Engine& engine) override;
+  Status agree(Status local) override;
+  ParticleSnapshot gather(ParticleSnapshot local) override;
+  double sum(double local) override;
+
+  // Diagnostics and tests.
+  const char* strategyName() const { return m_decomp ? m_decomp->name() : "none"; }
+  int rebalances() const { return m_rebalances; }
+  // max / mean over ranks of the smoothed cost of the last rebuild (1 = balanced).
+  double lastImbalance() const { return m_lastImbalance; }
+  // Particles owned by each rank at the last rebuild.
+  const std::vector<long long>& ownedPerRank() const { return m_ownedPerRank; }
+  int ownerOfCell(std::uint32_t cell) const { return m_cellOwner[cell]; }
+  // Particles this rank has sent to others at rebuilds, in all.
+  long long migratedOut() const { return m_migratedOut; }
+
+ private:
+  // Builds the decomposition from per-particle weights `w` of this rank's particles at `pos` (cell
+  // weights reduced over ranks for the curve, weighted samples gathered for the multi-section).
+  Status decompose(const std::vector<Vec3d>& pos, const std::vector<double>& w);
+  // Sends rows packed per destination (counts[d] rows for rank d, one packed block each, in rank order)
+  // and receives the blocks every rank sends here (`recvCounts` rows per source, learnt through the count
+  // matrix unless `countsKnown`), in rank order.
+  std::vector<PackedRows> exchange(const std::vector<std::byte>& out, const std::vector<int>& counts, std::size_t rowBytes,
+                                   std::vector<int>& recvCounts, bool countsKnown);
+  // Packs rows to[d] for each rank d, one block each, into m_out; returns the counts.
+  std::vector<int> packFor(Engine& engine, const std::vector<std::vector<Index>>& to, std::uint32_t flags);
+  std::vector<Vec3d> positions(Engine& engine) const;
+
+  MPI_Comm m_comm;
+  int m_rank = 0, m_size = 1;
+  MpiDomainOptions m_options;
+  CellGrid m_grid;
+  std::unique_ptr<decomp::Decomposition> m_decomp;
+  std::vector<std::int32_t> m_cellOwner;  // per cell of m_grid
+  double m_costPerParticle = 0;           // smoothed [s per particle between rebuilds]
+  int m_rebalances = 0;
+  long long m_migratedOut = 0;
+  double m_lastImbalance = 1;
+  std::vector<long long> m_ownedPerRank;
+  // Halo, fixed between rebuilds: rows sent (grouped by destination rank), counts both ways.
+  std::vector<std::vector<Index>> m_haloRows;  // per destination rank
+  std::vector<int> m_haloSend, m_haloRecv;
+  std::vector<std::byte> m_out, m_in, m_one;
+};
+
+}  // namespace pflow::compute

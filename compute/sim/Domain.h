@@ -1,0 +1,42 @@
+// How a run is split across processes. The step loop calls these hooks on every run: the base class is
+// the single-process domain (every hook does nothing), compute/mpi's MpiDomain exchanges particles
+// between MPI ranks (migration at rebuilds, ghosts every step) and keeps them balanced. The compute core
+// itself never sees MPI.
+#pragma once
+#include <cstdint>
+
+#include "common/Status.h"
+#include "compute/particles/ParticleSnapshot.h"
+
+namespace pflow::compute {
+
+class Engine;
+struct EngineSetup;
+
+class Domain {
+ public:
+  virtual ~Domain() = default;
+  virtual int rank() const { return 0; }
+  virtual int ranks() const { return 1; }
+  // Every rank prepares the whole scene; this keeps this rank's share and gives each particle its
+  // global id (its index in the scene).
+  virtual Status partition(EngineSetup&) { return Status::ok(); }
+  // True on every rank when any rank needs a neighbour rebuild (ranks rebuild together).
+  virtual bool anyRebuild(bool local) { return local; }
+  // Rebuild, before the sort: ghosts dropped, particles sent to the ranks that own their cells now (the
+  // ranks rebalanced first when their cost differs by more than the tolerance). `cost`: seconds this rank
+  // spent in contacts and forces since the last rebuild.
+  virtual Status migrate(Engine&, double /*cost*/) { return Status::ok(); }
+  // Rebuild, after the sort: the ghosts (particles of other ranks within reach of this rank's cells).
+  virtual Status exchangeGhosts(Engine&) { return Status::ok(); }
+  // Between rebuilds, after the first half step: the ghosts' positions and velocities.
+  virtual Status refreshGhosts(Engine&) { return Status::ok(); }
+  // The step's outcome, the same on every rank: OK, or the error of the lowest failing rank.
+  virtual Status agree(Status local) { return local; }
+  // All ranks' particles in one snapshot ordered by id, on rank 0 (an empty one elsewhere). Collective.
+  virtual ParticleSnapshot gather(ParticleSnapshot local) { return local; }
+  // Sum over ranks (collective).
+  virtual double sum(double local) { return local; }
+};
+
+}  // namespace pflow::compute
