@@ -40,13 +40,16 @@ struct GatherBytes {
   std::size_t stride;
   // Copies by 8- or 4-byte words (every field is a multiple of one and buffers are 64-byte aligned):
   // a run-time-sized memcpy would go byte by byte on the GPU.
+  // The word size also needs both bases aligned to it: packed blocks (Engine::pack) start wherever the
+  // previous block ended, a multiple of 4 bytes only (a GPU faults on a misaligned 8-byte access).
   PFLOW_HOSTDEVICE void operator()(Index k) const {
     const std::size_t from = std::size_t(perm[k]) * stride, to = std::size_t(k) * stride;
-    if (stride % 8 == 0) {
+    const std::size_t bases = std::size_t(reinterpret_cast<std::uintptr_t>(src) | reinterpret_cast<std::uintptr_t>(dst));
+    if (stride % 8 == 0 && bases % 8 == 0) {
       const auto* s = reinterpret_cast<const std::uint64_t*>(src + from);
       auto* d = reinterpret_cast<std::uint64_t*>(dst + to);
       for (std::size_t w = 0; w < stride / 8; ++w) d[w] = s[w];
-    } else if (stride % 4 == 0) {
+    } else if (stride % 4 == 0 && bases % 4 == 0) {
       const auto* s = reinterpret_cast<const std::uint32_t*>(src + from);
       auto* d = reinterpret_cast<std::uint32_t*>(dst + to);
       for (std::size_t w = 0; w < stride / 4; ++w) d[w] = s[w];

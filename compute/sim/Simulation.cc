@@ -143,19 +143,25 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const RunConfig& config, 
   const bool single = config.sim.precision == Precision::kFloat;
   ExecutorKind kind = options.executor;
   if (kind == ExecutorKind::kAuto) kind = cudaDeviceCount() > 0 ? ExecutorKind::kCuda : ExecutorKind::kCpu;
+  Status made;
   if (kind == ExecutorKind::kCuda) {
     auto engine = makeCudaEngine(std::move(setup).value(), options.device, single);
-    if (!engine) return engine.status();
-    sim->m_engine = std::move(engine).value();
-    // Kernels run asynchronously: each phase timer waits for its own work.
-    sim->m_timers.setFence([e = sim->m_engine.get()] { e->fence(); });
+    if (engine) {
+      sim->m_engine = std::move(engine).value();
+      // Kernels run asynchronously: each phase timer waits for its own work.
+      sim->m_timers.setFence([e = sim->m_engine.get()] { e->fence(); });
+    } else {
+      made = engine.status();
+    }
   } else {
     try {
       sim->m_engine = makeCpuEngine(std::move(setup).value(), single);
     } catch (...) {
-      return fromException();
+      made = fromException();
     }
   }
+  // A device that fails on one rank fails the run on all (the others would wait in the first exchange).
+  if (Status s = sim->m_domain->agree(made); !s.isOk()) return s;
   sim->m_executor = kind;
   try {
     if (Status s = sim->initialise(); !s.isOk()) return s;

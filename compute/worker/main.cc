@@ -1,10 +1,12 @@
 // pflow-worker: the MPI compute program the node agent starts for a job.
 //
-// Rank 0 loads the built model, runs the step loop, reports progress to the manager from a thread of its own
-// (whose answer carries a cancel request), and sends snapshots to the back-end. A cancel request, or SIGTERM from
-// the agent (forwarded by mpirun), stops the run at the next step boundary with the sink closed. Until the domain decomposition lands (the MPI issue),
-// ranks > 0 hold their device and wait for rank 0's final word without spinning; rank 0 broadcasts it at the step
-// boundary where the run ends, is cancelled or fails, so every rank stops together.
+// Every rank loads the built model and runs the step loop on its own device over its share of the particles
+// (compute/mpi's MpiDomain: decomposition, migration, ghosts, rebalancing). Rank 0 reports progress to the
+// manager from a thread of its own (whose answer carries a cancel request) and sends the snapshots, gathered
+// from all ranks in id order, to the back-end. A cancel request, or SIGTERM from the agent (forwarded by
+// mpirun), stops the run at the next step boundary on every rank (one reduction per step), with the sink
+// closed. Every outcome that one rank sees alone (a device that fails, a back-end that refuses a snapshot) is
+// agreed on by all ranks before the next collective, so no rank is left waiting.
 //
 // Exit codes: 0 finished (or cancelled: the manager knows it asked), 1 bad options or model, 2 I/O (back-end or
 // files), 3 the simulation failed (the message names particle, step and quantity). The last line on stderr is the
@@ -26,6 +28,7 @@
 
 #include "common/Log.h"
 #include "common/rpc/Rpc.h"
+#include "compute/mpi/MpiDomain.h"
 #include "compute/sim/Simulation.h"
 #include "compute/worker/SnapshotSinks.h"
 #include "compute/worker/WorkerOptions.h"
@@ -35,27 +38,6 @@
 namespace {
 
 using namespace pflow;
-
-enum Word : int { kFinished = 0, kCancelled = 1, kFailed = 2 };
-
-// Ranks > 0: wait for rank 0's final word with a non-blocking broadcast, sleeping between tests.
-int waitForRankZero() {
-  int word = kFailed;
-  MPI_Request req;
-  MPI_Ibcast(&word, 1, MPI_INT, 0, MPI_COMM_WORLD, &req);
-  int done = 0;
-  while (!done) {
-    MPI_Test(&req, &done, MPI_STATUS_IGNORE);
-    if (!done) std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
-  return word;
-}
-
-void tellOtherRanks(int word) {
-  MPI_Request req;
-  MPI_Ibcast(&word, 1, MPI_INT, 0, MPI_COMM_WORLD, &req);
-  MPI_Wait(&req, MPI_STATUS_IGNORE);
-}
 
 // SIGTERM or SIGINT (the agent stopping the job, mpirun forwarding it): stop at the next step boundary, close the
 // snapshot sink and tell the other ranks, instead of dying mid-write.
@@ -134,14 +116,16 @@ class ProgressReporter {
   std::thread m_thread;
 };
 
-manager::v1::Progress progressOf(const compute::Simulation& sim, std::int64_t totalSteps, double duration, double rate) {
+// `particles`: over all ranks.
+manager::v1::Progress progressOf(const compute::Simulation& sim, std::int64_t totalSteps, double duration, double rate,
+                                 double particles) {
   manager::v1::Progress p;
   p.set_step(sim.stepCount());
   p.set_total_steps(totalSteps);
   p.set_time(sim.time());
   p.set_duration(duration);
   p.set_particle_steps_per_second(rate);
-  p.set_eta_seconds(rate > 0 ? double(totalSteps - sim.stepCount()) * double(sim.numParticles()) / rate : 0);
+  p.set_eta_seconds(rate > 0 ? double(totalSteps - sim.stepCount()) * particles / rate : 0);
   return p;
 }
 
@@ -151,70 +135,92 @@ int fail(int code, const std::string& message) {
   return code;
 }
 
-int runRankZero(const worker::WorkerOptions& o, int ranks) {
+// Runs the job on this rank; returns the exit code (the same on every rank), -1 when cancelled.
+int runRank(const worker::WorkerOptions& o, int rank, int ranks) {
+  const bool lead = rank == 0;
   auto scene = frontend::loadScene((std::filesystem::path(o.modelDir) / "scene.yaml").string());
   if (!scene) return fail(1, "cannot load the model: " + scene.status().message());
   compute::RunConfig cfg = scene.value().config;
   if (o.threads > 0) cfg.sim.threads = o.threads;
-  const worker::LeasedDevice& device = o.devices.front();
+  const worker::LeasedDevice& device = o.devices[std::size_t(rank)];
   compute::SimulationOptions so;
   if (device.kind == "gpu") {  // a GPU lease runs on that GPU or fails: never silently on the CPU
     so.executor = compute::ExecutorKind::kCuda;
     so.device = device.index;
   }
+  auto domain = ranks > 1 ? std::make_shared<compute::MpiDomain>(MPI_COMM_WORLD) : nullptr;
+  so.domain = domain;
+  compute::Domain single;
+  compute::Domain& all = domain ? static_cast<compute::Domain&>(*domain) : single;
   auto created = compute::Simulation::create(cfg, so);
   if (!created) return fail(created.status().code() == StatusCode::kInvalidArgument ? 1 : 3, created.status().message());
   compute::Simulation& sim = *created.value();
+  const double particles = all.sum(double(sim.numParticles()));
   const std::string executorNote = sim.executorDescription() + ", " + sim.engine().precisionName() + " (device " +
-                                   device.node + ":" + device.kind + ":" +
-                                   std::to_string(device.index) +
-                                   "; " + std::to_string(ranks) + " rank(s))";
-  spdlog::info("job {}: {} particles, executor {}", o.jobId, sim.numParticles(), executorNote);
+                                   device.node + ":" + device.kind + ":" + std::to_string(device.index) + "; " +
+                                   std::to_string(ranks) + " rank(s)" +
+                                   (domain ? std::string(", ") + domain->strategyName() + " decomposition" : "") + ")";
+  spdlog::info("job {}: rank {} of {}: {} of {} particles, executor {}", o.jobId, rank, ranks, sim.numParticles(),
+               particles, executorNote);
 
-  auto sink = o.backendAddress.empty() ? worker::makeFileSink(o.output) : worker::makeBackendSink(o.backendAddress, o.jobId);
-  if (!sink) return fail(2, sink.status().message());
+  // The sink lives on rank 0; its failures are agreed on (the other ranks would wait in the next collective).
+  std::unique_ptr<worker::SnapshotSink> sink;
+  Status opened;
+  if (lead) {
+    auto made = o.backendAddress.empty() ? worker::makeFileSink(o.output) : worker::makeBackendSink(o.backendAddress, o.jobId);
+    if (made) sink = std::move(made).value();
+    else opened = made.status();
+    if (opened.isOk()) opened = sink->writeGeometry(sim.geometry());
+  }
+  if (Status s = all.agree(opened); !s.isOk()) return fail(2, s.message());
   const auto& fields = scene.value().outputFields;
-  auto write = [&]() -> Status {
+  auto write = [&]() -> Status {  // collective: every rank's particles gathered on rank 0
     auto t = sim.timers().time(compute::Phase::kOutput);
-    return sink.value()->write(sim.snapshot(fields));
+    compute::ParticleSnapshot snap = sim.snapshot(fields);
+    return all.agree(lead ? sink->write(snap) : Status::ok());
   };
-  if (Status s = sink.value()->writeGeometry(sim.geometry()); !s.isOk()) return fail(2, s.message());
   if (Status s = write(); !s.isOk()) return fail(2, s.message());
 
   const double duration = cfg.sim.duration, interval = cfg.sim.snapshotInterval;
   const auto totalSteps = std::int64_t(std::llround(duration / sim.dt()));
   const auto perSnapshot = interval > 0 ? std::max<std::int64_t>(1, std::llround(interval / sim.dt())) : totalSteps;
-  ProgressReporter progress(o.managerAddress, o.jobId, o.progressInterval);
+  ProgressReporter progress(lead ? o.managerAddress : std::string(), o.jobId, o.progressInterval);
   const auto start = std::chrono::steady_clock::now();
   auto lastPost = start - std::chrono::hours(1);
   bool cancelled = false;
+  auto rate = [&](const compute::Simulation& s, double wall) { return wall > 0 ? particles * double(s.stepCount()) / wall : 0; };
   auto observer = [&](const compute::Simulation& s) -> Status {
     if (s.stepCount() % perSnapshot == 0 || s.stepCount() == totalSteps)
       if (Status st = write(); !st.isOk()) return st;
-    if (g_stopSignal || progress.cancelRequested()) {
+    int stop = (g_stopSignal || progress.cancelRequested()) ? 1 : 0;
+    if (domain) MPI_Allreduce(MPI_IN_PLACE, &stop, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);  // every rank stops together
+    if (stop) {
       cancelled = true;
       return Status(StatusCode::kCancelled, "cancelled at step " + std::to_string(s.stepCount()));
     }
     const auto now = std::chrono::steady_clock::now();
-    if (std::chrono::duration<double>(now - lastPost).count() >= o.progressInterval) {
+    if (lead && std::chrono::duration<double>(now - lastPost).count() >= o.progressInterval) {
       lastPost = now;
-      const double wall = std::chrono::duration<double>(now - start).count();
-      progress.post(progressOf(s, totalSteps, duration, wall > 0 ? double(s.numParticles()) * double(s.stepCount()) / wall : 0), executorNote);
+      progress.post(progressOf(s, totalSteps, duration, rate(s, std::chrono::duration<double>(now - start).count()), particles),
+                    executorNote);
     }
     return Status::ok();
   };
   Status run = sim.runUntil(duration, observer);
   if (cancelled) {
     spdlog::info("job {} cancelled at step {} (t = {} s)", o.jobId, sim.stepCount(), sim.time());
-    if (Status s = sink.value()->close(); !s.isOk()) spdlog::warn("{}", s.message());
+    if (sink)
+      if (Status s = sink->close(); !s.isOk()) spdlog::warn("{}", s.message());
     return -1;  // tells main: cancelled
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  progress.final(progressOf(sim, totalSteps, duration, wall > 0 ? double(sim.numParticles()) * double(sim.stepCount()) / wall : 0), "finished");
-  if (Status s = sink.value()->close(); !s.isOk() && run.isOk()) run = s;
-  spdlog::info("{}", sim.timers().report());
+  progress.final(progressOf(sim, totalSteps, duration, rate(sim, wall), particles), "finished");
+  if (sink)
+    if (Status s = sink->close(); !s.isOk() && run.isOk()) run = s;
+  run = all.agree(run);
+  spdlog::info("rank {}: {}", rank, sim.timers().report());
   if (!run.isOk()) return fail(run.code() == StatusCode::kIo || run.code() == StatusCode::kUnavailable ? 2 : 3, run.message());
-  spdlog::info("job {} finished: {} steps in {:.1f} s", o.jobId, sim.stepCount(), wall);
+  if (lead) spdlog::info("job {} finished: {} steps in {:.1f} s", o.jobId, sim.stepCount(), wall);
   return 0;
 }
 
@@ -260,14 +266,9 @@ int main(int argc, char** argv) {
   else if (o.backendAddress.empty() && o.output.empty()) code = fail(1, "give --backend or --output for the snapshots");
   else o.devices = parsed.value();
 
-  if (rank == 0) {
-    if (code == 0) code = runRankZero(o, size);
-    tellOtherRanks(code == 0 ? kFinished : code < 0 ? kCancelled : kFailed);
-    if (code < 0) code = 0;  // cancelled: a clean stop
-  } else {
-    const int word = waitForRankZero();
-    if (code == 0 && word == kFailed) code = 1;
-  }
+  // Option errors are the same on every rank (same command line).
+  if (code == 0) code = runRank(o, rank, size);
+  if (code < 0) code = 0;  // cancelled: a clean stop
   MPI_Finalize();
   return code;
 }

@@ -8,6 +8,8 @@
 #include <cmath>
 #include <map>
 #include <cstdio>
+#include <cstdlib>
+#include <string>
 #include <random>
 
 #include "compute/mpi/MpiDomain.h"
@@ -35,8 +37,17 @@ int worldSize() {
   return s;
 }
 
-std::unique_ptr<Simulation> start(const RunConfig& c, std::shared_ptr<MpiDomain> domain) {
+// PFLOW_TEST_EXECUTOR=cuda runs every simulation of these tests on the GPU (each rank on device 0: the
+// device machine has one), the reference included.
+compute::SimulationOptions options() {
   compute::SimulationOptions o;
+  const char* e = std::getenv("PFLOW_TEST_EXECUTOR");
+  if (e && std::string(e) == "cuda") o.executor = compute::ExecutorKind::kCuda;
+  return o;
+}
+
+std::unique_ptr<Simulation> start(const RunConfig& c, std::shared_ptr<MpiDomain> domain) {
+  compute::SimulationOptions o = options();
   o.domain = std::move(domain);
   auto sim = Simulation::create(c, o);
   EXPECT_TRUE(sim.isOk()) << sim.status().toString();
@@ -89,7 +100,7 @@ TEST(Distributed, ConservesCountMomentumAndHistory) {
   const RunConfig c = cloud(8, 7, 6, 1.5, 0.5, false, false);
   auto domain = std::make_shared<MpiDomain>(MPI_COMM_WORLD);
   auto sim = start(c, domain);
-  auto ref = Simulation::create(c);  // one process, on every rank
+  auto ref = Simulation::create(c, options());  // one process, on every rank
   ASSERT_TRUE(sim && ref.isOk());
   const Totals t0 = totals(*sim);
   ASSERT_EQ(t0.n, c.particles.size());
@@ -121,7 +132,7 @@ TEST(Distributed, ConservesCountMomentumAndHistory) {
 TEST(Distributed, MatchesOneProcessParticleForParticle) {
   const RunConfig c = cloud(10, 8, 5, 1.0, 0.4, true, true);
   auto sim = start(c, std::make_shared<MpiDomain>(MPI_COMM_WORLD));
-  auto ref = Simulation::create(c);
+  auto ref = Simulation::create(c, options());
   ASSERT_TRUE(sim && ref.isOk());
   for (int k = 0; k < 10; ++k) {
     ASSERT_TRUE(sim->runSteps(100).isOk());
@@ -221,7 +232,7 @@ TEST(Distributed, ImpactAcrossRankBoundaryMatchesOneProcess) {
   c.sim.dt = 2e-8;
   c.sim.domain = compute::Aabb{{-1.05, -0.1, -0.1}, {1.05, 0.6, 0.1}};
   auto sim = start(c, std::make_shared<MpiDomain>(MPI_COMM_WORLD));
-  auto ref = Simulation::create(c);
+  auto ref = Simulation::create(c, options());
   ASSERT_TRUE(sim && ref.isOk());
   ASSERT_TRUE(sim->runSteps(5000).isOk());
   ASSERT_TRUE(ref.value()->runSteps(5000).isOk());
