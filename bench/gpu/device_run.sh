@@ -91,7 +91,7 @@ if has cpuab; then
   ab() {  # label, env..., -- extra args
     local label=$1; shift
     local envs=()
-    while [[ $1 != -- ]]; do envs+=("$1"); shift; done
+    while [[ $1 != -- ]]; do envs+=("$1"); shift; done  # VAR=value ... before --, pflow-bench options after
     shift
     env "${envs[@]}" "$B/pflow-bench" --executor cpu --settle-executor cuda -n "${CPU_SIZES:-1000000}" --tile-from 200000 \
       --settle-steps "${SETTLE:-30000}" --resettle-steps "${RESETTLE:-1000}" --steps "${CPU_STEPS:-300}" \
@@ -99,13 +99,13 @@ if has cpuab; then
       --commit "$commit" "$@" >> "$OUT/bench.jsonl" 2>> "$OUT/bench.log"
     summary+=("cpuab $label rc=$?")
   }
-  ab "default" PFLOW_DUMMY=1 -- --threads "$cores" --lammps-ranks "$cores"
+  ab "default" -- --threads "$cores" --lammps-ranks "$cores"
   ab "pinned" OMP_PROC_BIND=close OMP_PLACES=cores -- --threads "$cores" --no-lammps
   ab "chunk 64" PFLOW_DYNAMIC_CHUNK=64 -- --threads "$cores" --no-lammps
   ab "chunk 1024" PFLOW_DYNAMIC_CHUNK=1024 -- --threads "$cores" --no-lammps
   ab "static" PFLOW_DYNAMIC_CHUNK=0 -- --threads "$cores" --no-lammps
   ab "first touch off" PFLOW_FIRST_TOUCH=0 -- --threads "$cores" --no-lammps
-  CPU_SIZES=4000000 ab "default" PFLOW_DUMMY=1 -- --threads "$cores" --lammps-ranks "$cores"
+  CPU_SIZES=4000000 ab "default" -- --threads "$cores" --lammps-ranks "$cores"
 fi
 if [[ -s $OUT/bench.jsonl ]]; then
   summary+=("$(python3 - "$OUT/bench.jsonl" <<'PY'

@@ -151,7 +151,7 @@ struct ComputeForces {
       const double dist = std::sqrt(d2);
       const V n = vcast<R>((1.0 / dist) * d);
       const R overlap = R(rs - dist);
-      if (overlap > R(kMaxOverlapRatio) * (ri < rj ? ri : rj)) flagDeep(i);
+      if (overlap > R(kMaxOverlapRatio) * (ri < rj ? ri : rj)) flagDeepOverlap(a.cond, i);
       const R mj = mass[j];
       const ContactParams& pp = params[material[j]];
       const R li = ri - R(0.5) * overlap, lj = rj - R(0.5) * overlap;
@@ -185,8 +185,6 @@ struct ComputeForces {
       a.torque[i] = tq;
     }
   }
-
-  PFLOW_HOSTDEVICE void flagDeep(Index i) const { flagDeepOverlap(a.cond, i); }
 
   // Claims an empty slot for partner g, or returns -1 when all are taken.
   PFLOW_HOSTDEVICE static int claimSlot(SlotRow<PartnerId> partner, int slots, Gid g) {
@@ -236,8 +234,6 @@ struct ComputeWallForces {
     return false;
   }
 
-  PFLOW_HOSTDEVICE void flagDeep(Index i) const { flagDeepOverlap(a.cond, i); }
-
   PFLOW_HOSTDEVICE void wallForces(Index i, Vec3d xi, V vi, V wi, R ri, R mi, R Ii, const ContactParams* params,
                                    V& f, V& tq) const {
     WallContact wc[kMaxWallContacts];
@@ -249,7 +245,7 @@ struct ComputeWallForces {
       const double sd = dot(xi - pl.point, pl.normal);
       if (sd >= double(ri)) continue;
       if (nwc == kMaxWallContacts) { tooMany = true; break; }
-      if (double(ri) - sd > kMaxOverlapRatio * double(ri)) flagDeep(i);
+      if (double(ri) - sd > kMaxOverlapRatio * double(ri)) flagDeepOverlap(a.cond, i);
       wc[nwc++] = {-pl.normal, xi - sd * pl.normal, pl.normal, zero3<double>(), double(ri) - sd, planeKey(Index(p)), pl.material, true};
     }
     const std::uint32_t nc = a.wallCandCount[i] < a.wallCandCapacity ? a.wallCandCount[i] : a.wallCandCapacity;
@@ -264,7 +260,7 @@ struct ComputeWallForces {
       const Vec3d fn = geometry::triangleNormal(v[0], v[1], v[2]);
       const double d = std::sqrt(d2);
       const Vec3d n = d > 0 ? (1.0 / d) * dv : -fn;
-      if (rid - d > kMaxOverlapRatio * rid) flagDeep(i);
+      if (rid - d > kMaxOverlapRatio * rid) flagDeepOverlap(a.cond, i);
       const std::int32_t mesh = a.triMesh[t];
       wc[nwc++] = {n, cp.point, fn, a.meshMotion[mesh].velocityAt(cp.point, a.time), rid - d, triangleKey(mesh, t),
                    a.triMaterial[t], cp.feature == geometry::Feature::kFace};

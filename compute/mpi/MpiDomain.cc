@@ -28,12 +28,6 @@ Vec3d cellCentre(const CellGrid& g, std::uint32_t c) {
 }
 }  // namespace
 
-Result<MpiDomainOptions::Strategy> parseStrategy(const std::string& name, const std::string& field) {
-  if (name == "sfc") return MpiDomainOptions::Strategy::kSfc;
-  if (name == "multisection") return MpiDomainOptions::Strategy::kMultiSection;
-  return invalidArgument(field + ": '" + name + "' is not one of sfc, multisection");
-}
-
 MpiDomain::MpiDomain(MPI_Comm comm, MpiDomainOptions options) : m_comm(comm), m_options(options) {
   MPI_Comm_rank(m_comm, &m_rank);
   MPI_Comm_size(m_comm, &m_size);
@@ -43,7 +37,7 @@ MpiDomain::MpiDomain(MPI_Comm comm, MpiDomainOptions options) : m_comm(comm), m_
 
 Status MpiDomain::decompose(const std::vector<Vec3d>& pos, const std::vector<double>& w) {
   const std::uint32_t cells = m_grid.numCells();
-  if (m_options.strategy == MpiDomainOptions::Strategy::kSfc) {
+  if (m_options.strategy == DecompositionKind::kSfc) {
     // The patent's: per-cell weights summed over ranks, contiguous ranges along the Morton curve.
     std::vector<double> weight(cells, 0.0);
     for (std::size_t i = 0; i < pos.size(); ++i) weight[m_grid.cellOf(pos[i])] += w[i];
@@ -158,16 +152,13 @@ std::vector<Vec3d> MpiDomain::positions(Engine& engine) const {
   return std::vector<Vec3d>(a->as<Vec3d>(), a->as<Vec3d>() + s.n);
 }
 
-std::vector<int> MpiDomain::packFor(Engine& engine, const std::vector<std::vector<Index>>& to, std::uint32_t flags) {
-  std::vector<int> counts(static_cast<std::size_t>(m_size), 0);
-  m_out.clear();
-  for (int r = 0; r < m_size; ++r) {
+void MpiDomain::flatten(const std::vector<std::vector<Index>>& to, std::vector<Index>& rows, std::vector<int>& counts) {
+  rows.clear();
+  counts.assign(to.size(), 0);
+  for (std::size_t r = 0; r < to.size(); ++r) {
     counts[r] = int(to[r].size());
-    if (to[r].empty()) continue;
-    engine.pack(to[r], flags, m_one);
-    m_out.insert(m_out.end(), m_one.begin(), m_one.end());
+    rows.insert(rows.end(), to[r].begin(), to[r].end());
   }
-  return counts;
 }
 
 std::vector<PackedRows> MpiDomain::exchange(const std::vector<std::byte>& out, const std::vector<int>& counts,
@@ -247,11 +238,13 @@ Status MpiDomain::migrate(Engine& engine, double cost) {
     if (owner == m_rank) stay.push_back(i);
     else leaving[std::size_t(owner)].push_back(i);
   }
-  const std::vector<int> counts = packFor(engine, leaving, kMigrate);
-  m_migratedOut += (long long)(n - stay.size());
-  std::vector<int> recvCounts;
+  std::vector<Index> rows;
+  std::vector<int> counts, recvCounts;
+  flatten(leaving, rows, counts);
+  engine.pack(rows, counts, kMigrate, m_out);
+  m_migratedOut += (long long)rows.size();
   const std::vector<PackedRows> in = exchange(m_out, counts, engine.rowBytes(kMigrate), recvCounts, false);
-  engine.keepOwned(stay);
+  if (!rows.empty()) engine.keepOwned(stay);  // a compaction of every field: only when some left
   engine.appendOwned(in);
   long long owned = (long long)engine.size();
   m_ownedPerRank.assign(static_cast<std::size_t>(m_size), 0);
@@ -263,7 +256,7 @@ Status MpiDomain::exchangeGhosts(Engine& engine) {
   // Each owned particle goes to every other rank that owns one of the 27 cells around its own (the
   // particles are sorted by cell, so the set is computed once per cell).
   const std::vector<Vec3d> pos = positions(engine);
-  m_haloRows.assign(static_cast<std::size_t>(m_size), {});
+  std::vector<std::vector<Index>> to(static_cast<std::size_t>(m_size));
   std::uint32_t lastCell = ~0u;
   std::vector<int> dest;
   for (Index i = 0; i < Index(pos.size()); ++i) {
@@ -278,15 +271,16 @@ Status MpiDomain::exchangeGhosts(Engine& engine) {
       });
       lastCell = c;
     }
-    for (int d : dest) m_haloRows[std::size_t(d)].push_back(i);
+    for (int d : dest) to[std::size_t(d)].push_back(i);
   }
-  m_haloSend = packFor(engine, m_haloRows, kGhost);
+  flatten(to, m_haloRows, m_haloSend);
+  engine.pack(m_haloRows, m_haloSend, kGhost, m_out);
   engine.setGhosts(exchange(m_out, m_haloSend, engine.rowBytes(kGhost), m_haloRecv, false));
   return Status::ok();
 }
 
 Status MpiDomain::refreshGhosts(Engine& engine) {
-  packFor(engine, m_haloRows, kRefresh);
+  engine.pack(m_haloRows, m_haloSend, kRefresh, m_out);
   engine.refreshGhosts(exchange(m_out, m_haloSend, engine.rowBytes(kRefresh), m_haloRecv, true));
   return Status::ok();
 }

@@ -18,11 +18,12 @@
 #include "compute/neighbor/CellGrid.h"
 #include "compute/sim/Domain.h"
 #include "compute/sim/Engine.h"
+#include "compute/sim/RunConfig.h"
 
 namespace pflow::compute {
 
 struct MpiDomainOptions {
-  enum class Strategy { kSfc, kMultiSection } strategy = Strategy::kSfc;
+  DecompositionKind strategy = DecompositionKind::kSfc;  // the scene's simulation.decomposition
   // Rebalance on a rebuild when the busiest rank's smoothed cost exceeds the mean by this fraction.
   double tolerance = 0.05;
   bool rebalance = true;
@@ -32,9 +33,6 @@ struct MpiDomainOptions {
   // particle count (deterministic: tests, and machines whose timings are noise, e.g. oversubscribed).
   enum class Cost { kMeasured, kCount } cost = Cost::kMeasured;
 };
-
-// "sfc" | "multisection"; an error naming `field` otherwise.
-Result<MpiDomainOptions::Strategy> parseStrategy(const std::string& name, const std::string& field);
 
 class MpiDomain final : public Domain {
  public:
@@ -54,8 +52,6 @@ class MpiDomain final : public Domain {
   // Diagnostics and tests.
   const char* strategyName() const { return m_decomp ? m_decomp->name() : "none"; }
   int rebalances() const { return m_rebalances; }
-  // max / mean over ranks of the smoothed cost of the last rebuild (1 = balanced).
-  double lastImbalance() const { return m_lastImbalance; }
   // Particles owned by each rank at the last rebuild.
   const std::vector<long long>& ownedPerRank() const { return m_ownedPerRank; }
   int ownerOfCell(std::uint32_t cell) const { return m_cellOwner[cell]; }
@@ -71,8 +67,8 @@ class MpiDomain final : public Domain {
   // matrix unless `countsKnown`), in rank order.
   std::vector<PackedRows> exchange(const std::vector<std::byte>& out, const std::vector<int>& counts, std::size_t rowBytes,
                                    std::vector<int>& recvCounts, bool countsKnown);
-  // Packs rows to[d] for each rank d, one block each, into m_out; returns the counts.
-  std::vector<int> packFor(Engine& engine, const std::vector<std::vector<Index>>& to, std::uint32_t flags);
+  // Rows to[d] for each rank d, concatenated, with the count per rank.
+  static void flatten(const std::vector<std::vector<Index>>& to, std::vector<Index>& rows, std::vector<int>& counts);
   std::vector<Vec3d> positions(Engine& engine) const;
 
   MPI_Comm m_comm;
@@ -87,9 +83,9 @@ class MpiDomain final : public Domain {
   double m_lastImbalance = 1;
   std::vector<long long> m_ownedPerRank;
   // Halo, fixed between rebuilds: rows sent (grouped by destination rank), counts both ways.
-  std::vector<std::vector<Index>> m_haloRows;  // per destination rank
+  std::vector<Index> m_haloRows;  // grouped by destination rank, m_haloSend[r] for rank r
   std::vector<int> m_haloSend, m_haloRecv;
-  std::vector<std::byte> m_out, m_in, m_one;
+  std::vector<std::byte> m_out, m_in;
 };
 
 }  // namespace pflow::compute

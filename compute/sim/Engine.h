@@ -103,8 +103,10 @@ class Engine {
   // field (each a block of `count` values; slot-major slot fields slot by slot), in this engine's layout:
   // every rank of a run runs the same executor and precision with the same slot counts (ensureSlots).
   virtual std::size_t rowBytes(std::uint32_t fieldFlags) const = 0;
-  // The fields carrying `fieldFlags` (kMigrate, kGhost, kRefresh) of local rows `rows`, packed on the device.
-  virtual void pack(const std::vector<Index>& rows, std::uint32_t fieldFlags, std::vector<std::byte>& out) const = 0;
+  // The fields carrying `fieldFlags` (kMigrate, kGhost, kRefresh) of local rows `rows`, packed on the device
+  // as consecutive blocks of segments[0], segments[1], ... rows (one block per destination rank).
+  virtual void pack(const std::vector<Index>& rows, const std::vector<int>& segments, std::uint32_t fieldFlags,
+                    std::vector<std::byte>& out) const = 0;
   // The owned particles become rows `keep` (ascending or not), in that order; ghosts are dropped.
   virtual void keepOwned(const std::vector<Index>& keep) = 0;
   // Appends owned particles: blocks packed with kMigrate (every field that travels); ghosts are dropped.

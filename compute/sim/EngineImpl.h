@@ -20,14 +20,6 @@
 
 namespace pflow::compute {
 
-namespace kernels {
-template <class T>
-struct Fill {
-  T* p;
-  T v;
-  PFLOW_HOSTDEVICE void operator()(Index i) const { p[i] = v; }
-};
-}  // namespace kernels
 
 template <class Exec, class R>
 class EngineImpl final : public Engine {
@@ -75,26 +67,34 @@ class EngineImpl final : public Engine {
       if (f.flags & flags) b += m_particles.strideBytes(f);
     return b;
   }
-  void pack(const std::vector<Index>& rows, std::uint32_t flags, std::vector<std::byte>& out) const override {
-    // Field by field, each a block of rows.size() values (slot fields slot by slot when slot-major),
-    // gathered on the device into one staging buffer, then one copy to the host.
+  void pack(const std::vector<Index>& rows, const std::vector<int>& segments, std::uint32_t flags,
+            std::vector<std::byte>& out) const override {
+    // Each segment field by field, each field a block of the segment's values (slot fields slot by slot
+    // when slot-major), gathered on the device into one staging buffer: one upload of the rows, one copy
+    // back to the host, whatever the number of segments.
     const Index count = Index(rows.size());
     out.resize(rowBytes(flags) * count);
     if (!count) return;
-    m_stage.resize(std::max(m_stage.bytes(), out.size()));
-    m_rowsBuf.resize(std::max(m_rowsBuf.bytes(), count * sizeof(Index)));
+    if (m_stage.bytes() < out.size()) m_stage.resize(out.size());
+    if (m_rowsBuf.bytes() < count * sizeof(Index)) m_rowsBuf.resize(count * sizeof(Index));
     m_mem.copyFromHost(m_rowsBuf.data(), rows.data(), count * sizeof(Index));
     std::size_t at = 0;
-    forEachBlock(flags, count, [&](const unsigned char* field, std::size_t stride) {
-      m_exec.forEach(count, kernels::GatherBytes{field, m_stage.as<unsigned char>() + at, m_rowsBuf.as<Index>(), stride});
-      at += stride * count;
-    });
+    Index first = 0;
+    for (int segment : segments) {
+      const Index n = Index(segment);
+      if (!n) continue;
+      forEachBlock(flags, [&](const unsigned char* field, std::size_t stride) {
+        m_exec.forEach(n, kernels::GatherBytes{field, m_stage.as<unsigned char>() + at, m_rowsBuf.as<Index>() + first, stride});
+        at += stride * n;
+      });
+      first += n;
+    }
     m_mem.copyToHost(out.data(), m_stage.data(), out.size());
   }
   void keepOwned(const std::vector<Index>& keep) override {
     m_n = m_owned;
     const Index count = Index(keep.size());
-    m_rowsBuf.resize(std::max(m_rowsBuf.bytes(), std::max<std::size_t>(1, count) * sizeof(Index)));
+    if (m_rowsBuf.bytes() < std::max<std::size_t>(1, count) * sizeof(Index)) m_rowsBuf.resize(std::max<std::size_t>(1, count) * sizeof(Index));
     m_mem.copyFromHost(m_rowsBuf.data(), keep.data(), count * sizeof(Index));
     reorder(m_rowsBuf.as<Index>(), count);
     m_owned = m_n = count;
@@ -181,7 +181,6 @@ class EngineImpl final : public Engine {
         allocWallCandidates();
       }
     }
-    ++m_rebuilds;
     return Status::ok();
   }
 
@@ -297,8 +296,6 @@ class EngineImpl final : public Engine {
     else return {};
   }
 
-  std::size_t rebuilds() const { return m_rebuilds; }
-
  private:
   void init();
   void allocNeighbors() {
@@ -333,7 +330,7 @@ class EngineImpl final : public Engine {
   // Calls f(first byte of row 0, stride) for each block of the fields carrying `flags`: one per field,
   // or one per slot of a slot-major slot field. The packed layout of pack/unpack.
   template <class F>
-  void forEachBlock(std::uint32_t flags, Index, const F& f) const {
+  void forEachBlock(std::uint32_t flags, const F& f) const {
     for (const auto& fi : kFieldTableOf<R>) {
       if (!(fi.flags & flags)) continue;
       const Buffer& field = m_particles.buffer(fi.id);
@@ -355,10 +352,10 @@ class EngineImpl final : public Engine {
   void copyIn(const std::byte* data, Index first, Index count, std::uint32_t flags) {
     if (!count) return;
     const std::size_t bytes = rowBytes(flags) * count;
-    m_stage.resize(std::max(m_stage.bytes(), bytes));
+    if (m_stage.bytes() < bytes) m_stage.resize(bytes);
     m_mem.copyFromHost(m_stage.data(), data, bytes);
     std::size_t at = 0;
-    forEachBlock(flags, count, [&](unsigned char* field, std::size_t stride) {
+    forEachBlock(flags, [&](unsigned char* field, std::size_t stride) {
       m_mem.copyWithin(field + stride * first, m_stage.as<unsigned char>() + at, stride * count);
       at += stride * count;
     });
@@ -375,7 +372,8 @@ class EngineImpl final : public Engine {
     atLeast(m_nbrCount, n * sizeof(std::uint32_t));
     atLeast(m_wallCandCount, n * sizeof(std::uint32_t));
     atLeast(m_planeMask, n * sizeof(std::uint32_t));
-    if (m_nbr.bytes() < std::size_t(m_owned) * m_nbrCap * sizeof(Index) || m_columnMajor) allocNeighbors();
+    // Column-major rows are m_owned apart: a buffer of at least m_owned * m_nbrCap entries fits either layout.
+    if (m_nbr.bytes() < std::size_t(m_owned) * m_nbrCap * sizeof(Index)) allocNeighbors();
     if (m_wallCand.bytes() < std::size_t(m_owned) * m_wallCap * sizeof(Index)) allocWallCandidates();
   }
   void binTriangles();
@@ -455,7 +453,6 @@ class EngineImpl final : public Engine {
   Index m_nbrCap = 16;
   bool m_columnMajor = Exec::kColumnMajorLists;
   Index m_wallCap = 4;
-  std::size_t m_rebuilds = 0;
   Buffer m_moved{m_mem, 0}, m_cellKey{m_mem, 0}, m_perm{m_mem, 0}, m_cellStart{m_mem, 0}, m_scratch{m_mem, 0};
   Buffer m_nbr{m_mem, 0}, m_nbrSlot{m_mem, 0}, m_nbrCount{m_mem, 0};
   Buffer m_planes{m_mem, 0}, m_triRef{m_mem, 0}, m_triVerts{m_mem, 0}, m_triRebuild{m_mem, 0};

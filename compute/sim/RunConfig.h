@@ -74,6 +74,9 @@ struct Aabb {
 };
 
 enum class Precision { kDouble, kFloat };
+// How a distributed run splits space between ranks (compute/decomp): the seed patent's Morton-curve
+// ranges of cells, or FDPS's multi-section cuts.
+enum class DecompositionKind { kSfc, kMultiSection };
 
 struct SimulationSettings {
   Vec3d gravity{0, 0, -9.81};        // [m/s^2]
@@ -84,6 +87,7 @@ struct SimulationSettings {
   double snapshotInterval = 0;       // [s] between snapshots; 0 = first and last only
   std::optional<Aabb> domain;        // [m]; unset = derived from particles and walls
   Precision precision = Precision::kDouble;
+  DecompositionKind decomposition = DecompositionKind::kSfc;  // used when the run has more than one rank
   int historySlots = 8;              // initial tangential-history slots per particle (grown on demand)
   int wallHistorySlots = 4;          // initial wall-contact slots per particle (grown on demand)
   int threads = 0;                   // OpenMP threads; 0 = all

@@ -28,7 +28,7 @@ Status Simulation::stepPhases() {
   { auto t = m_timers.time(Phase::kMeshes);     meshMoved = std::sqrt(m_engine->moveMeshes(tNext)); }
   Status s;
   if (m_domain->anyRebuild(2 * moved > m_skin || moved + meshMoved > m_skin)) s = rebuild();
-  else { auto t = m_timers.time(Phase::kHalo); s = m_domain->refreshGhosts(*m_engine); }
+  else if (m_domain->ranks() > 1) { auto t = m_timers.time(Phase::kHalo); s = m_domain->refreshGhosts(*m_engine); }
   if (s.isOk()) { auto t = m_timers.time(Phase::kForces);     s = m_engine->computeForces(dt, tNext); }
   if (s.isOk()) { auto t = m_timers.time(Phase::kIntegrate2); s = m_engine->integrateSecondHalf(dt); }
   PFLOW_RETURN_IF_ERROR(m_domain->agree(s));  // every rank stops on any rank's error

@@ -48,7 +48,6 @@ class Simulation {
   const CellGrid& grid() const { return m_grid; }
   double skin() const { return m_skin; }
   std::size_t numParticles() const { return m_engine->size(); }  // on this rank
-  const Domain& domain() const { return *m_domain; }
   std::int64_t rebuilds() const { return m_rebuilds; }
 
   // Host copy of the particles now: the fields named (scene output.fields), or every snapshot field. In a

@@ -148,7 +148,9 @@ int runRank(const worker::WorkerOptions& o, int rank, int ranks) {
     so.executor = compute::ExecutorKind::kCuda;
     so.device = device.index;
   }
-  auto domain = ranks > 1 ? std::make_shared<compute::MpiDomain>(MPI_COMM_WORLD) : nullptr;
+  compute::MpiDomainOptions split;
+  split.strategy = cfg.sim.decomposition;
+  auto domain = ranks > 1 ? std::make_shared<compute::MpiDomain>(MPI_COMM_WORLD, split) : nullptr;
   so.domain = domain;
   compute::Domain single;
   compute::Domain& all = domain ? static_cast<compute::Domain&>(*domain) : single;

@@ -255,6 +255,18 @@ void Loader::parseSimulation(const Fields& top) {
       }
     }
   }
+  if (const Entry* d = f->find("decomposition")) {
+    std::string name;
+    if (read(d->value, "simulation.decomposition", d->loc, name)) {
+      if (name == "sfc") {
+        s.decomposition = compute::DecompositionKind::kSfc;
+      } else if (name == "multisection") {
+        s.decomposition = compute::DecompositionKind::kMultiSection;
+      } else {
+        badValue("simulation.decomposition", unknownName("decomposition", name, kDecompositions, "Choices"), d->loc);
+      }
+    }
+  }
   get(*f, "history_slots", s.historySlots);
   get(*f, "wall_history_slots", s.wallHistorySlots);
   get(*f, "threads", s.threads);

@@ -67,10 +67,11 @@ constexpr std::string_view kCapNames[] = {"bottom", "top"};
 constexpr std::string_view kHopperOpenings[] = {"orifice", "top"};
 constexpr std::string_view kMotionKeys[] = {"velocity", "angular_velocity", "axis", "axis_point", "start_time"};
 constexpr std::string_view kSimulationKeys[] = {"gravity", "duration", "dt", "dt_fraction", "skin", "snapshot_interval",
-                                                "domain", "precision", "history_slots", "wall_history_slots", "threads", "seed", "physics"};
+                                                "domain", "precision", "decomposition", "history_slots", "wall_history_slots", "threads", "seed", "physics"};
 constexpr std::string_view kPhysicsKeys[] = {"friction", "rolling_resistance"};
 constexpr std::string_view kOutputKeys[] = {"file", "fields"};
 constexpr std::string_view kPrecisions[] = {"double", "float"};
+constexpr std::string_view kDecompositions[] = {"sfc", "multisection"};
 // Box faces; the index is the face's surface number.
 constexpr std::array<std::string_view, 6> kBoxFaces = {"bottom", "top", "left", "right", "front", "back"};
 

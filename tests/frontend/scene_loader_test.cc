@@ -72,6 +72,7 @@ simulation:
   snapshot_interval: 0.01
   domain: {min: [-0.1, -0.1, -0.1], max: [1.1, 1.1, 0.5]}
   precision: float
+  decomposition: multisection
   history_slots: 12
   wall_history_slots: 6
   threads: 2
@@ -201,6 +202,7 @@ TEST(SceneLoader, FullSceneRoundTrip) {
   ASSERT_TRUE(s.domain.has_value());
   EXPECT_EQ(s.domain->hi.z, 0.5);
   EXPECT_EQ(s.precision, compute::Precision::kFloat);
+  EXPECT_EQ(s.decomposition, compute::DecompositionKind::kMultiSection);
   EXPECT_EQ(s.historySlots, 12);
   EXPECT_EQ(s.wallHistorySlots, 6);
   EXPECT_EQ(s.threads, 2);
@@ -222,6 +224,7 @@ TEST(SceneLoader, DefaultsOfAMinimalScene) {
   EXPECT_EQ(c.sim.historySlots, 8);
   EXPECT_EQ(c.sim.wallHistorySlots, 4);
   EXPECT_EQ(c.sim.precision, compute::Precision::kDouble);
+  EXPECT_EQ(c.sim.decomposition, compute::DecompositionKind::kSfc);
   EXPECT_EQ(c.sim.seed, 1u);
   EXPECT_TRUE(r->outputFile.empty());
 
@@ -327,7 +330,7 @@ TEST(SceneLoader, WrongTypesAreErrors) {
                                                   "      - {position: [0, 0], radius: \"0.001\"}\n"
                                                   "      - {position: 5, radius: [1]}\n"
                                                   "      - {position: [0, x, 0.1], radius: 0.001}\n",
-                                                  "  duration: 0.1s\n  history_slots: 2.5\n  dt: fast\n  precision: duble\n"));
+                                                  "  duration: 0.1s\n  history_slots: 2.5\n  dt: fast\n  precision: duble\n  decomposition: morton\n"));
   ASSERT_FALSE(r.isOk());
   const std::string m = r.status().message();
   EXPECT_HAS(m, "particles[0].list[0].position: expected a list of 3 numbers [x, y, z], got a list of 2 items");
@@ -339,9 +342,10 @@ TEST(SceneLoader, WrongTypesAreErrors) {
   EXPECT_HAS(m, "simulation.history_slots: expected an integer, got '2.5'");
   EXPECT_HAS(m, "simulation.dt: expected a number (s) or 'auto', got 'fast'");
   EXPECT_HAS(m, "simulation.precision: unknown precision 'duble'; did you mean 'double'?");
+  EXPECT_HAS(m, "simulation.decomposition: unknown decomposition 'morton'");
   // Placeholders for broken values do not produce validate() noise (e.g. radius 0 "must be > 0").
   EXPECT_FALSE(contains(m, "must be > 0")) << m;
-  EXPECT_HAS(m, "9 error(s)");
+  EXPECT_HAS(m, "10 error(s)");
 }
 
 TEST(SceneLoader, StructuralErrors) {
