@@ -163,6 +163,12 @@ void MpiDomain::flatten(const std::vector<std::vector<Index>>& to, std::vector<I
 
 std::vector<PackedRows> MpiDomain::exchange(const std::vector<std::byte>& out, const std::vector<int>& counts,
                                             std::size_t rowBytes, std::vector<int>& recvCounts, bool countsKnown) {
+  post(out, counts, rowBytes, recvCounts, countsKnown);
+  return complete();
+}
+
+void MpiDomain::post(const std::vector<std::byte>& out, const std::vector<int>& counts, std::size_t rowBytes,
+                     std::vector<int>& recvCounts, bool countsKnown) {
   // The count matrix: each rank learns how many rows every other rank sends it.
   if (!countsKnown) {
     recvCounts.assign(static_cast<std::size_t>(m_size), 0);
@@ -171,16 +177,16 @@ std::vector<PackedRows> MpiDomain::exchange(const std::vector<std::byte>& out, c
   std::size_t inRows = 0;
   for (int c : recvCounts) inRows += std::size_t(c);
   m_in.resize(inRows * rowBytes);
-  std::vector<MPI_Request> requests;
-  std::vector<PackedRows> blocks;
+  m_requests.clear();
+  m_blocks.clear();
   std::size_t at = 0;
   for (int r = 0; r < m_size; ++r) {
     const std::size_t bytes = std::size_t(recvCounts[r]) * rowBytes;
     if (bytes) {
       if (bytes > std::size_t(INT_MAX)) throw std::runtime_error("a halo or migration message above 2 GiB");
-      blocks.push_back({m_in.data() + at, Index(recvCounts[r])});
-      requests.emplace_back();
-      MPI_Irecv(m_in.data() + at, int(bytes), MPI_BYTE, r, 0, m_comm, &requests.back());
+      m_blocks.push_back({m_in.data() + at, Index(recvCounts[r])});
+      m_requests.emplace_back();
+      MPI_Irecv(m_in.data() + at, int(bytes), MPI_BYTE, r, 0, m_comm, &m_requests.back());
     }
     at += bytes;
   }
@@ -188,13 +194,17 @@ std::vector<PackedRows> MpiDomain::exchange(const std::vector<std::byte>& out, c
   for (int r = 0; r < m_size; ++r) {
     const std::size_t bytes = std::size_t(counts[r]) * rowBytes;
     if (bytes) {
-      requests.emplace_back();
-      MPI_Isend(out.data() + at, int(bytes), MPI_BYTE, r, 0, m_comm, &requests.back());
+      m_requests.emplace_back();
+      MPI_Isend(out.data() + at, int(bytes), MPI_BYTE, r, 0, m_comm, &m_requests.back());
     }
     at += bytes;
   }
-  MPI_Waitall(int(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
-  return blocks;
+}
+
+std::vector<PackedRows> MpiDomain::complete() {
+  MPI_Waitall(int(m_requests.size()), m_requests.data(), MPI_STATUSES_IGNORE);
+  m_requests.clear();
+  return std::move(m_blocks);
 }
 
 Status MpiDomain::migrate(Engine& engine, double cost) {
@@ -279,9 +289,22 @@ Status MpiDomain::exchangeGhosts(Engine& engine) {
   return Status::ok();
 }
 
-Status MpiDomain::refreshGhosts(Engine& engine) {
+// The halo's rows and counts are fixed between rebuilds: no count matrix, just the messages. m_out and
+// m_in stay untouched while they are in flight (nothing else exchanges until finishRefresh).
+Status MpiDomain::startRefresh(Engine& engine) {
   engine.pack(m_haloRows, m_haloSend, kRefresh, m_out);
-  engine.refreshGhosts(exchange(m_out, m_haloSend, engine.rowBytes(kRefresh), m_haloRecv, true));
+  post(m_out, m_haloSend, engine.rowBytes(kRefresh), m_haloRecv, true);
+  return Status::ok();
+}
+
+Status MpiDomain::awaitRefresh() {
+  m_arrived = complete();
+  return Status::ok();
+}
+
+Status MpiDomain::finishRefresh(Engine& engine) {
+  engine.refreshGhosts(m_arrived);
+  m_arrived.clear();
   return Status::ok();
 }
 

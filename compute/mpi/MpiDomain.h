@@ -44,7 +44,9 @@ class MpiDomain final : public Domain {
   bool anyRebuild(bool local) override;
   Status migrate(Engine& engine, double cost) override;
   Status exchangeGhosts(Engine& engine) override;
-  Status refreshGhosts(Engine& engine) override;
+  Status startRefresh(Engine& engine) override;
+  Status awaitRefresh() override;
+  Status finishRefresh(Engine& engine) override;
   Status agree(Status local) override;
   ParticleSnapshot gather(ParticleSnapshot local) override;
   double sum(double local) override;
@@ -67,6 +69,11 @@ class MpiDomain final : public Domain {
   // matrix unless `countsKnown`), in rank order.
   std::vector<PackedRows> exchange(const std::vector<std::byte>& out, const std::vector<int>& counts, std::size_t rowBytes,
                                    std::vector<int>& recvCounts, bool countsKnown);
+  // The two halves of exchange(): post() learns the counts (unless known) and starts the messages,
+  // m_requests holds them until complete() waits for them (once) and returns the received blocks.
+  void post(const std::vector<std::byte>& out, const std::vector<int>& counts, std::size_t rowBytes,
+            std::vector<int>& recvCounts, bool countsKnown);
+  std::vector<PackedRows> complete();
   // Rows to[d] for each rank d, concatenated, with the count per rank.
   static void flatten(const std::vector<std::vector<Index>>& to, std::vector<Index>& rows, std::vector<int>& counts);
   std::vector<Vec3d> positions(Engine& engine) const;
@@ -86,6 +93,9 @@ class MpiDomain final : public Domain {
   std::vector<Index> m_haloRows;  // grouped by destination rank, m_haloSend[r] for rank r
   std::vector<int> m_haloSend, m_haloRecv;
   std::vector<std::byte> m_out, m_in;
+  std::vector<MPI_Request> m_requests;  // messages in flight (post .. complete)
+  std::vector<PackedRows> m_blocks;     // where they land in m_in
+  std::vector<PackedRows> m_arrived;    // awaitRefresh .. finishRefresh
 };
 
 }  // namespace pflow::compute

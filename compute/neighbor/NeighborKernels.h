@@ -25,6 +25,46 @@ struct ListLayout {
 
 namespace pflow::compute::kernels {
 
+// Distributed runs: flag[i] = 1 when owned particle i has a ghost (local row >= owned) among its
+// candidates, so its forces need the refreshed halo; 0 when they can be computed while it is in flight.
+struct MarkBoundary {
+  const Index* nbr;
+  const std::uint32_t* nbrCount;
+  ListLayout layout;
+  Index capacity;
+  Index owned;
+  std::uint32_t* flag;
+  PFLOW_HOSTDEVICE void operator()(Index i) const {
+    const std::uint32_t n = nbrCount[i] < capacity ? nbrCount[i] : capacity;
+    std::uint32_t b = 0;
+    for (std::uint32_t e = 0; e < n; ++e) b |= nbr[layout.at(i, e)] >= owned ? 1u : 0u;
+    flag[i] = b;
+  }
+};
+
+// Splits [0, n) by flag into one list: flagged rows first ([0, flagged), in order), then the others.
+// `scan` is the exclusive prefix sum of `flag`.
+struct SplitByFlag {
+  const std::uint32_t* flag;
+  const std::uint32_t* scan;
+  Index flagged;
+  Index* list;
+  PFLOW_HOSTDEVICE void operator()(Index i) const {
+    if (flag[i]) list[scan[i]] = i;
+    else list[flagged + i - scan[i]] = i;
+  }
+};
+
+// Runs kernel `f` over the rows in `list` (item k is row list[k]): a pass over part of the particles.
+// Only the force kernels use it, whose work per particle varies.
+template <class F>
+struct OverList {
+  static constexpr bool kVariableCost = true;  // CpuExecutor::forEach: dynamic chunks
+  F f;
+  const Index* list;
+  PFLOW_HOSTDEVICE void operator()(Index k) const { f(list[k]); }
+};
+
 struct CellKey {
   CellGrid grid;
   const Vec3d* pos;

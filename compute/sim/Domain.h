@@ -29,8 +29,13 @@ class Domain {
   virtual Status migrate(Engine&, double /*cost*/) { return Status::ok(); }
   // Rebuild, after the sort: the ghosts (particles of other ranks within reach of this rank's cells).
   virtual Status exchangeGhosts(Engine&) { return Status::ok(); }
-  // Between rebuilds, after the first half step: the ghosts' positions and velocities.
-  virtual Status refreshGhosts(Engine&) { return Status::ok(); }
+  // Between rebuilds, after the first half step: the ghosts' positions and velocities, in three parts so
+  // that the interior particles' forces are computed while the messages travel: startRefresh packs and
+  // sends this rank's rows and posts the receives, awaitRefresh waits for the messages, finishRefresh
+  // writes the ghosts.
+  virtual Status startRefresh(Engine&) { return Status::ok(); }
+  virtual Status awaitRefresh() { return Status::ok(); }
+  virtual Status finishRefresh(Engine&) { return Status::ok(); }
   // The step's outcome, the same on every rank: OK, or the error of the lowest failing rank.
   virtual Status agree(Status local) { return local; }
   // All ranks' particles in one snapshot ordered by id, on rank 0 (an empty one elsewhere). Collective.

@@ -82,7 +82,15 @@ class Engine {
   // which the sort does not carry through the reorder.
   virtual void sortByCell() = 0;
   virtual Status buildContacts() = 0;
-  virtual Status computeForces(double dt, double time) = 0;
+  // Forces of every owned particle (kAll), or, between rebuilds of a distributed run, in two passes so the
+  // halo can be in flight during the first: kInterior (particles with no ghost among their candidates; only
+  // queued, conditions not read) then kBoundary (the rest, once the ghosts are refreshed; reads the
+  // conditions of both). Without ghosts every particle is interior.
+  enum class ForceSet { kAll, kInterior, kBoundary };
+  virtual Status computeForces(double dt, double time, ForceSet set) = 0;
+  Status computeForces(double dt, double time) { return computeForces(dt, time, ForceSet::kAll); }
+  // Owned particles with a ghost candidate (the kBoundary pass), as of the last buildContacts.
+  virtual std::size_t boundaryParticles() const = 0;
   virtual Status integrateSecondHalf(double dt) = 0;
 
   // Explicit host copies for output and diagnostics.

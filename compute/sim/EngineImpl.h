@@ -24,6 +24,8 @@ namespace pflow::compute {
 template <class Exec, class R>
 class EngineImpl final : public Engine {
  public:
+  using Engine::computeForces;
+ public:
   using V = Vec3<R>;
 
   explicit EngineImpl(EngineSetup s)
@@ -127,6 +129,7 @@ class EngineImpl final : public Engine {
     }
   }
   void dropGhosts() override {
+    m_numBoundary = 0;
     m_n = m_owned;
     m_particles.resize(m_n);
   }
@@ -181,13 +184,15 @@ class EngineImpl final : public Engine {
         allocWallCandidates();
       }
     }
+    splitBoundary();
     return Status::ok();
   }
+  std::size_t boundaryParticles() const override { return m_numBoundary; }
 
-  Status computeForces(double dt, double time) override {
-    resetConditions();
-    m_exec.forEach(m_owned, kernels::ComputeForces<R>{forceArgs(dt, time, false)});
-    if (m_anyWalls) m_exec.forEach(m_owned, kernels::ComputeWallForces<R>{forceArgs(dt, time, false)});
+  Status computeForces(double dt, double time, ForceSet set) override {
+    if (set != ForceSet::kBoundary) resetConditions();
+    launchForces(dt, time, set, false);
+    if (set == ForceSet::kInterior) return Status::ok();  // queued; the boundary pass reads the flags
     Conditions c = readConditions();
     if (c.flags & kExcessiveOverlap) return deepOverlapError(c.deepParticle);
     if (c.flags & kTooManyWallContacts)
@@ -213,8 +218,7 @@ class EngineImpl final : public Engine {
         m_particles.resizeSlots(Multiplicity::kWallSlots, grown);
       }
       resetConditions();
-      m_exec.forEach(m_owned, kernels::ComputeForces<R>{forceArgs(dt, time, true)});
-      if (m_anyWalls) m_exec.forEach(m_owned, kernels::ComputeWallForces<R>{forceArgs(dt, time, true)});
+      launchForces(dt, time, ForceSet::kAll, true);
       c = readConditions();
     }
     return Status::ok();
@@ -360,6 +364,34 @@ class EngineImpl final : public Engine {
       at += stride * count;
     });
   }
+  // The pair kernel, then the wall kernel, over the particles of `set`: every owned one, or one part of
+  // the list splitBoundary made (boundary rows first, then interior ones).
+  void launchForces(double dt, double time, ForceSet set, bool storeOnly) {
+    const kernels::ForceArgs<R> args = forceArgs(dt, time, storeOnly);
+    if (set == ForceSet::kAll || (m_numBoundary == 0 && set == ForceSet::kInterior)) {
+      m_exec.forEach(m_owned, kernels::ComputeForces<R>{args});
+      if (m_anyWalls) m_exec.forEach(m_owned, kernels::ComputeWallForces<R>{args});
+      return;
+    }
+    const Index* list = m_split.as<Index>() + (set == ForceSet::kBoundary ? 0 : m_numBoundary);
+    const Index count = set == ForceSet::kBoundary ? m_numBoundary : m_owned - m_numBoundary;
+    m_exec.forEach(count, kernels::OverList<kernels::ComputeForces<R>>{{args}, list});
+    if (m_anyWalls) m_exec.forEach(count, kernels::OverList<kernels::ComputeWallForces<R>>{{args}, list});
+  }
+  // After the candidate lists: which owned particles have a ghost candidate (their forces wait for the
+  // halo), as one list with those first. Without ghosts nothing is boundary.
+  void splitBoundary() {
+    m_numBoundary = 0;
+    if (m_n == m_owned || m_owned == 0) return;
+    const std::size_t n = m_owned;
+    if (m_split.bytes() < n * sizeof(Index)) m_split.resize(n * sizeof(Index) + n * sizeof(Index) / 4);
+    if (m_splitFlag.bytes() < 2 * n * sizeof(std::uint32_t)) m_splitFlag.resize(2 * n * sizeof(std::uint32_t) + n * sizeof(std::uint32_t) / 2);
+    std::uint32_t* flag = m_splitFlag.as<std::uint32_t>();
+    std::uint32_t* scan = flag + n;
+    m_exec.forEach(m_owned, kernels::MarkBoundary{m_nbr.as<Index>(), m_nbrCount.as<std::uint32_t>(), nbrLayout(), m_nbrCap, m_owned, flag});
+    m_numBoundary = Index(m_exec.exclusiveScan(flag, scan, m_owned));
+    m_exec.forEach(m_owned, kernels::SplitByFlag{flag, scan, m_numBoundary, m_split.as<Index>()});
+  }
   // Per-particle work buffers sized for the current counts (kept when big enough).
   void sizeLocalBuffers() {
     auto atLeast = [](Buffer& b, std::size_t bytes) {
@@ -461,6 +493,8 @@ class EngineImpl final : public Engine {
   Buffer m_wallCand{m_mem, 0}, m_wallCandCount{m_mem, 0}, m_planeMask{m_mem, 0};
   Buffer m_params{m_mem, 0}, m_cond{m_mem, sizeof(Conditions)};
   Buffer m_ghostCellStart{m_mem, 0}, m_ghostItems{m_mem, 0};
+  Buffer m_split{m_mem, 0}, m_splitFlag{m_mem, 0};  // boundary rows, then interior ones (splitBoundary)
+  Index m_numBoundary = 0;
   mutable Buffer m_stage{m_mem, 0}, m_rowsBuf{m_mem, 0};  // pack/unpack staging
 };
 

@@ -21,17 +21,21 @@ class PhaseTimers {
  public:
   class Scope {
    public:
-    Scope(PhaseTimers& t, Phase p) : m_t(t), m_p(p), m_start(std::chrono::steady_clock::now()) {}
+    Scope(PhaseTimers& t, Phase p, bool fenced = true)
+        : m_t(t), m_p(p), m_fenced(fenced), m_start(std::chrono::steady_clock::now()) {}
     ~Scope() {
-      if (m_t.m_fence) m_t.m_fence();
+      if (m_fenced && m_t.m_fence) m_t.m_fence();
       m_t.m_seconds[int(m_p)] += std::chrono::duration<double>(std::chrono::steady_clock::now() - m_start).count();
     }
    private:
     PhaseTimers& m_t;
     Phase m_p;
+    bool m_fenced;
     std::chrono::steady_clock::time_point m_start;
   };
   Scope time(Phase p) { return Scope(*this, p); }
+  // Times the host's part only: the device's queued work goes on (and is counted by the next fenced phase).
+  Scope timeUnfenced(Phase p) { return Scope(*this, p, false); }
   double seconds(Phase p) const { return p == Phase::kCount ? 0.0 : m_seconds[int(p)]; }
   double total() const {
     double s = 0;

@@ -24,6 +24,8 @@ struct SimulationOptions {
   EngineSetup::Layout layout = EngineSetup::Layout::kExecutor;  // tests: another executor's data layouts
   // How the run is split across processes (compute/mpi's MpiDomain); null: one process.
   std::shared_ptr<Domain> domain;
+  // Distributed runs: compute the interior particles' forces while the halo travels (false: in sequence).
+  bool overlapHalo = true;
 };
 
 // "cpu" | "cuda" | "auto" -> kind; an error naming the flag otherwise.
@@ -71,6 +73,7 @@ class Simulation {
   Status stepPhases();  // the step loop itself (Simulation.cc, top of the file)
   Status initialise();
   Status rebuild();
+  Status haloAndForces(double dt, double time);
   Status withStep(Status s) const;
   void reportSlotGrowth();
 
@@ -85,6 +88,7 @@ class Simulation {
   double m_time = 0;
   std::int64_t m_rebuilds = 0;
   ExecutorKind m_executor = ExecutorKind::kCpu;
+  bool m_overlapHalo = true;
   int m_historySlots = 0, m_wallHistorySlots = 0;  // last reported
 };
 
