@@ -67,6 +67,8 @@ class Simulation {
   ExecutorKind executorKind() const { return m_executor; }
   std::size_t deviceBytes() const { return m_engine->deviceBytes(); }
   Engine& engine() { return *m_engine; }
+  // Distributed runs: overlap the halo with the interior forces (SimulationOptions::overlapHalo).
+  void setOverlapHalo(bool on) { m_overlapHalo = on; }
 
  private:
   Simulation(const EngineSetup& setup, TimeStepInfo ts, std::unique_ptr<Engine> engine);
