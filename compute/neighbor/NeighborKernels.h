@@ -127,6 +127,9 @@ struct BuildNeighbors {
   const Index* ghostCellStart = nullptr;
   const Index* ghostItems = nullptr;
   Index ghostBase = 0;
+  // Candidates in ascending global id, not in row order: a particle's forces are then summed in the same
+  // order whatever the rows' order, so a distributed run reproduces one process bit for bit.
+  bool canonicalOrder = false;
 
   PFLOW_HOSTDEVICE void operator()(Index i) const {
     const Vec3d xi = pos[i];
@@ -172,6 +175,19 @@ struct BuildNeighbors {
       atomicMaxU32(&cond->neededNeighbors, count);
       return;
     }
+    if (canonicalOrder)  // insertion sort by gid (rows are short and mostly in order already)
+      for (std::uint32_t e = 1; e < count; ++e) {
+        const Index j = nbr[row + e * col];
+        const std::int8_t slot = nbrSlot[row + e * col];
+        const Gid g = gid[j];
+        std::uint32_t k = e;
+        for (; k > 0 && gid[nbr[row + (k - 1) * col]] > g; --k) {
+          nbr[row + k * col] = nbr[row + (k - 1) * col];
+          nbrSlot[row + k * col] = nbrSlot[row + (k - 1) * col];
+        }
+        nbr[row + k * col] = j;
+        nbrSlot[row + k * col] = slot;
+      }
     for (int k = 0; k < slots; ++k) {
       if (partners[k] == kNoPartner) continue;
       bool candidate = false;

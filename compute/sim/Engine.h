@@ -43,6 +43,10 @@ struct EngineSetup {
   int historySlots = 8;
   int wallHistorySlots = 4;
   int threads = 0;
+  // Candidates in ascending global id (BuildNeighbors::canonicalOrder): the forces then do not depend on
+  // the order of the rows, so a distributed run equals one process bit for bit. Set by distributed runs
+  // (MpiDomain::partition) and by one-process runs that are compared with them (SimulationOptions).
+  bool canonicalOrder = false;
   // Data layouts: the executor's own, or forced to the GPU's (column-major candidate rows, slot-major
   // history) or the CPU's, so the CPU executor can be compared with itself across layouts in tests.
   enum class Layout { kExecutor, kGpu, kCpu } layout = Layout::kExecutor;

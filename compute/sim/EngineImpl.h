@@ -159,6 +159,7 @@ class EngineImpl final : public Engine {
                                                   m_particles.layout(Multiplicity::kContactSlots), m_setup.skin, m_nbrCap,
                                                   nbrLayout(), m_nbr.as<Index>(), m_nbrSlot.as<std::int8_t>(),
                                                   m_nbrCount.as<std::uint32_t>(), m_cond.as<Conditions>()};
+      build.canonicalOrder = m_setup.canonicalOrder;
       if (m_n > m_owned) {
         build.ghostCellStart = m_ghostCellStart.as<Index>();
         build.ghostItems = m_ghostItems.as<Index>();

@@ -166,6 +166,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const RunConfig& config, 
   auto setup = prepareEngineSetup(config);
   if (!setup) return setup.status();
   setup.value().layout = options.layout;
+  setup.value().canonicalOrder = options.canonicalOrder;
   std::shared_ptr<Domain> domain = options.domain ? options.domain : std::make_shared<Domain>();
   if (Status s = domain->partition(setup.value()); !s.isOk()) return s;
   std::unique_ptr<Simulation> sim(new Simulation(setup.value(), ts.value(), nullptr));

@@ -26,6 +26,9 @@ struct SimulationOptions {
   std::shared_ptr<Domain> domain;
   // Distributed runs: compute the interior particles' forces while the halo travels (false: in sequence).
   bool overlapHalo = true;
+  // Candidates in global-id order (EngineSetup::canonicalOrder): one process reproducing a distributed run
+  // bit for bit. Distributed runs always use it.
+  bool canonicalOrder = false;
 };
 
 // "cpu" | "cuda" | "auto" -> kind; an error naming the flag otherwise.
