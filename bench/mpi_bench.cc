@@ -98,6 +98,10 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"on", "off", "both"}))
       ->capture_default_str();
   app.add_option("--cost", costName, "load-balance cost: measured or count")->check(CLI::IsMember({"measured", "count"}))->capture_default_str();
+  std::string canonical = "on";
+  app.add_option("--canonical", canonical, "candidates in global-id order (bit-for-bit equal to one process)")
+      ->check(CLI::IsMember({"on", "off"}))
+      ->capture_default_str();
   app.add_option("--device", device, "device name for the results table");
   app.add_option("--commit", commit, "commit for the results table");
   try {
@@ -156,6 +160,7 @@ int main(int argc, char** argv) {
   pflow::compute::MpiDomainOptions mo;
   mo.strategy = decomposition == "sfc" ? pflow::compute::DecompositionKind::kSfc : pflow::compute::DecompositionKind::kMultiSection;
   mo.cost = costName == "count" ? pflow::compute::MpiDomainOptions::Cost::kCount : pflow::compute::MpiDomainOptions::Cost::kMeasured;
+  mo.canonicalOrder = canonical == "on";
   auto domain = std::make_shared<pflow::compute::MpiDomain>(MPI_COMM_WORLD, mo);
   so.domain = domain;
   auto created = Simulation::create(cfg, so);
@@ -201,7 +206,7 @@ int main(int argc, char** argv) {
     const std::string where = so.executor == pflow::compute::ExecutorKind::kCuda ? s.executorDescription() : device;
     nlohmann::json j{{"code", "pflow"}, {"executor", executor}, {"executor_description", s.executorDescription()},
                      {"ranks", ranks}, {"threads_per_rank", so.executor == pflow::compute::ExecutorKind::kCuda ? 0 : threads},
-                     {"precision", precision}, {"decomposition", domain->strategyName()}, {"overlap", on},
+                     {"precision", precision}, {"decomposition", domain->strategyName()}, {"overlap", on}, {"canonical_order", mo.canonicalOrder},
                      {"case", "settled_bed_mono"}, {"n", owned}, {"per_rank", double(owned) / ranks},
                      {"busiest_over_mean", double(busiest) * ranks / double(owned)}, {"tiles", tx * ty},
                      {"steps", steps}, {"wall_s", wall}, {"particle_steps_per_s", rate},

@@ -83,7 +83,7 @@ Status MpiDomain::partition(EngineSetup& s) {
   // Every rank holds the whole scene here, so the first decomposition needs no reduction of positions:
   // each rank weighs only the particles r, r + size, ... and the sum over ranks counts each once.
   m_grid = s.grid;
-  s.canonicalOrder = true;  // forces independent of the rows' order: equal to one process bit for bit
+  s.canonicalOrder = m_options.canonicalOrder;  // forces independent of the rows' order: one process's bits
   const std::size_t n = s.position.size();
   std::vector<Vec3d> pos;
   std::vector<double> w;

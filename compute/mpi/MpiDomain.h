@@ -32,6 +32,9 @@ struct MpiDomainOptions {
   // What a rank's cost is: the measured seconds of its contact and force phases (the default), or its
   // particle count (deterministic: tests, and machines whose timings are noise, e.g. oversubscribed).
   enum class Cost { kMeasured, kCount } cost = Cost::kMeasured;
+  // Candidates in global-id order (EngineSetup::canonicalOrder): the run equals one process bit for bit.
+  // Off only to measure what it costs.
+  bool canonicalOrder = true;
 };
 
 class MpiDomain final : public Domain {
