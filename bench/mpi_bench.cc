@@ -92,6 +92,9 @@ int main(int argc, char** argv) {
   app.add_option("--steps", steps, "timed steps (per overlap setting)")->capture_default_str();
   app.add_option("--threads", threads, "OpenMP threads per rank (0: the cores divided by the ranks on the node)");
   app.add_option("--executor", executor, "cpu or cuda")->check(CLI::IsMember({"cpu", "cuda"}))->capture_default_str();
+  std::string settleExecutor;
+  app.add_option("--settle-executor", settleExecutor, "executor rank 0 settles the small bed on (default: --executor)")
+      ->check(CLI::IsMember({"cpu", "cuda"}));
   app.add_option("--precision", precision)->check(CLI::IsMember({"double", "float"}))->capture_default_str();
   app.add_option("--decomposition", decomposition)->check(CLI::IsMember({"sfc", "multisection"}))->capture_default_str();
   app.add_option("--overlap", overlap, "halo overlapped with the interior forces: on, off, or both (timed in turn)")
@@ -137,7 +140,10 @@ int main(int argc, char** argv) {
   pflow::compute::ParticleSnapshot settled;
   double settleWall = 0;
   if (rank == 0) {
-    auto sim = Simulation::create(base, so);
+    pflow::compute::SimulationOptions settleOptions = so;
+    if (!settleExecutor.empty())
+      settleOptions.executor = settleExecutor == "cuda" ? pflow::compute::ExecutorKind::kCuda : pflow::compute::ExecutorKind::kCpu;
+    auto sim = Simulation::create(base, settleOptions);
     if (!sim) return fail(sim.status().toString());
     const auto t0 = std::chrono::steady_clock::now();
     if (auto st = sim.value()->runSteps(settleSteps); !st.isOk()) return fail("settling: " + st.toString());

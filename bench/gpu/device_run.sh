@@ -2,7 +2,7 @@
 # One call on the lent GPU machine (see bench/gpu/README.md): unpack the bundle built here, run the GPU
 # tests, measure the copy bandwidth and the settled-bed throughput, print a short table last.
 # Usage (from the repository root on the device machine):
-#   bash bench/gpu/device_run.sh [tests] [sanitize] [bench] [scaling] [largest] [cpu] [cpuab] [layouts]
+#   bash bench/gpu/device_run.sh [tests] [sanitize] [bench] [scaling] [largest] [cpu] [cpuab] [layouts] [mpi]
 # Logs and JSON go to $OUT (or ./out).
 set -uo pipefail
 OUT=${OUT:-out}
@@ -106,6 +106,48 @@ if has cpuab; then
   ab "static" PFLOW_DYNAMIC_CHUNK=0 -- --threads "$cores" --no-lammps
   ab "first touch off" PFLOW_FIRST_TOUCH=0 -- --threads "$cores" --no-lammps
   CPU_SIZES=4000000 ab "default" -- --threads "$cores" --lammps-ranks "$cores"
+fi
+# Distributed runs (issue 6): the MPI tests on the GPU, what candidates in id order cost, weak and strong
+# scaling over the GPUs when there are several, and the CPU executor's ranks x threads on this host's cores.
+if has mpi; then
+  export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+  cores=$(nproc)
+  ngpu=$(nvidia-smi -L | wc -l)
+  PFLOW_TEST_EXECUTOR=cuda OMP_NUM_THREADS=1 timeout 400 mpirun --oversubscribe -np 2 "$B/distributed_test" > "$OUT/distributed_gpu_np2.log" 2>&1
+  summary+=("distributed_test cuda np=2 rc=$? $(grep -E '^\[  (PASSED|FAILED)' "$OUT/distributed_gpu_np2.log" | tr '\n' ' ')")
+  mb() {  # ranks, label, args...
+    local np=$1 label=$2; shift 2
+    timeout "${MPI_TIMEOUT:-300}" mpirun --oversubscribe --bind-to none -np "$np" "$B/pflow-bench-mpi" --device "$label" \
+      --commit "$commit" "$@" >> "$OUT/mpi.jsonl" 2>> "$OUT/mpi.log"
+    summary+=("bench-mpi np=$np $* rc=$?")
+  }
+  for c in on off; do
+    mb 1 "$dev" --executor cuda --per-rank "${MPI_GPU_N:-4000000}" --tile-from 200000 --settle-steps "${SETTLE:-30000}" \
+      --steps "${MPI_GPU_STEPS:-1000}" --overlap on --canonical "$c"
+  done
+  if ((ngpu > 1)); then
+    for np in 1 2 4 8; do
+      ((np > ngpu)) && break
+      mb "$np" "$ngpu x $dev" --executor cuda --per-rank "${MPI_GPU_N:-4000000}" --tile-from 200000 --settle-steps "${SETTLE:-30000}" --steps "${MPI_GPU_STEPS:-1000}"
+      mb "$np" "$ngpu x $dev" --executor cuda --particles 16000000 --tile-from 200000 --settle-steps "${SETTLE:-30000}" --steps "${MPI_GPU_STEPS:-1000}"
+    done
+  fi
+  cpu="$(lscpu | sed -n 's/^Model name: *//p' | head -1), $cores cores"
+  for np in ${MPI_CPU_RANKS:-1 2 4 8 16}; do
+    mb "$np" "$cpu" --executor cpu --settle-executor cuda --particles "${MPI_CPU_N:-1000000}" --threads $((cores / np)) \
+      --tile-from 200000 --settle-steps "${SETTLE:-30000}" --resettle-steps 200 --steps "${MPI_CPU_STEPS:-300}" --overlap both
+  done
+  summary+=("$(python3 - "$OUT/mpi.jsonl" <<'PY'
+import json, sys
+for line in open(sys.argv[1]):
+    j = json.loads(line)
+    ph = j["phases_mean_s"]
+    print(f'{j["executor"]} ranks={j["ranks"]} thr={j["threads_per_rank"]} n={j["n"]} overlap={j["overlap"]} canon={j["canonical_order"]} '
+          f'{j["particle_steps_per_s"]:.3g} p-s/s comm={100*j["comm_share"]:.1f}% halo={ph["halo"]:.2f}s forces={ph["forces"]:.2f}s '
+          f'contacts={ph["contacts"]:.2f}s migrate={ph["migrate"]:.2f}s bnd={100*j["boundary_share_mean"]:.1f}% ghosts/owned={j["ghosts_per_owned"]:.3f} '
+          f'busiest={j["busiest_over_mean"]:.3f} wall={j["wall_s"]:.1f}s')
+PY
+)")
 fi
 if [[ -s $OUT/bench.jsonl ]]; then
   summary+=("$(python3 - "$OUT/bench.jsonl" <<'PY'
