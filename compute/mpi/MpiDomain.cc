@@ -37,6 +37,8 @@ MpiDomain::MpiDomain(MPI_Comm comm, MpiDomainOptions options) : m_comm(comm), m_
 
 Status MpiDomain::decompose(const std::vector<Vec3d>& pos, const std::vector<double>& w) {
   const std::uint32_t cells = m_grid.numCells();
+  m_haloAt.clear();  // every cell's halo ranks are worked out again
+  m_haloRanks.clear();
   if (m_options.strategy == DecompositionKind::kSfc) {
     // The patent's: per-cell weights summed over ranks, contiguous ranges along the Morton curve.
     std::vector<double> weight(cells, 0.0);
@@ -210,6 +212,7 @@ std::vector<PackedRows> MpiDomain::complete() {
 
 Status MpiDomain::migrate(Engine& engine, double cost) {
   engine.dropGhosts();
+  if (m_size == 1) return Status::ok();  // one rank owns every cell
   // Rows travel in the engine's layout: every rank with the same slot counts.
   int slots[2] = {engine.historySlots(), engine.wallHistorySlots()};
   MPI_Allreduce(MPI_IN_PLACE, slots, 2, MPI_INT, MPI_MAX, m_comm);
@@ -264,25 +267,22 @@ Status MpiDomain::migrate(Engine& engine, double cost) {
 }
 
 Status MpiDomain::exchangeGhosts(Engine& engine) {
-  // Each owned particle goes to every other rank that owns one of the 27 cells around its own (the
-  // particles are sorted by cell, so the set is computed once per cell).
+  if (m_size == 1) return Status::ok();
+  // Each owned particle goes to every other rank that owns one of the 27 cells around its own. The set
+  // depends on the cell only: worked out once per decomposition, when a cell is first met (most cells are
+  // interior, with no other rank around them).
   const std::vector<Vec3d> pos = positions(engine);
   std::vector<std::vector<Index>> to(static_cast<std::size_t>(m_size));
   std::uint32_t lastCell = ~0u;
-  std::vector<int> dest;
+  const std::int32_t* dest = nullptr;
+  int destCount = 0;
   for (Index i = 0; i < Index(pos.size()); ++i) {
-    int cx, cy, cz;
-    m_grid.coords(pos[i], cx, cy, cz);
-    const std::uint32_t c = m_grid.index(cx, cy, cz);
+    const std::uint32_t c = m_grid.cellOf(pos[i]);
     if (c != lastCell) {
-      dest.clear();
-      forNeighbourCells(m_grid, cx, cy, cz, [&](std::uint32_t nc) {
-        const int o = m_cellOwner[nc];
-        if (o != m_rank && std::find(dest.begin(), dest.end(), o) == dest.end()) dest.push_back(o);
-      });
+      haloRanksOf(c, dest, destCount);
       lastCell = c;
     }
-    for (int d : dest) to[std::size_t(d)].push_back(i);
+    for (int k = 0; k < destCount; ++k) to[std::size_t(dest[k])].push_back(i);
   }
   flatten(to, m_haloRows, m_haloSend);
   engine.pack(m_haloRows, m_haloSend, kGhost, m_out);
@@ -290,9 +290,30 @@ Status MpiDomain::exchangeGhosts(Engine& engine) {
   return Status::ok();
 }
 
+void MpiDomain::haloRanksOf(std::uint32_t c, const std::int32_t*& dest, int& count) {
+  if (m_haloAt.size() != m_cellOwner.size()) m_haloAt.assign(m_cellOwner.size(), -1);  // new decomposition
+  if (m_haloAt[c] < 0) {
+    const int cx = int(c % std::uint32_t(m_grid.nx)), cy = int((c / std::uint32_t(m_grid.nx)) % std::uint32_t(m_grid.ny)),
+              cz = int(c / (std::uint32_t(m_grid.nx) * std::uint32_t(m_grid.ny)));
+    m_haloAt[c] = std::int32_t(m_haloRanks.size());
+    std::int32_t n = 0;
+    m_haloRanks.push_back(0);  // the count, then the ranks
+    forNeighbourCells(m_grid, cx, cy, cz, [&](std::uint32_t nc) {
+      const std::int32_t o = m_cellOwner[nc];
+      const auto first = m_haloRanks.end() - n;
+      if (o != m_rank && std::find(first, m_haloRanks.end(), o) == m_haloRanks.end()) m_haloRanks.push_back(o), ++n;
+    });
+    m_haloRanks[std::size_t(m_haloAt[c])] = n;
+  }
+  const std::int32_t* at = m_haloRanks.data() + m_haloAt[c];
+  count = at[0];
+  dest = at + 1;
+}
+
 // The halo's rows and counts are fixed between rebuilds: no count matrix, just the messages. m_out and
 // m_in stay untouched while they are in flight (nothing else exchanges until finishRefresh).
 Status MpiDomain::startRefresh(Engine& engine) {
+  if (m_size == 1) return Status::ok();
   engine.pack(m_haloRows, m_haloSend, kRefresh, m_out);
   post(m_out, m_haloSend, engine.rowBytes(kRefresh), m_haloRecv, true);
   return Status::ok();
@@ -304,6 +325,7 @@ Status MpiDomain::awaitRefresh() {
 }
 
 Status MpiDomain::finishRefresh(Engine& engine) {
+  if (m_size == 1) return Status::ok();
   engine.refreshGhosts(m_arrived);
   m_arrived.clear();
   return Status::ok();

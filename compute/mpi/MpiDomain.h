@@ -80,6 +80,8 @@ class MpiDomain final : public Domain {
   // Rows to[d] for each rank d, concatenated, with the count per rank.
   static void flatten(const std::vector<std::vector<Index>>& to, std::vector<Index>& rows, std::vector<int>& counts);
   std::vector<Vec3d> positions(Engine& engine) const;
+  // The other ranks owning a cell among the 27 around cell c (count, then a pointer to them), cached.
+  void haloRanksOf(std::uint32_t c, const std::int32_t*& dest, int& count);
 
   MPI_Comm m_comm;
   int m_rank = 0, m_size = 1;
@@ -87,6 +89,10 @@ class MpiDomain final : public Domain {
   CellGrid m_grid;
   std::unique_ptr<decomp::Decomposition> m_decomp;
   std::vector<std::int32_t> m_cellOwner;  // per cell of m_grid
+  // Halo ranks per cell, filled as cells are met (haloRanksOf): m_haloAt[c] = -1 (not yet) or where cell
+  // c's count and ranks start in m_haloRanks. Cleared by each decomposition.
+  std::vector<std::int32_t> m_haloAt;
+  std::vector<std::int32_t> m_haloRanks;
   double m_costPerParticle = 0;           // smoothed [s per particle between rebuilds]
   int m_rebalances = 0;
   long long m_migratedOut = 0;
