@@ -269,5 +269,29 @@ TEST(Instability, MovingMeshPushingParticlesDoesNotTrip) {
   EXPECT_GT(minX, 0.01 + 0.2 * c.sim.duration);  // in front of the plate: pushed, not passed through
 }
 
+// The settings are validated together, and reduce_dt is refused for a run over several ranks.
+TEST(Instability, SettingsAreValidated) {
+  RunConfig c = compressedBlock(0.2);
+  c.sim.maxOverlap = 1.5;
+  c.sim.maxContacts = 4;  // below history_slots (8)
+  c.sim.checkpointSteps = 0;
+  const ErrorList errors = c.validate();
+  const std::string all = errors.toStatus("invalid").message();
+  EXPECT_NE(all.find("simulation.max_overlap"), std::string::npos) << all;
+  EXPECT_NE(all.find("simulation.max_contacts"), std::string::npos) << all;
+  EXPECT_NE(all.find("simulation.checkpoint_steps"), std::string::npos) << all;
+
+  struct TwoRanks : compute::Domain {
+    int ranks() const override { return 2; }
+  };
+  RunConfig r = compressedBlock(0.2);
+  r.sim.onInstability = compute::OnInstability::kReduceDt;
+  compute::SimulationOptions o;
+  o.domain = std::make_shared<TwoRanks>();
+  auto sim = Simulation::create(r, o);
+  ASSERT_FALSE(sim.isOk());
+  EXPECT_NE(sim.status().message().find("reduce_dt runs in one process only"), std::string::npos) << sim.status().toString();
+}
+
 }  // namespace
 }  // namespace pflow::test
