@@ -114,11 +114,13 @@ Result<RunSummary> runScene(const RunOptions& o) {
   const auto stepsPerSnapshot = interval > 0 ? std::max<std::int64_t>(1, std::llround(interval / sim.dt())) : totalSteps;
   spdlog::info("running {} steps to t = {} s, a snapshot every {} steps, output {}", totalSteps, duration,
                stepsPerSnapshot, sum.outputPath);
+  // Snapshot steps from the simulation's schedule: they stay at the same times when reduce_dt halves dt.
+  sim.scheduleOutput(interval, double(totalSteps) * sim.dt());
 
   const auto wallStart = std::chrono::steady_clock::now();
   auto lastReport = wallStart;
   auto observer = [&](const compute::Simulation& s) -> Status {
-    if (s.stepCount() % stepsPerSnapshot == 0 || s.stepCount() == totalSteps)
+    if (s.outputDue())
       if (Status st = writeSnapshot(); !st.isOk()) return st;
     const auto now = std::chrono::steady_clock::now();
     if (o.progressSeconds > 0 && std::chrono::duration<double>(now - lastReport).count() >= o.progressSeconds) {

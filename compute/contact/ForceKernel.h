@@ -27,6 +27,13 @@ PFLOW_HOSTDEVICE inline void flagDeepOverlap(Conditions* cond, Index i) {
   atomicMinU32(&cond->deepParticle, i);
 }
 
+// A centre behind a plane, or carried through a triangle's face within the step:
+// the particle passed through a wall. The run stops, naming the lowest such particle.
+PFLOW_HOSTDEVICE inline void flagTunnelled(Conditions* cond, Index i) {
+  atomicOrU32(&cond->flags, kTunnelled);
+  atomicMinU32(&cond->tunnelParticle, i);
+}
+
 // R: the run's precision. Positions are double at both precisions and the contact geometry (separation,
 // distance, overlap, closest point on a wall) is computed in double from them; the physics (relative
 // velocities, forces, torques, history) runs in R.
@@ -71,6 +78,7 @@ struct ForceArgs {
   int numMaterials;
   double dt;
   double time;      // at which walls' velocities are evaluated
+  double maxOverlap;  // overlap limit relative to the smaller radius (simulation.max_overlap)
   bool storeOnly;   // redo after slot growth: store the displacements that found no slot, nothing else
   Conditions* cond;
 };
@@ -151,7 +159,7 @@ struct ComputeForces {
       const double dist = std::sqrt(d2);
       const V n = vcast<R>((1.0 / dist) * d);
       const R overlap = R(rs - dist);
-      if (overlap > R(kMaxOverlapRatio) * (ri < rj ? ri : rj)) flagDeepOverlap(a.cond, i);
+      if (overlap > R(a.maxOverlap) * (ri < rj ? ri : rj)) flagDeepOverlap(a.cond, i);
       const R mj = mass[j];
       const ContactParams& pp = params[material[j]];
       const R li = ri - R(0.5) * overlap, lj = rj - R(0.5) * overlap;
@@ -234,6 +242,20 @@ struct ComputeWallForces {
     return false;
   }
 
+  // Did the centre pass through the face of triangle v during this step? Its path relative to the wall,
+  // from x - (v - v_wall) dt to x, crosses the triangle's plane at a point inside the triangle. A contact
+  // force keeps a centre a radius away from the face, so a crossing is never legitimate (from either side).
+  PFLOW_HOSTDEVICE bool crossedFace(Vec3d x, V vi, const Vec3d* v, Vec3d closest, const MeshMotionParams& motion) const {
+    const Vec3d fn = geometry::triangleNormal(v[0], v[1], v[2]);
+    const Vec3d step = a.dt * (vcast<double>(vi) - motion.velocityAt(closest, a.time));
+    const double now = dot(x - v[0], fn), before = now - dot(step, fn);
+    if ((before > 0) == (now > 0) || before == now) return false;
+    const Vec3d p = x - (now / (now - before)) * step;  // where the path meets the plane
+    const auto cp = geometry::closestPointOnTriangle(p, v[0], v[1], v[2]);
+    const double tol = 1e-9 * (norm(v[1] - v[0]) + norm(v[2] - v[0]));
+    return cp.feature == geometry::Feature::kFace && norm2(p - cp.point) <= tol * tol;
+  }
+
   PFLOW_HOSTDEVICE void wallForces(Index i, Vec3d xi, V vi, V wi, R ri, R mi, R Ii, const ContactParams* params,
                                    V& f, V& tq) const {
     WallContact wc[kMaxWallContacts];
@@ -244,8 +266,12 @@ struct ComputeWallForces {
       const PlaneParams& pl = a.planes[p];
       const double sd = dot(xi - pl.point, pl.normal);
       if (sd >= double(ri)) continue;
+      if (sd < 0) {  // the centre is behind the plane: it went through (the mask keeps planes behind)
+        flagTunnelled(a.cond, i);
+        continue;
+      }
       if (nwc == kMaxWallContacts) { tooMany = true; break; }
-      if (double(ri) - sd > kMaxOverlapRatio * double(ri)) flagDeepOverlap(a.cond, i);
+      if (double(ri) - sd > a.maxOverlap * double(ri)) flagDeepOverlap(a.cond, i);
       wc[nwc++] = {-pl.normal, xi - sd * pl.normal, pl.normal, zero3<double>(), double(ri) - sd, planeKey(Index(p)), pl.material, true};
     }
     const std::uint32_t nc = a.wallCandCount[i] < a.wallCandCapacity ? a.wallCandCount[i] : a.wallCandCapacity;
@@ -255,12 +281,16 @@ struct ComputeWallForces {
       const auto cp = geometry::closestPointOnTriangle(xi, v[0], v[1], v[2]);
       const Vec3d dv = cp.point - xi;
       const double d2 = norm2(dv), rid = double(ri);
+      if (a.dt > 0 && crossedFace(xi, vi, v, cp.point, a.meshMotion[a.triMesh[t]])) {
+        flagTunnelled(a.cond, i);
+        continue;
+      }
       if (d2 >= rid * rid) continue;
       if (nwc == kMaxWallContacts) { tooMany = true; break; }
       const Vec3d fn = geometry::triangleNormal(v[0], v[1], v[2]);
       const double d = std::sqrt(d2);
       const Vec3d n = d > 0 ? (1.0 / d) * dv : -fn;
-      if (rid - d > kMaxOverlapRatio * rid) flagDeepOverlap(a.cond, i);
+      if (rid - d > a.maxOverlap * rid) flagDeepOverlap(a.cond, i);
       const std::int32_t mesh = a.triMesh[t];
       wc[nwc++] = {n, cp.point, fn, a.meshMotion[mesh].velocityAt(cp.point, a.time), rid - d, triangleKey(mesh, t),
                    a.triMaterial[t], cp.feature == geometry::Feature::kFace};

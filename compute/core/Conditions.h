@@ -14,11 +14,14 @@ enum ConditionBits : std::uint32_t {
   kWallCandidateOverflow = 1u << 3, // a particle has more candidate triangles than the stride
   kNonFinite = 1u << 4,             // a position, velocity, spin, force or torque is NaN or infinite
   kTooManyWallContacts = 1u << 5,   // more simultaneous triangle contacts than kMaxWallContacts
-  kExcessiveOverlap = 1u << 6,      // an overlap beyond kMaxOverlapRatio of the smaller radius: blow-up
+  kExcessiveOverlap = 1u << 6,      // an overlap beyond the run's limit (simulation.max_overlap): blow-up
+  kTunnelled = 1u << 7,             // a centre behind a plane, or carried through a triangle's face
+  kLeftDomain = 1u << 8,            // a centre outside the scene's explicit simulation.domain
 };
 
-// Overlaps this deep (relative to the smaller radius) mean the integration has failed: dt too large
-// for the speeds, or a material far too soft. The run stops with an error instead of going on.
+// Default limit of an overlap relative to the smaller radius (simulation.max_overlap): overlaps this
+// deep mean the integration has failed (dt too large for the speeds, or a material far too soft). The
+// run stops with an error instead of going on.
 inline constexpr double kMaxOverlapRatio = 0.5;
 
 struct Conditions {
@@ -29,6 +32,8 @@ struct Conditions {
   std::uint32_t neededWallCandidates = 0;
   std::uint32_t badParticle = kNoIndex;  // lowest local index with a non-finite value (the host names the quantity)
   std::uint32_t deepParticle = kNoIndex; // lowest local index with an excessive overlap
+  std::uint32_t tunnelParticle = kNoIndex;  // lowest local index that tunnelled through a wall
+  std::uint32_t outsideParticle = kNoIndex; // lowest local index outside the explicit domain
 };
 
 namespace kernels {

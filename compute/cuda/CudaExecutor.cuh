@@ -64,6 +64,24 @@ __global__ void maxOfKernel(Index n, F f, unsigned long long* result) {
   }
 }
 
+// sum over the items of f(i): a warp-shuffle and shared-memory block reduction, then one atomicAdd per
+// block (the order of the blocks' additions varies from run to run: for diagnostics, not physics).
+template <class F>
+__global__ void sumOfKernel(Index n, F f, double* result) {
+  const Index i = blockIdx.x * blockDim.x + threadIdx.x;
+  double v = i < n ? f(i) : 0.0;
+  for (int o = 16; o > 0; o >>= 1) v += __shfl_down_sync(0xffffffffu, v, o);
+  __shared__ double warpSum[32];
+  const int lane = threadIdx.x & 31, warp = threadIdx.x >> 5;
+  if (lane == 0) warpSum[warp] = v;
+  __syncthreads();
+  if (warp == 0) {
+    v = lane < int((blockDim.x + 31) >> 5) ? warpSum[lane] : 0.0;
+    for (int o = 16; o > 0; o >>= 1) v += __shfl_down_sync(0xffffffffu, v, o);
+    if (lane == 0) atomicAdd(result, v);
+  }
+}
+
 // Per-kernel block size by measurement (see the file comment).
 class LaunchTuner {
  public:
@@ -127,6 +145,19 @@ class CudaExecutor {
     double v;
     static_assert(sizeof v == sizeof bits);
     std::memcpy(&v, &bits, sizeof v);
+    return v;
+  }
+
+  // sum over i of f(i) (f returns double); 0 for n == 0.
+  template <class F>
+  double sumOf(Index n, const F& f) const {
+    if (n == 0) return 0.0;
+    PFLOW_CUDA_CHECK(cudaMemsetAsync(m_reduce, 0, sizeof(double)));
+    double* out = reinterpret_cast<double*>(m_reduce);
+    launch(reinterpret_cast<const void*>(&sumOfKernel<F>), typeid(F).name(), n,
+           [&](unsigned grid, int block) { sumOfKernel<F><<<grid, block>>>(n, f, out); });
+    double v = 0;
+    PFLOW_CUDA_CHECK(cudaMemcpy(&v, m_reduce, sizeof v, cudaMemcpyDeviceToHost));
     return v;
   }
 

@@ -27,6 +27,9 @@ struct IntegrateArgs {
   Vec3d gravity;
   double dt;
   Conditions* cond;
+  // The scene's explicit simulation.domain (checkDomain): a centre outside it is flagged (kLeftDomain).
+  bool checkDomain = false;
+  Vec3d domainLo{0, 0, 0}, domainHi{0, 0, 0};
 
   // Half kick of particle i: v += (F/m + g) dt/2 and w += T/I dt/2, with I = (2/5) m r^2.
   PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void halfKick(Index i, Vec3<R>& v, Vec3<R>& w) const {
@@ -94,7 +97,34 @@ struct IntegrateSecondHalf {
       atomicOrU32(&a.cond->flags, kNonFinite);
       atomicMinU32(&a.cond->badParticle, i);
     }
+    if (a.checkDomain && (x.x < a.domainLo.x || x.y < a.domainLo.y || x.z < a.domainLo.z || x.x > a.domainHi.x ||
+                          x.y > a.domainHi.y || x.z > a.domainHi.z)) {
+      atomicOrU32(&a.cond->flags, kLeftDomain);
+      atomicMinU32(&a.cond->outsideParticle, i);
+    }
   }
+};
+
+// Kinetic energy of particle i, translational plus rotational (I = 2/5 m r^2) [J] (sumOf).
+template <class R>
+struct KineticEnergy {
+  const Vec3<R>* vel;
+  const Vec3<R>* omega;
+  const R* mass;
+  const R* radius;
+  PFLOW_HOSTDEVICE double operator()(Index i) const {
+    const double m = double(mass[i]), r = double(radius[i]);
+    return 0.5 * m * norm2(vcast<double>(vel[i])) + 0.2 * m * r * r * norm2(vcast<double>(omega[i]));
+  }
+};
+
+// Gravitational potential energy of particle i relative to the point `origin`, -m g.(x - origin) [J] (sumOf).
+template <class R>
+struct PotentialEnergy {
+  const Vec3d* pos;
+  const R* mass;
+  Vec3d gravity, origin;
+  PFLOW_HOSTDEVICE double operator()(Index i) const { return -double(mass[i]) * dot(gravity, pos[i] - origin); }
 };
 
 }  // namespace pflow::compute::kernels

@@ -42,6 +42,12 @@ struct EngineSetup {
   double maxRadius = 0;
   int historySlots = 8;
   int wallHistorySlots = 4;
+  // run-time detectors (docs/physics.md, "Instability detectors")
+  double maxOverlap = 0.5;  // overlap limit, relative to the smaller radius (simulation.max_overlap)
+  int maxContacts = 64;     // simultaneous particle contacts of one particle (simulation.max_contacts)
+  bool checkDomain = false; // the scene stated simulation.domain: a centre leaving it is an error
+  double dt = 0;            // the run's step at the start (errors at t = 0 suggest from it)
+  Vec3d domainLo{0, 0, 0}, domainHi{0, 0, 0};
   int threads = 0;
   // Candidates in ascending global id (BuildNeighbors::canonicalOrder): the forces then do not depend on
   // the order of the rows, so a distributed run equals one process bit for bit. Set by distributed runs
@@ -68,6 +74,29 @@ struct ContactStats {
   double maxSpeed = 0;               // [m/s]
   std::size_t historyEntries = 0;
   double candidatesPerParticle = 0;  // mean length of the neighbour candidate lists    // occupied tangential-history slots (particle and wall)
+};
+
+// One particle as the host sees it, for error messages (copied off the device on the error path only).
+struct ParticleProbe {
+  Gid gid = kNoGid;
+  Vec3d position{0, 0, 0}, velocity{0, 0, 0};
+  double radius = 0, speed = 0;
+  // Hertz duration of a head-on impact on a particle of its own size and material at its speed [s]
+  // (0 at rest or when not finite): the time scale a step must resolve.
+  double contactTime = 0;
+};
+
+// The step an error suggests: half the current one, or a twentieth of the culprit's Hertz contact time
+// at its measured speed when that is shorter.
+inline double suggestedDt(double dt, const ParticleProbe& p) {
+  double s = 0.5 * dt;
+  if (p.contactTime > 0 && p.contactTime < 1e300 && p.contactTime / 20 < s) s = p.contactTime / 20;
+  return s;
+}
+
+struct MechanicalEnergy {
+  double kinetic = 0;    // translational + rotational [J]
+  double potential = 0;  // gravitational, relative to the lower corner of the grid [J]
 };
 
 class Engine {
@@ -103,6 +132,14 @@ class Engine {
   virtual ParticleSnapshot snapshot(std::int64_t step, double time, const std::vector<std::string>& fields) const = 0;
   virtual GeometrySnapshot geometry() const = 0;
   virtual ContactStats contactStats() const = 0;
+  // Device reductions over the owned particles (one sum each; the host reads 16 bytes).
+  virtual MechanicalEnergy mechanicalEnergy() const = 0;
+  // Elastic energy stored in the owned particles' contacts now (the Hertz potential (8/15) E* sqrt(R*)
+  // delta^5/2; a pair with another owned particle counted half by each, so ranks' values add up). Host
+  // copies: called once, at the start.
+  virtual double elasticEnergy() const = 0;
+  // The owned particle with the largest kinetic energy (host copies: error path only); gid kNoGid when none.
+  virtual ParticleProbe fastestParticle() const = 0;
   virtual std::size_t deviceBytes() const = 0;
   virtual int historySlots() const = 0;
   virtual int wallHistorySlots() const = 0;
@@ -128,6 +165,12 @@ class Engine {
   // Overwrites the ghosts' kRefresh fields (position, velocities): blocks as in setGhosts, same rows.
   virtual void refreshGhosts(const std::vector<PackedRows>& blocks) = 0;
   virtual void dropGhosts() = 0;
+  // ---- Checkpoints (simulation.on_instability: reduce_dt). save: every kMigrate field of the owned rows,
+  // packed (pack's layout at the current slot counts). restore: the engine holds exactly those rows again,
+  // with those slot counts (slots that grew since shrink back); the caller then rebuilds and recomputes the
+  // forces (they are not saved).
+  virtual void save(std::vector<std::byte>& out) const = 0;
+  virtual void restore(const std::vector<std::byte>& rows, Index count, int contactSlots, int wallSlots) = 0;
   // Grows the history slots to at least these counts (ranks agree on them before exchanging rows).
   virtual void ensureSlots(int contactSlots, int wallSlots) = 0;
 

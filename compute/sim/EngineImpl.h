@@ -133,6 +133,19 @@ class EngineImpl final : public Engine {
     m_n = m_owned;
     m_particles.resize(m_n);
   }
+  void save(std::vector<std::byte>& out) const override {
+    std::vector<Index> rows(m_owned);
+    for (Index i = 0; i < m_owned; ++i) rows[i] = i;
+    pack(rows, {int(m_owned)}, kMigrate, out);
+  }
+  void restore(const std::vector<std::byte>& rows, Index count, int contactSlots, int wallSlots) override {
+    m_particles.allocate(std::max<Index>(count, 1), contactSlots, wallSlots, m_particles.slotMajor());
+    m_n = m_owned = 0;
+    unpack(rows.data(), count, kMigrate);
+    m_owned = m_n;
+    m_particles.resize(m_n);
+    sizeLocalBuffers();
+  }
   void ensureSlots(int contactSlots, int wallSlots) override {
     if (contactSlots > m_particles.contactSlots()) m_particles.resizeSlots(Multiplicity::kContactSlots, contactSlots);
     if (wallSlots > m_particles.wallSlots()) m_particles.resizeSlots(Multiplicity::kWallSlots, wallSlots);
@@ -195,7 +208,9 @@ class EngineImpl final : public Engine {
     launchForces(dt, time, set, false);
     if (set == ForceSet::kInterior) return Status::ok();  // queued; the boundary pass reads the flags
     Conditions c = readConditions();
-    if (c.flags & kExcessiveOverlap) return deepOverlapError(c.deepParticle);
+    // A particle behind a wall is also deep in it: the tunnelling is the cause to name.
+    if (c.flags & kTunnelled) return tunnelError(c.tunnelParticle, dt, time);
+    if (c.flags & kExcessiveOverlap) return deepOverlapError(c.deepParticle, dt);
     if (c.flags & kTooManyWallContacts)
       return Status(StatusCode::kResourceExhausted,
                     "a particle touches more than " + std::to_string(kMaxWallContacts) +
@@ -204,8 +219,11 @@ class EngineImpl final : public Engine {
     // the slots and store the displacements that found no slot.
     while (c.flags & (kHistoryOverflow | kWallHistoryOverflow)) {
       if (c.flags & kHistoryOverflow) {
-        // One spare slot: slots are carried by every particle, so headroom costs n times over.
-        const int grown = std::max<int>(m_particles.contactSlots() + 1, int(c.neededHistory) + 1);
+        // More contacts than the scene allows (simulation.max_contacts): a collapse, not a dense packing.
+        if (int(c.neededHistory) > m_setup.maxContacts) return slotOverflowError(dt);
+        // One spare slot (up to the cap): slots are carried by every particle, so headroom costs n times over.
+        const int grown = std::max<int>(m_particles.contactSlots() + 1,
+                                        std::min<int>(int(c.neededHistory) + 1, m_setup.maxContacts));
         if (grown > 127)
           return Status(StatusCode::kResourceExhausted,
                         "a particle has " + std::to_string(c.neededHistory) + " simultaneous contacts, above the 127-slot limit");
@@ -229,7 +247,8 @@ class EngineImpl final : public Engine {
     resetConditions();
     m_exec.forEach(m_owned, kernels::IntegrateSecondHalf<R>{integrateArgs(dt)});
     const Conditions c = readConditions();
-    if (c.flags & kNonFinite) return nonFiniteError(c.badParticle);
+    if (c.flags & kNonFinite) return nonFiniteError(c.badParticle, dt);
+    if (c.flags & kLeftDomain) return leftDomainError(c.outsideParticle, dt);
     return Status::ok();
   }
 
@@ -280,6 +299,21 @@ class EngineImpl final : public Engine {
   }
 
   ContactStats contactStats() const override;
+
+  MechanicalEnergy mechanicalEnergy() const override {
+    MechanicalEnergy e;
+    e.kinetic = m_exec.sumOf(m_owned, kernels::KineticEnergy<R>{m_particles.template ptr<Field::Velocity>(),
+                                                                 m_particles.template ptr<Field::AngularVelocity>(),
+                                                                 m_particles.template ptr<Field::Mass>(),
+                                                                 m_particles.template ptr<Field::Radius>()});
+    if (norm2(m_setup.gravity) > 0)
+      e.potential = m_exec.sumOf(m_owned, kernels::PotentialEnergy<R>{m_particles.template ptr<Field::Position>(),
+                                                                       m_particles.template ptr<Field::Mass>(),
+                                                                       m_setup.gravity, m_setup.grid.lo});
+    return e;
+  }
+  double elasticEnergy() const override;
+  ParticleProbe fastestParticle() const override;
 
   std::vector<std::pair<Gid, Gid>> candidatePairs() const override {
     std::vector<Index> nbr(std::size_t(m_owned) * m_nbrCap);
@@ -416,14 +450,52 @@ class EngineImpl final : public Engine {
     m_mem.copyToHost(&c, m_cond.data(), sizeof c);
     return c;
   }
-  Status nonFiniteError(Index i) const;
-  Status deepOverlapError(Index i) const;
+  Status nonFiniteError(Index i, double dt) const;
+  Status deepOverlapError(Index i, double dt) const;
+  Status tunnelError(Index i, double dt, double time) const;
+  Status leftDomainError(Index i, double dt) const;
+  Status slotOverflowError(double dt) const;
+  ParticleProbe probe(Index i) const;
+  // Host copies of what the error diagnoses read (error path and start only).
+  struct HostView {
+    std::vector<Vec3d> pos;
+    std::vector<R> rad, mass;
+    std::vector<std::int32_t> mat;
+    std::vector<Gid> gid;
+    std::vector<Index> nbr, wallCand;
+    std::vector<std::uint32_t> nbrCount, wallCandCount;
+    std::vector<Vec3d> triVerts;
+  };
+  HostView hostView() const;
+  // A particle's deepest contact: the partner (a particle's gid, or a wall's name) and the overlap [m].
+  struct Deepest {
+    std::string partner;
+    Gid partnerGid = kNoGid;
+    double overlap = -1, ratio = 0;
+  };
+  Deepest deepestContact(const HostView& h, Index i) const;
+  std::string suggestion(double dt, const ParticleProbe& p) const {
+    if (!(dt > 0)) dt = m_setup.dt;  // the forces at the start are computed with dt = 0
+    char buf[128];
+    std::snprintf(buf, sizeof buf, "; suggested dt %.3g s (now %.3g s)", suggestedDt(dt, p), dt);
+    return buf;
+  }
+  std::string describe(const ParticleProbe& p) const {
+    char buf[256];
+    std::snprintf(buf, sizeof buf, "particle %llu (radius %.4g m at (%.6g, %.6g, %.6g) m, speed %.4g m/s)",
+                  (unsigned long long)p.gid, p.radius, p.position.x, p.position.y, p.position.z, p.speed);
+    return buf;
+  }
 
   kernels::IntegrateArgs<R> integrateArgs(double dt) {
-    return {m_particles.template ptr<Field::Position>(), m_particles.template ptr<Field::Velocity>(),
+    kernels::IntegrateArgs<R> a{m_particles.template ptr<Field::Position>(), m_particles.template ptr<Field::Velocity>(),
             m_particles.template ptr<Field::AngularVelocity>(), m_particles.template ptr<Field::Force>(),
             m_particles.template ptr<Field::Torque>(), m_particles.template ptr<Field::Radius>(), m_particles.template ptr<Field::Mass>(),
             m_moved.as<Vec3f>(), m_setup.gravity, dt, m_cond.as<Conditions>()};
+    a.checkDomain = m_setup.checkDomain;
+    a.domainLo = m_setup.domainLo;
+    a.domainHi = m_setup.domainHi;
+    return a;
   }
   kernels::ForceArgs<R> forceArgs(double dt, double time, bool storeOnly) {
     kernels::ForceArgs<R> a{};
@@ -462,6 +534,7 @@ class EngineImpl final : public Engine {
     a.numMaterials = m_setup.numMaterials;
     a.dt = dt;
     a.time = time;
+    a.maxOverlap = m_setup.maxOverlap;
     a.storeOnly = storeOnly;
     a.cond = m_cond.as<Conditions>();
     return a;
@@ -583,7 +656,83 @@ void EngineImpl<Exec, R>::binTriangles() {
 }
 
 template <class Exec, class R>
-Status EngineImpl<Exec, R>::nonFiniteError(Index i) const {
+typename EngineImpl<Exec, R>::HostView EngineImpl<Exec, R>::hostView() const {
+  HostView h;
+  h.pos.resize(m_n);
+  h.rad.resize(m_n);
+  h.mass.resize(m_n);
+  h.mat.resize(m_n);
+  h.gid.resize(m_n);
+  m_mem.copyToHost(h.pos.data(), m_particles.template ptr<Field::Position>(), m_n * sizeof(Vec3d));
+  m_mem.copyToHost(h.rad.data(), m_particles.template ptr<Field::Radius>(), m_n * sizeof(R));
+  m_mem.copyToHost(h.mass.data(), m_particles.template ptr<Field::Mass>(), m_n * sizeof(R));
+  m_mem.copyToHost(h.mat.data(), m_particles.template ptr<Field::Material>(), m_n * sizeof(std::int32_t));
+  m_mem.copyToHost(h.gid.data(), m_particles.template ptr<Field::Gid>(), m_n * sizeof(Gid));
+  h.nbr.resize(std::size_t(m_owned) * m_nbrCap);
+  h.nbrCount.resize(m_owned);
+  m_mem.copyToHost(h.nbr.data(), m_nbr.data(), h.nbr.size() * sizeof(Index));
+  m_mem.copyToHost(h.nbrCount.data(), m_nbrCount.data(), m_owned * sizeof(std::uint32_t));
+  h.wallCand.resize(std::size_t(m_owned) * m_wallCap);
+  h.wallCandCount.resize(m_owned);
+  m_mem.copyToHost(h.wallCand.data(), m_wallCand.data(), h.wallCand.size() * sizeof(Index));
+  m_mem.copyToHost(h.wallCandCount.data(), m_wallCandCount.data(), m_owned * sizeof(std::uint32_t));
+  h.triVerts.resize(3 * std::size_t(m_numTri));
+  m_mem.copyToHost(h.triVerts.data(), m_triVerts.data(), h.triVerts.size() * sizeof(Vec3d));
+  return h;
+}
+
+template <class Exec, class R>
+typename EngineImpl<Exec, R>::Deepest EngineImpl<Exec, R>::deepestContact(const HostView& h, Index i) const {
+  Deepest best;
+  const double ri = double(h.rad[i]);
+  for (std::uint32_t e = 0; e < std::min<std::uint32_t>(h.nbrCount[i], m_nbrCap); ++e) {
+    const Index j = h.nbr[nbrLayout().at(i, e)];
+    const double ov = ri + double(h.rad[j]) - norm(h.pos[j] - h.pos[i]);
+    if (ov > best.overlap) {
+      best = {"particle " + std::to_string(h.gid[j]), h.gid[j], ov, ov / std::min(ri, double(h.rad[j]))};
+    }
+  }
+  for (std::size_t p = 0; p < m_setup.planes.size(); ++p) {
+    const double ov = ri - dot(h.pos[i] - m_setup.planes[p].point, m_setup.planes[p].normal);
+    if (ov > best.overlap) best = {"plane '" + m_setup.planeNames[p] + "'", kNoGid, ov, ov / ri};
+  }
+  for (std::uint32_t e = 0; e < std::min<std::uint32_t>(h.wallCandCount[i], m_wallCap); ++e) {
+    const Index t = h.wallCand[std::size_t(i) * m_wallCap + e];
+    const auto cp = geometry::closestPointOnTriangle(h.pos[i], h.triVerts[3 * t], h.triVerts[3 * t + 1], h.triVerts[3 * t + 2]);
+    const double ov = ri - norm(cp.point - h.pos[i]);
+    if (ov > best.overlap)
+      best = {"mesh '" + m_setup.meshNames[std::size_t(m_setup.triMesh[t])] + "' (triangle " + std::to_string(t) + ")", kNoGid, ov, ov / ri};
+  }
+  return best;
+}
+
+template <class Exec, class R>
+ParticleProbe EngineImpl<Exec, R>::probe(Index i) const {
+  ParticleProbe p;
+  if (i >= m_owned) return p;
+  R r, m;
+  V v;
+  std::int32_t mat;
+  m_mem.copyToHost(&p.gid, m_particles.template ptr<Field::Gid>() + i, sizeof p.gid);
+  m_mem.copyToHost(&r, m_particles.template ptr<Field::Radius>() + i, sizeof r);
+  m_mem.copyToHost(&m, m_particles.template ptr<Field::Mass>() + i, sizeof m);
+  m_mem.copyToHost(&mat, m_particles.template ptr<Field::Material>() + i, sizeof mat);
+  m_mem.copyToHost(&p.position, m_particles.template ptr<Field::Position>() + i, sizeof p.position);
+  m_mem.copyToHost(&v, m_particles.template ptr<Field::Velocity>() + i, sizeof v);
+  p.velocity = vcast<double>(v);
+  p.radius = double(r);
+  p.speed = norm(p.velocity);
+  // Hertz contact time of an impact on its own kind: R* = r/2, m* = m/2 (physics-reference.md).
+  const double effYoung = m_setup.contactTable[std::size_t(mat) * m_setup.numMaterials + std::size_t(mat)].effYoung;
+  if (p.speed > 0 && std::isfinite(p.speed) && effYoung > 0) {
+    const double effR = 0.5 * double(r), effM = 0.5 * double(m);
+    p.contactTime = 2.868 * std::pow(effM * effM / (effR * effYoung * effYoung * p.speed), 0.2);
+  }
+  return p;
+}
+
+template <class Exec, class R>
+Status EngineImpl<Exec, R>::nonFiniteError(Index i, double dt) const {
   const ParticleSnapshot s = snapshot(0, 0, {});
   auto vec = [&](const char* name) {
     const Vec3d v = s.find(name)->template as<Vec3d>()[i];
@@ -598,26 +747,154 @@ Status EngineImpl<Exec, R>::nonFiniteError(Index i) const {
     if (!isFinite(s.find(name)->template as<Vec3d>()[i])) what += (what.empty() ? "" : ", ") + vec(name);
   if (!isFinite(f)) what += std::string(what.empty() ? "" : ", ") + "force";
   if (!isFinite(t)) what += std::string(what.empty() ? "" : ", ") + "torque";
-  return numericalError("particle " + std::to_string(gid) + " has a non-finite " + what);
+  // Its speed is meaningless now: the suggestion is half the step.
+  return numericalError("non-finite: particle " + std::to_string(gid) + " has a non-finite " + what +
+                        ": the integration has blown up (time step too large, or the material too soft)" + suggestion(dt, {}));
 }
 
 template <class Exec, class R>
-Status EngineImpl<Exec, R>::deepOverlapError(Index i) const {
-  Gid gid;
-  R r;
-  Vec3d x;
-  V v;
-  m_mem.copyToHost(&gid, m_particles.template ptr<Field::Gid>() + i, sizeof gid);
-  m_mem.copyToHost(&r, m_particles.template ptr<Field::Radius>() + i, sizeof r);
-  m_mem.copyToHost(&x, m_particles.template ptr<Field::Position>() + i, sizeof x);
-  m_mem.copyToHost(&v, m_particles.template ptr<Field::Velocity>() + i, sizeof v);
-  char buf[512];
+Status EngineImpl<Exec, R>::deepOverlapError(Index i, double dt) const {
+  const ParticleProbe p = probe(i);
+  const Deepest d = deepestContact(hostView(), i);
+  char buf[768];
   std::snprintf(buf, sizeof buf,
-                "particle %llu (radius %.4g m at (%.4g, %.4g, %.4g) m, speed %.4g m/s) overlaps a neighbour or wall by more "
-                "than %.0f%% of the smaller radius: the integration has blown up (time step too large for these speeds, "
-                "or the material too soft)",
-                (unsigned long long)gid, double(r), x.x, x.y, x.z, double(norm(v)), 100 * kMaxOverlapRatio);
-  return numericalError(buf);
+                "excessive overlap: %s and %s overlap by %.4g m, %.1f%% of the smaller radius (simulation.max_overlap: %.1f%%): "
+                "the contact is not resolved (time step too large for these speeds, or the material too soft)",
+                describe(p).c_str(), d.partner.c_str(), d.overlap, 100 * d.ratio, 100 * m_setup.maxOverlap);
+  return numericalError(buf + suggestion(dt, p));
+}
+
+template <class Exec, class R>
+Status EngineImpl<Exec, R>::tunnelError(Index i, double dt, double time) const {
+  const ParticleProbe p = probe(i);
+  std::string wall;
+  for (std::size_t k = 0; k < m_setup.planes.size() && wall.empty(); ++k) {
+    const double sd = dot(p.position - m_setup.planes[k].point, m_setup.planes[k].normal);
+    if (sd < 0) {
+      char buf[256];
+      std::snprintf(buf, sizeof buf, "plane '%s' (its centre is %.4g m behind it)", m_setup.planeNames[k].c_str(), -sd);
+      wall = buf;
+    }
+  }
+  if (wall.empty()) {
+    // A triangle's face: the mesh of the candidate triangle nearest the centre.
+    const HostView h = hostView();
+    double nearest = 1e300;
+    for (std::uint32_t e = 0; e < std::min<std::uint32_t>(h.wallCandCount[i], m_wallCap); ++e) {
+      const Index t = h.wallCand[std::size_t(i) * m_wallCap + e];
+      const auto cp = geometry::closestPointOnTriangle(p.position, h.triVerts[3 * t], h.triVerts[3 * t + 1], h.triVerts[3 * t + 2]);
+      const double d = norm(cp.point - p.position);
+      if (d < nearest) {
+        nearest = d;
+        wall = "a face of mesh '" + m_setup.meshNames[std::size_t(m_setup.triMesh[t])] + "' (triangle " + std::to_string(t) + ")";
+      }
+    }
+    if (wall.empty()) wall = "a wall";
+  }
+  (void)time;
+  return numericalError("tunnelling: " + describe(p) + " passed through " + wall +
+                        " within one step: the step carries it further than a contact can stop it (time step too large "
+                        "for this speed)" + suggestion(dt, p));
+}
+
+template <class Exec, class R>
+Status EngineImpl<Exec, R>::leftDomainError(Index i, double dt) const {
+  const ParticleProbe p = probe(i);
+  const Vec3d lo = m_setup.domainLo, hi = m_setup.domainHi;
+  char buf[256];
+  std::snprintf(buf, sizeof buf, " is outside simulation.domain (min (%.6g, %.6g, %.6g), max (%.6g, %.6g, %.6g) m)", lo.x, lo.y,
+                lo.z, hi.x, hi.y, hi.z);
+  return numericalError("left the domain: " + describe(p) + buf +
+                        ": a wall is missing or was passed through, or the time step is too large" + suggestion(dt, p));
+}
+
+template <class Exec, class R>
+Status EngineImpl<Exec, R>::slotOverflowError(double dt) const {
+  // The particle with the most contacts now (host copies: the error path).
+  const HostView h = hostView();
+  Index worst = 0;
+  std::uint32_t most = 0;
+  for (Index i = 0; i < m_owned; ++i) {
+    std::uint32_t contacts = 0;
+    for (std::uint32_t e = 0; e < std::min<std::uint32_t>(h.nbrCount[i], m_nbrCap); ++e) {
+      const Index j = h.nbr[nbrLayout().at(i, e)];
+      contacts += norm(h.pos[j] - h.pos[i]) < double(h.rad[i]) + double(h.rad[j]);
+    }
+    if (contacts > most) {
+      most = contacts;
+      worst = i;
+    }
+  }
+  const ParticleProbe p = probe(worst);
+  return numericalError("contact-slot overflow: " + describe(p) + " has " + std::to_string(most) +
+                        " simultaneous contacts, above simulation.max_contacts (" + std::to_string(m_setup.maxContacts) +
+                        "): the packing has collapsed (time step too large, or the material too soft)" + suggestion(dt, p));
+}
+
+template <class Exec, class R>
+double EngineImpl<Exec, R>::elasticEnergy() const {
+  const HostView h = hostView();
+  const int nm = m_setup.numMaterials;
+  auto table = [&](int a, int b) { return m_setup.contactTable[std::size_t(a) * nm + std::size_t(b)].effYoung; };
+  // Hertz potential (8/15) E* sqrt(R*) delta^(5/2), whose derivative is the Hertz force (4/3) E* sqrt(R*) delta^(3/2).
+  auto hertz = [](double effYoung, double effR, double delta) { return 8.0 / 15.0 * effYoung * std::sqrt(effR) * std::pow(delta, 2.5); };
+  double u = 0;
+  for (Index i = 0; i < m_owned; ++i) {
+    const double ri = double(h.rad[i]);
+    for (std::uint32_t e = 0; e < std::min<std::uint32_t>(h.nbrCount[i], m_nbrCap); ++e) {
+      const Index j = h.nbr[nbrLayout().at(i, e)];
+      const double rj = double(h.rad[j]), ov = ri + rj - norm(h.pos[j] - h.pos[i]);
+      if (ov > 0) u += 0.5 * hertz(table(h.mat[i], h.mat[j]), ri * rj / (ri + rj), ov);  // half: j counts the other
+    }
+    for (const auto& pl : m_setup.planes) {
+      const double ov = ri - dot(h.pos[i] - pl.point, pl.normal);
+      if (ov > 0) u += hertz(table(h.mat[i], pl.material), ri, ov);
+    }
+    // Triangles: every face contact (each is a genuine contact; the rims of neighbouring triangles in the
+    // same plane are edge contacts the force kernel drops), or the deepest edge or vertex contact when
+    // there is no face contact (an approximation: the start's elastic energy only widens the allowance).
+    double edge = 0;
+    int edgeMaterial = 0;
+    bool face = false;
+    for (std::uint32_t e = 0; e < std::min<std::uint32_t>(h.wallCandCount[i], m_wallCap); ++e) {
+      const Index t = h.wallCand[std::size_t(i) * m_wallCap + e];
+      const auto cp = geometry::closestPointOnTriangle(h.pos[i], h.triVerts[3 * t], h.triVerts[3 * t + 1], h.triVerts[3 * t + 2]);
+      const double ov = ri - norm(cp.point - h.pos[i]);
+      if (ov <= 0) continue;
+      if (cp.feature == geometry::Feature::kFace) {
+        face = true;
+        u += hertz(table(h.mat[i], m_setup.triMaterial[t]), ri, ov);
+      } else if (ov > edge) {
+        edge = ov;
+        edgeMaterial = m_setup.triMaterial[t];
+      }
+    }
+    if (!face && edge > 0) u += hertz(table(h.mat[i], edgeMaterial), ri, edge);
+  }
+  return u;
+}
+
+template <class Exec, class R>
+ParticleProbe EngineImpl<Exec, R>::fastestParticle() const {
+  if (m_owned == 0) return {};
+  std::vector<V> vel(m_owned), om(m_owned);
+  std::vector<R> rad(m_owned), mass(m_owned);
+  m_mem.copyToHost(vel.data(), m_particles.template ptr<Field::Velocity>(), m_owned * sizeof(V));
+  m_mem.copyToHost(om.data(), m_particles.template ptr<Field::AngularVelocity>(), m_owned * sizeof(V));
+  m_mem.copyToHost(rad.data(), m_particles.template ptr<Field::Radius>(), m_owned * sizeof(R));
+  m_mem.copyToHost(mass.data(), m_particles.template ptr<Field::Mass>(), m_owned * sizeof(R));
+  Index best = 0;
+  double most = -1;
+  for (Index i = 0; i < m_owned; ++i) {
+    const kernels::KineticEnergy<R> ke{vel.data(), om.data(), mass.data(), rad.data()};
+    const double k = ke(i);
+    if (k > most || !std::isfinite(k)) {
+      most = k;
+      best = i;
+      if (!std::isfinite(k)) break;
+    }
+  }
+  return probe(best);
 }
 
 template <class Exec, class R>

@@ -19,6 +19,7 @@ constexpr std::size_t kMaxErrorsPerKind = 20;
 // A particle may start overlapping a plane by at most this fraction of its radius.
 constexpr double kMaxPlaneOverlapFraction = 0.1;
 constexpr int kMinHistorySlots = 1, kMaxHistorySlots = 64;
+constexpr int kMaxContacts = 127;  // history slots are indexed by int8 in the candidate rows
 constexpr int kMinWallHistorySlots = 1, kMaxWallHistorySlots = 32;
 // Two unit normals whose dot product is below -kAntiParallel are treated as facing each other.
 constexpr double kAntiParallel = 1.0 - 1e-9;
@@ -225,6 +226,15 @@ void validateSimulation(const RunConfig& c, ErrorList& e) {
   intRange(e, "simulation.history_slots", s.historySlots, kMinHistorySlots, kMaxHistorySlots);
   intRange(e, "simulation.wall_history_slots", s.wallHistorySlots, kMinWallHistorySlots, kMaxWallHistorySlots);
   if (s.threads < 0) e.add("simulation.threads", std::to_string(s.threads) + " must be >= 0 (0 = all cores)");
+  if (finite(e, "simulation.max_overlap", s.maxOverlap) && !(s.maxOverlap > 0 && s.maxOverlap <= 1)) {
+    e.add("simulation.max_overlap", num(s.maxOverlap) + " must be in (0, 1]: the overlap limit as a fraction of the smaller radius");
+  }
+  intRange(e, "simulation.max_contacts", s.maxContacts, 1, kMaxContacts);
+  if (s.maxContacts < s.historySlots && s.historySlots <= kMaxHistorySlots && s.maxContacts >= 1) {
+    e.add("simulation.max_contacts", std::to_string(s.maxContacts) + " must be >= simulation.history_slots (" +
+                                         std::to_string(s.historySlots) + ")");
+  }
+  if (s.checkpointSteps < 1) e.add("simulation.checkpoint_steps", std::to_string(s.checkpointSteps) + " must be >= 1");
 }
 
 // Per-particle checks (capped per kind), particle-vs-plane checks in O(N * planes), and facing planes.

@@ -77,6 +77,9 @@ enum class Precision { kDouble, kFloat };
 // How a distributed run splits space between ranks (compute/decomp): the seed patent's Morton-curve
 // ranges of cells, or FDPS's multi-section cuts.
 enum class DecompositionKind { kSfc, kMultiSection };
+// What a run does when a detector finds it unstable (docs/physics.md, "Instability detectors"): stop with
+// the error, or go back to the last checkpoint and halve the time step.
+enum class OnInstability { kStop, kReduceDt };
 
 struct SimulationSettings {
   Vec3d gravity{0, 0, -9.81};        // [m/s^2]
@@ -91,6 +94,10 @@ struct SimulationSettings {
   int historySlots = 8;              // initial tangential-history slots per particle (grown on demand)
   int wallHistorySlots = 4;          // initial wall-contact slots per particle (grown on demand)
   int threads = 0;                   // OpenMP threads; 0 = all
+  double maxOverlap = 0.5;           // overlap limit, fraction of the smaller radius, in (0, 1]
+  int maxContacts = 64;              // simultaneous particle contacts of one particle; more is a collapse
+  OnInstability onInstability = OnInstability::kStop;
+  int checkpointSteps = 1000;        // reduce_dt: steps between checkpoints (also at every output)
   std::uint64_t seed = 1;            // for anything random (jitter)
 };
 

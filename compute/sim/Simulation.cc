@@ -28,7 +28,7 @@ Status fromException();  // the exception in flight as a Status (below)
 // ---------------------------------------------------------------------------------------------
 // The step loop. One velocity-Verlet step, top to bottom, a timer per phase.
 Status Simulation::stepPhases() {
-  const double dt = m_timeStep.dt, tNext = double(m_step + 1) * dt;
+  const double dt = m_timeStep.dt, tNext = timeAt(m_step + 1);
   double moved, meshMoved;
   { auto t = m_timers.time(Phase::kIntegrate1); moved = std::sqrt(m_engine->integrateFirstHalf(dt)); }
   { auto t = m_timers.time(Phase::kMeshes);     meshMoved = std::sqrt(m_engine->moveMeshes(tNext)); }
@@ -39,7 +39,14 @@ Status Simulation::stepPhases() {
   else if (s.isOk()) { auto t = m_timers.time(Phase::kForces);     s = m_engine->computeForces(dt, tNext); }
   if (s.isOk()) { auto t = m_timers.time(Phase::kIntegrate2); s = m_engine->integrateSecondHalf(dt); }
   PFLOW_RETURN_IF_ERROR(m_domain->agree(s));  // every rank stops on any rank's error
-  reportSlotGrowth();
+  // reduce_dt checkpoints: every checkpointSteps, at outputs (a reduction never goes back past one) and
+  // when slots grew (a checkpoint holds rows of one slot count); the energy is checked there too, so a
+  // checkpoint never holds a state the detector would reject.
+  const std::int64_t next = m_step + 1;
+  m_checkpointDue = m_onInstability == OnInstability::kReduceDt &&
+                    (reportSlotGrowth() || (m_nextOutput >= 0 && next >= m_nextOutput) || next == m_endOutput ||
+                     next - m_checkpoint.step >= m_checkpointSteps);
+  if (m_energyCheck && (next % kEnergyCheckSteps == 0 || m_checkpointDue)) PFLOW_RETURN_IF_ERROR(checkEnergy());
   ++m_step;
   m_time = tNext;
   return Status::ok();
@@ -85,12 +92,122 @@ Status Simulation::haloAndForces(double dt, double time) {
 // A step, with an exception from the engine reported as an error of that step instead of escaping:
 // an allocation that does not fit (history slots or candidate rows grown beyond the device's memory) as
 // RESOURCE_EXHAUSTED, anything else (a CUDA fault) as INTERNAL.
-Status Simulation::step() {
+Status Simulation::guardedStep() {
   try {
     return stepPhases();
   } catch (...) {
     return withStep(fromException());
   }
+}
+
+// A step; with reduce_dt, checkpoints and the recovery from a detector's error.
+Status Simulation::step() {
+  const bool reduce = m_onInstability == OnInstability::kReduceDt;
+  try {
+    if (reduce && !m_checkpoint.valid) takeCheckpoint();
+  } catch (...) {
+    return withStep(fromException());
+  }
+  Status s = guardedStep();
+  if (!s.isOk()) {
+    if (!reduce || s.code() != StatusCode::kNumerical) return s;
+    return restoreCheckpoint(s);
+  }
+  advanceOutput();
+  if (m_checkpointDue) {
+    try {
+      takeCheckpoint();
+    } catch (...) {
+      return withStep(fromException());
+    }
+  }
+  return s;
+}
+
+// Mechanical energy (kinetic + gravitational) against its start: with fixed walls and dissipative contacts
+// it can exceed the start only by the elastic energy stored in the start's contacts. Growth beyond that
+// plus the tolerance is energy the integration made up: the step is too large (docs/physics.md).
+Status Simulation::checkEnergy() {
+  const MechanicalEnergy e = m_engine->mechanicalEnergy();
+  const double total = m_domain->sum(e.kinetic + e.potential);  // the same decision on every rank
+  const double excess = total - m_energyStart;
+  if (excess <= m_energyAllowance) return Status::ok();
+  const ParticleProbe p = m_engine->fastestParticle();
+  char buf[768];
+  std::snprintf(buf, sizeof buf,
+                "energy growth: the mechanical energy (kinetic + gravitational, %.4g J) is %.4g J above its start, beyond "
+                "the %.4g J allowed (the elastic energy stored at the start plus %.0f%% of the energy scale %.4g J) with "
+                "no energy input; the fastest is particle %llu (radius %.4g m at (%.6g, %.6g, %.6g) m, speed %.4g m/s): "
+                "the integration gains energy (time step too large for these contacts); suggested dt %.3g s (now %.3g s)",
+                total, excess, m_energyAllowance, 100 * kEnergyTolerance, m_energyScale, (unsigned long long)p.gid, p.radius,
+                p.position.x, p.position.y, p.position.z, p.speed, suggestedDt(m_timeStep.dt, p), m_timeStep.dt);
+  return numericalError(buf);
+}
+
+void Simulation::takeCheckpoint() {
+  Checkpoint& c = m_checkpoint;
+  m_engine->save(c.rows);
+  c.count = Index(m_engine->size());
+  c.slots = m_engine->historySlots();
+  c.wallSlots = m_engine->wallHistorySlots();
+  c.step = m_step;
+  c.time = m_time;
+  c.nextOutput = m_nextOutput;
+  c.endOutput = m_endOutput;
+  c.valid = true;
+}
+
+// reduce_dt: back to the checkpoint with half the step; the step count and the time go back to the
+// checkpoint's, and the steps left to each scheduled output double.
+Status Simulation::restoreCheckpoint(const Status& cause) {
+  if (m_reductions >= kMaxDtReductions)
+    return Status(cause.code(), cause.message() + "; gave up after " + std::to_string(m_reductions) +
+                                    " time-step reductions (simulation.on_instability: reduce_dt)");
+  const Checkpoint& c = m_checkpoint;
+  const double oldDt = m_timeStep.dt;
+  m_timeStep.dt = 0.5 * oldDt;
+  ++m_reductions;
+  m_step = m_stepBase = c.step;
+  m_time = m_timeBase = c.time;
+  if (m_outputSteps > 0) m_outputSteps *= 2;
+  m_nextOutput = c.nextOutput >= 0 ? c.step + 2 * (c.nextOutput - c.step) : -1;
+  m_endOutput = c.endOutput >= 0 ? c.step + 2 * (c.endOutput - c.step) : -1;
+  m_outputDue = false;
+  spdlog::warn("{}; going back to step {} (t = {:.6g} s) and halving the time step to {:.4g} s (reduction {} of {})",
+               cause.message(), c.step, c.time, m_timeStep.dt, m_reductions, kMaxDtReductions);
+  try {
+    m_engine->restore(c.rows, c.count, c.slots, c.wallSlots);
+    m_engine->moveMeshes(c.time);
+    Status s = rebuild();
+    if (s.isOk()) s = m_engine->computeForces(0.0, c.time);
+    if (!s.isOk()) return withStep(s);
+  } catch (...) {
+    return withStep(fromException());
+  }
+  m_historySlots = m_engine->historySlots();
+  m_wallHistorySlots = m_engine->wallHistorySlots();
+  return Status::ok();
+}
+
+void Simulation::scheduleOutput(double interval, double end) {
+  const double dt = m_timeStep.dt;
+  m_endOutput = m_stepBase + std::llround((end - m_timeBase) / dt);
+  m_outputSteps = interval > 0 ? std::max<std::int64_t>(1, std::llround(interval / dt)) : 0;
+  m_nextOutput = interval > 0 ? m_step + m_outputSteps : -1;
+  m_outputDue = false;
+  if (m_checkpoint.valid && m_checkpoint.step == m_step) {
+    m_checkpoint.nextOutput = m_nextOutput;
+    m_checkpoint.endOutput = m_endOutput;
+  }
+}
+
+void Simulation::advanceOutput() {
+  m_outputDue = false;
+  if (m_nextOutput >= 0 && m_step >= m_nextOutput) {
+    m_outputDue = true;
+    while (m_nextOutput <= m_step) m_nextOutput += m_outputSteps;
+  }
+  if (m_step == m_endOutput) m_outputDue = true;
 }
 
 namespace {
@@ -108,7 +225,7 @@ Status fromException() {
 }  // namespace
 
 // History slots grow on demand (never silently): say so once per growth.
-void Simulation::reportSlotGrowth() {
+bool Simulation::reportSlotGrowth() {
   const int slots = m_engine->historySlots(), wallSlots = m_engine->wallHistorySlots();
   if (slots != m_historySlots)
     spdlog::info("step {}: a particle has more contacts than tangential-history slots; grew from {} to {} per particle",
@@ -116,14 +233,17 @@ void Simulation::reportSlotGrowth() {
   if (wallSlots != m_wallHistorySlots)
     spdlog::info("step {}: a particle has more wall contacts than wall-history slots; grew from {} to {} per particle",
                  m_step + 1, m_wallHistorySlots, wallSlots);
+  const bool grew = slots != m_historySlots || wallSlots != m_wallHistorySlots;
   m_historySlots = slots;
   m_wallHistorySlots = wallSlots;
+  return grew;
 }
 
 Status Simulation::withStep(Status s) const {
   if (s.isOk()) return s;
+  if (!m_started) return Status(s.code(), s.message() + " at step 0 (t = " + std::to_string(m_time) + " s, the start)");
   return Status(s.code(), s.message() + " at step " + std::to_string(m_step + 1) + " (t = " +
-                              std::to_string(double(m_step + 1) * m_timeStep.dt) + " s)");
+                              std::to_string(timeAt(m_step + 1)) + " s)");
 }
 
 Status Simulation::initialise() {
@@ -133,6 +253,16 @@ Status Simulation::initialise() {
   if (s.isOk()) s = m_engine->computeForces(0.0, 0.0);
   PFLOW_RETURN_IF_ERROR(m_domain->agree(s));
   reportSlotGrowth();
+  m_started = true;
+  if (m_energyCheck) {
+    // The reference of the energy detector: the mechanical energy now, the elastic energy stored in the
+    // start's contacts (which may turn into kinetic energy) and the energy scale of the tolerance.
+    const MechanicalEnergy e = m_engine->mechanicalEnergy();
+    m_energyStart = m_domain->sum(e.kinetic + e.potential);
+    const double kinetic = m_domain->sum(e.kinetic), elastic = m_domain->sum(m_engine->elasticEnergy());
+    m_energyScale = kinetic + elastic + m_energyScale;  // m_energyScale held M |g| H (create)
+    m_energyAllowance = elastic + kEnergyTolerance * m_energyScale;
+  }
   return Status::ok();
 }
 
@@ -143,9 +273,8 @@ Status Simulation::runSteps(std::int64_t steps) {
 }
 
 Status Simulation::runUntil(double time, const std::function<Status(const Simulation&)>& observer) {
-  const double dt = m_timeStep.dt;
-  const auto last = std::int64_t(std::llround(time / dt));
-  while (m_step < last) {
+  // The last step recomputed each time: a reduce_dt recovery changes dt and the steps left.
+  while (m_step < m_stepBase + std::llround((time - m_timeBase) / m_timeStep.dt)) {
     if (Status s = step(); !s.isOk()) return s;
     if (observer)
       if (Status s = observer(*this); !s.isOk()) return s;
@@ -167,11 +296,30 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const RunConfig& config, 
   if (!setup) return setup.status();
   setup.value().layout = options.layout;
   setup.value().canonicalOrder = options.canonicalOrder;
+  setup.value().dt = ts.value().dt;
   std::shared_ptr<Domain> domain = options.domain ? options.domain : std::make_shared<Domain>();
+  double totalMass = 0;  // the whole scene's (every rank prepares it), before the partition keeps a share
+  for (double m : setup.value().mass) totalMass += m;
   if (Status s = domain->partition(setup.value()); !s.isOk()) return s;
   std::unique_ptr<Simulation> sim(new Simulation(setup.value(), ts.value(), nullptr));
   sim->m_domain = std::move(domain);
   sim->m_overlapHalo = options.overlapHalo;
+  sim->m_onInstability = config.sim.onInstability;
+  sim->m_checkpointSteps = config.sim.checkpointSteps;
+  if (sim->m_onInstability == OnInstability::kReduceDt && sim->m_domain->ranks() > 1)
+    return invalidArgument("simulation.on_instability: reduce_dt runs in one process only (this run has " +
+                           std::to_string(sim->m_domain->ranks()) + " ranks); use stop, or run on one rank");
+  // Energy detector: off while a mesh moves (the work it does on the particles is not accounted for).
+  sim->m_energyCheck = std::none_of(config.meshes.begin(), config.meshes.end(), [](const MeshConfig& m) { return m.motion.moves(); });
+  if (!sim->m_energyCheck) spdlog::info("energy-growth detector off: a mesh moves (its work on the particles is not accounted for)");
+  {
+    // M |g| H: the gravitational energy the particles can exchange across the grid's height along g.
+    const double g = norm(config.sim.gravity);
+    const Vec3d ext = sim->m_grid.cellSize * Vec3d{double(sim->m_grid.nx), double(sim->m_grid.ny), double(sim->m_grid.nz)};
+    const double height = g > 0 ? (std::fabs(config.sim.gravity.x) * ext.x + std::fabs(config.sim.gravity.y) * ext.y +
+                                   std::fabs(config.sim.gravity.z) * ext.z) / g : 0.0;
+    sim->m_energyScale = totalMass * g * height;
+  }
   const bool single = config.sim.precision == Precision::kFloat;
   ExecutorKind kind = options.executor;
   if (kind == ExecutorKind::kAuto) kind = cudaDeviceCount() > 0 ? ExecutorKind::kCuda : ExecutorKind::kCpu;
@@ -236,6 +384,13 @@ Result<EngineSetup> prepareEngineSetup(const RunConfig& c) {
   s.historySlots = c.sim.historySlots;
   s.wallHistorySlots = c.sim.wallHistorySlots;
   s.threads = c.sim.threads;
+  s.maxOverlap = c.sim.maxOverlap;
+  s.maxContacts = c.sim.maxContacts;
+  if (c.sim.domain) {  // only a domain the scene states is a boundary (a derived one is just the grid's extent)
+    s.checkDomain = true;
+    s.domainLo = c.sim.domain->lo;
+    s.domainHi = c.sim.domain->hi;
+  }
 
   if (n >= kMaxParticles)
     return invalidArgument("particles: " + std::to_string(n) + " particles, at most " + std::to_string(kMaxParticles - 1) +

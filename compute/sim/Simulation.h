@@ -39,12 +39,28 @@ class Simulation {
   // Validates the configuration (every error at once) and sets up the engine with forces at t = 0.
   static Result<std::unique_ptr<Simulation>> create(const RunConfig& config, const SimulationOptions& options = {});
 
-  // One velocity-Verlet step.
+  // One velocity-Verlet step. With simulation.on_instability: reduce_dt, a detector's error instead
+  // restores the last checkpoint and halves dt (the step count and time go back to the checkpoint's;
+  // OK is returned), up to kMaxDtReductions times.
   Status step();
   // Steps until `time` (the last step may not overshoot by more than dt/2); after each step calls
   // `observer`, which may stop the run by returning a non-OK status.
   Status runUntil(double time, const std::function<Status(const Simulation&)>& observer = {});
   Status runSteps(std::int64_t steps);
+
+  // Output schedule (pflow run, pflow-worker): outputDue() is true after the step that reaches each
+  // multiple of `interval` (rounded to whole steps of the dt of the moment; 0: none) and after the step
+  // that reaches `end`. Checkpoints are also taken there, so a reduction never goes back past an output.
+  void scheduleOutput(double interval, double end);
+  bool outputDue() const { return m_outputDue; }
+  // Time-step reductions so far (reduce_dt).
+  int dtReductions() const { return m_reductions; }
+  static constexpr int kMaxDtReductions = 6;
+  // Mechanical energy checks: every this many steps (docs/physics.md, "Instability detectors").
+  static constexpr int kEnergyCheckSteps = 10;
+  // Allowed growth of the mechanical energy beyond what the start's elastic energy can give back, as a
+  // fraction of the energy scale (initial kinetic + elastic + M |g| H).
+  static constexpr double kEnergyTolerance = 0.05;
 
   std::int64_t stepCount() const { return m_step; }
   double time() const { return m_time; }
@@ -80,7 +96,23 @@ class Simulation {
   Status rebuild();
   Status haloAndForces(double dt, double time);
   Status withStep(Status s) const;
-  void reportSlotGrowth();
+  bool reportSlotGrowth();  // true when slots grew
+  Status guardedStep();      // stepPhases, exceptions as errors
+  Status checkEnergy();
+  void takeCheckpoint();
+  Status restoreCheckpoint(const Status& cause);
+  double timeAt(std::int64_t step) const { return m_timeBase + double(step - m_stepBase) * m_timeStep.dt; }
+  void advanceOutput();
+
+  struct Checkpoint {
+    std::vector<std::byte> rows;
+    Index count = 0;
+    int slots = 0, wallSlots = 0;
+    std::int64_t step = 0;
+    double time = 0;
+    std::int64_t nextOutput = 0, endOutput = 0;
+    bool valid = false;
+  };
 
   CellGrid m_grid;  // of the engine, for reports
   double m_skin;    // neighbour skin [m]
@@ -91,6 +123,22 @@ class Simulation {
   double m_costMark = 0;  // contacts + forces seconds at the last rebuild (the domain's cost measure)
   std::int64_t m_step = 0;
   double m_time = 0;
+  // t = m_timeBase + (m_step - m_stepBase) dt: exact multiples of dt until dt changes (reduce_dt).
+  std::int64_t m_stepBase = 0;
+  double m_timeBase = 0;
+  // Energy detector (disabled while a mesh moves: its work is not accounted for).
+  bool m_energyCheck = false;
+  double m_energyStart = 0, m_energyAllowance = 0, m_energyScale = 0;
+  // reduce_dt
+  OnInstability m_onInstability = OnInstability::kStop;
+  int m_checkpointSteps = 1000;
+  int m_reductions = 0;
+  Checkpoint m_checkpoint;
+  // output schedule (steps)
+  std::int64_t m_outputSteps = 0, m_nextOutput = -1, m_endOutput = -1;
+  bool m_outputDue = false;
+  bool m_checkpointDue = false;
+  bool m_started = false;  // initialise() done: errors before are the start's (step 0)  // after the step in progress (stepPhases decides)
   std::int64_t m_rebuilds = 0;
   ExecutorKind m_executor = ExecutorKind::kCpu;
   bool m_overlapHalo = true;

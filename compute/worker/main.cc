@@ -185,14 +185,14 @@ int runRank(const worker::WorkerOptions& o, int rank, int ranks) {
 
   const double duration = cfg.sim.duration, interval = cfg.sim.snapshotInterval;
   const auto totalSteps = std::int64_t(std::llround(duration / sim.dt()));
-  const auto perSnapshot = interval > 0 ? std::max<std::int64_t>(1, std::llround(interval / sim.dt())) : totalSteps;
+  sim.scheduleOutput(interval, double(totalSteps) * sim.dt());  // snapshot times kept if reduce_dt halves dt
   ProgressReporter progress(lead ? o.managerAddress : std::string(), o.jobId, o.progressInterval);
   const auto start = std::chrono::steady_clock::now();
   auto lastPost = start - std::chrono::hours(1);
   bool cancelled = false;
   auto rate = [&](const compute::Simulation& s, double wall) { return wall > 0 ? particles * double(s.stepCount()) / wall : 0; };
   auto observer = [&](const compute::Simulation& s) -> Status {
-    if (s.stepCount() % perSnapshot == 0 || s.stepCount() == totalSteps)
+    if (s.outputDue())
       if (Status st = write(); !st.isOk()) return st;
     int stop = (g_stopSignal || progress.cancelRequested()) ? 1 : 0;
     if (domain) MPI_Allreduce(MPI_IN_PLACE, &stop, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);  // every rank stops together

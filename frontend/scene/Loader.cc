@@ -271,6 +271,21 @@ void Loader::parseSimulation(const Fields& top) {
   get(*f, "wall_history_slots", s.wallHistorySlots);
   get(*f, "threads", s.threads);
   get(*f, "seed", s.seed);
+  get(*f, "max_overlap", s.maxOverlap);
+  get(*f, "max_contacts", s.maxContacts);
+  get(*f, "checkpoint_steps", s.checkpointSteps);
+  if (const Entry* a = f->find("on_instability")) {
+    std::string name;
+    if (read(a->value, "simulation.on_instability", a->loc, name)) {
+      if (name == "stop") {
+        s.onInstability = compute::OnInstability::kStop;
+      } else if (name == "reduce_dt") {
+        s.onInstability = compute::OnInstability::kReduceDt;
+      } else {
+        badValue("simulation.on_instability", unknownName("on_instability", name, kInstabilityActions, "Choices"), a->loc);
+      }
+    }
+  }
   // Physics switches: model no more than the scene needs. Off = the coefficient is zero for every material and
   // pair, so the kernels skip that part (rolling resistance) or cap it at zero (friction).
   if (const Entry* p = f->find("physics")) {

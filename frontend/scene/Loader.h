@@ -67,11 +67,13 @@ constexpr std::string_view kCapNames[] = {"bottom", "top"};
 constexpr std::string_view kHopperOpenings[] = {"orifice", "top"};
 constexpr std::string_view kMotionKeys[] = {"velocity", "angular_velocity", "axis", "axis_point", "start_time"};
 constexpr std::string_view kSimulationKeys[] = {"gravity", "duration", "dt", "dt_fraction", "skin", "snapshot_interval",
-                                                "domain", "precision", "decomposition", "history_slots", "wall_history_slots", "threads", "seed", "physics"};
+                                                "domain", "precision", "decomposition", "history_slots", "wall_history_slots", "threads", "seed", "physics",
+                                                "max_overlap", "max_contacts", "on_instability", "checkpoint_steps"};
 constexpr std::string_view kPhysicsKeys[] = {"friction", "rolling_resistance"};
 constexpr std::string_view kOutputKeys[] = {"file", "fields"};
 constexpr std::string_view kPrecisions[] = {"double", "float"};
 constexpr std::string_view kDecompositions[] = {"sfc", "multisection"};
+constexpr std::string_view kInstabilityActions[] = {"stop", "reduce_dt"};
 // Box faces; the index is the face's surface number.
 constexpr std::array<std::string_view, 6> kBoxFaces = {"bottom", "top", "left", "right", "front", "back"};
 
