@@ -91,6 +91,9 @@ struct SimulationSettings {
   int historySlots = 8;              // initial tangential-history slots per particle (grown on demand)
   int wallHistorySlots = 4;          // initial wall-contact slots per particle (grown on demand)
   int threads = 0;                   // OpenMP threads; 0 = all
+  // Neighbour rebuilds: 0 = automatic (when a particle may have moved half the skin); N > 0 = exactly every
+  // N steps whatever the displacement, so contacts can be missed on purpose (the accuracy study's sweep).
+  int rebuildInterval = 0;
   std::uint64_t seed = 1;            // for anything random (jitter)
 };
 

@@ -27,7 +27,9 @@ Status Simulation::stepPhases() {
   { auto t = m_timers.time(Phase::kIntegrate1); moved = std::sqrt(m_engine->integrateFirstHalf(dt)); }
   { auto t = m_timers.time(Phase::kMeshes);     meshMoved = std::sqrt(m_engine->moveMeshes(tNext)); }
   Status s;
-  if (m_domain->anyRebuild(2 * moved > m_skin || moved + meshMoved > m_skin)) s = rebuild();
+  const bool due = m_rebuildInterval > 0 ? (m_step + 1) % m_rebuildInterval == 0  // fixed interval: may miss contacts
+                                         : 2 * moved > m_skin || moved + meshMoved > m_skin;
+  if (m_domain->anyRebuild(due)) s = rebuild();
   else if (m_domain->ranks() > 1) { auto t = m_timers.time(Phase::kHalo); s = m_domain->refreshGhosts(*m_engine); }
   if (s.isOk()) { auto t = m_timers.time(Phase::kForces);     s = m_engine->computeForces(dt, tNext); }
   if (s.isOk()) { auto t = m_timers.time(Phase::kIntegrate2); s = m_engine->integrateSecondHalf(dt); }
@@ -140,6 +142,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const RunConfig& config, 
   if (Status s = domain->partition(setup.value()); !s.isOk()) return s;
   std::unique_ptr<Simulation> sim(new Simulation(setup.value(), ts.value(), nullptr));
   sim->m_domain = std::move(domain);
+  sim->m_rebuildInterval = config.sim.rebuildInterval;
   const bool single = config.sim.precision == Precision::kFloat;
   ExecutorKind kind = options.executor;
   if (kind == ExecutorKind::kAuto) kind = cudaDeviceCount() > 0 ? ExecutorKind::kCuda : ExecutorKind::kCpu;

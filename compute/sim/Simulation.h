@@ -84,6 +84,7 @@ class Simulation {
   std::int64_t m_step = 0;
   double m_time = 0;
   std::int64_t m_rebuilds = 0;
+  int m_rebuildInterval = 0;  // SimulationSettings::rebuildInterval (0 = automatic)
   ExecutorKind m_executor = ExecutorKind::kCpu;
   int m_historySlots = 0, m_wallHistorySlots = 0;  // last reported
 };
