@@ -21,6 +21,7 @@ struct Setting {
   double skinFraction = 0.1;  // neighbour skin, in largest particle diameters
   int rebuildInterval = 0;    // 0 = automatic (skin criterion); N = every N steps
   int threads = 0;
+  std::uint64_t seed = 0;     // bulk problems: which random packing (set by the study's averaging)
 };
 
 struct Quantity {
@@ -36,6 +37,9 @@ struct Outcome {
   std::string status = "ok";  // ok | energy gain | lost contacts | tunnelling | damping instability |
                               // non-finite | excessive overlap | error
   std::string detail;         // the run's error message, if any
+  // Bulk problems: each value is the mean over a few random packings; these are the packings' own values
+  // (per quantity, in packing order), whose scatter is the noise floor of the comparison.
+  std::vector<std::vector<double>> packings;
 };
 
 // A reference problem: a named case (`family/variant`) and how to run it. `reference` is filled for
