@@ -548,7 +548,7 @@ Problem settledBed() {
 Problem columnCollapse() {
   Problem p;
   p.family = "column_collapse";
-  p.name = "column_collapse/a1.5";
+  p.name = "column_collapse/a1.4";
   p.bulk = true;
   p.run = [](const Setting& s) {
     const double d = 2 * kR0, a = 1.02 * d, W = 1.2 * d;

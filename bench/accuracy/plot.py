@@ -82,7 +82,26 @@ def colours(cats):
     return {c: cmap(i % 20) for i, c in enumerate(sorted(cats))}
 
 
-def draw(family, executor, quantities, outdir):
+def noise_floor(outdir):
+    """(family, executor, quantity) -> relative standard error of the packing mean at the reference setting."""
+    path = os.path.join(outdir, "noise.csv")
+    out = {}
+    if not os.path.exists(path):
+        return out
+    vals = defaultdict(list)
+    for row in load(path):
+        v = fnum(row["value"])
+        if not math.isnan(v):
+            vals[(row["problem"].split("/")[0], row["executor"], row["quantity"])].append(v)
+    for key, v in vals.items():
+        if len(v) > 1:
+            mean = sum(v) / len(v)
+            sd = math.sqrt(sum((x - mean) ** 2 for x in v) / (len(v) - 1))
+            out[key] = sd / math.sqrt(len(v)) / abs(mean)
+    return out
+
+
+def draw(family, executor, quantities, outdir, noise):
     names = sorted(quantities)
     n = len(names)
     cats = {category(p) for q in names for p in quantities[q].values()}
@@ -105,6 +124,9 @@ def draw(family, executor, quantities, outdir):
             xs, ys = zip(*front)
             ax.step(xs, ys, where="post", color="k", lw=1.2, label="Pareto front")
             ax.scatter(xs, ys, facecolors="none", edgecolors="k", s=50)
+        if (family, executor, q) in noise:
+            ax.axhline(noise[(family, executor, q)], ls="--", color="r", lw=1,
+                       label="packing scatter (std. error of the mean)")
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("wall s per simulated s (%s)" % executor)
@@ -134,6 +156,9 @@ def draw(family, executor, quantities, outdir):
                 ax.scatter([first_bad["dt"]], [min(max(y, FLOOR), 10.0)], marker="X", s=70, color=col[cat], edgecolors="k")
                 ax.annotate(first_bad["status"], (first_bad["dt"], min(max(y, FLOOR), 10.0)), fontsize=6,
                             xytext=(3, 3), textcoords="offset points")
+        if (family, executor, q) in noise:
+            ax.axhline(noise[(family, executor, q)], ls="--", color="r", lw=1,
+                       label="packing scatter (std. error of the mean)")
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("dt / Rayleigh time")
@@ -150,8 +175,9 @@ def main():
     outdir = sys.argv[1] if len(sys.argv) > 1 else "docs/accuracy"
     rows = load(os.path.join(outdir, "study.csv"))
     groups = combine(rows)
+    noise = noise_floor(outdir)
     for (family, executor), quantities in sorted(groups.items()):
-        draw(family, executor, quantities, outdir)
+        draw(family, executor, quantities, outdir, noise)
         print("wrote %s/%s_%s_{cost,dt}.png" % (outdir, family, executor))
 
 
