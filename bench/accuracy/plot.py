@@ -2,6 +2,7 @@
 """Charts of the accuracy-speed study (docs/accuracy.md) from study.csv: per problem family and executor,
   <family>_<executor>_cost.png  error against cost (wall s per simulated s), log-log, Pareto front marked;
   <family>_<executor>_dt.png    error against the dt fraction of the Rayleigh time, failures marked.
+The reference run of a problem without a closed form (error 0) is not drawn.
 Variants of a family (glass and limestone; every e of the restitution problem) are combined per setting:
 the worst error and the largest cost over the variants, and a run counts as failed if any variant failed.
 Usage: plot.py [DIR]  (default docs/accuracy; reads DIR/study.csv, writes the PNGs there)."""
@@ -55,6 +56,8 @@ def combine(rows):
         }
         key = (r["precision"], r["dt"], r["softening"], r["skin"], r["rebuild"])
         err, cost = fnum(row["error"]), fnum(row["wall_s_per_sim_s"])
+        if err == 0:
+            continue  # the reference setting of a problem without a closed form (error 0 by definition)
         cur = out[(family, row["executor"])][row["quantity"]].get(key)
         if cur is None:
             cur = dict(r, error=err, cost=cost, status=row["status"])
