@@ -264,10 +264,12 @@ int main(int argc, char** argv) {
   std::string executor = "cpu";
   app.add_option("--executor", executor, "cpu | cuda")->check(CLI::IsMember({"cpu", "cuda"}));
   app.add_flag("--quick", o.quick, "a small subset (CI smoke): Chung & Ooi glass and aluminium, one restitution, the bouncing sphere");
-  app.add_option("--out", o.out, "directory of study.csv and stability.csv (merged with what is there)");
+  auto* outOpt = app.add_option("--out", o.out, "directory of study.csv, stability.csv and noise.csv (merged with what is there; "
+                                                "default docs/accuracy, with --quick build/accuracy-quick)");
   app.add_option("--only", o.only, "run only the problems whose name starts with this (e.g. chung_ooi_1, settled_bed)");
   app.add_option("--threads", o.threads, "OpenMP threads (0 = all)");
   CLI11_PARSE(app, argc, argv);
+  if (o.quick && outOpt->count() == 0) o.out = "build/accuracy-quick";  // never mixed into the committed study
   o.executor = executor == "cuda" ? pflow::compute::ExecutorKind::kCuda : pflow::compute::ExecutorKind::kCpu;
   spdlog::set_level(spdlog::level::warn);  // the engine's per-run info lines would drown the table
 
