@@ -235,6 +235,8 @@ void validateSimulation(const RunConfig& c, ErrorList& e) {
                                          std::to_string(s.historySlots) + ")");
   }
   if (s.checkpointSteps < 1) e.add("simulation.checkpoint_steps", std::to_string(s.checkpointSteps) + " must be >= 1");
+  if (s.rebuildInterval < 0)
+    e.add("simulation.rebuild_interval", std::to_string(s.rebuildInterval) + " must be >= 0 (0 = automatic from the skin)");
 }
 
 // Per-particle checks (capped per kind), particle-vs-plane checks in O(N * planes), and facing planes.

@@ -98,6 +98,9 @@ struct SimulationSettings {
   int maxContacts = 64;              // simultaneous particle contacts of one particle; more is a collapse
   OnInstability onInstability = OnInstability::kStop;
   int checkpointSteps = 1000;        // reduce_dt: steps between checkpoints (also at every output)
+  // Neighbour rebuilds: 0 = automatic (when a particle may have moved half the skin); N > 0 = exactly every
+  // N steps whatever the displacement, so contacts can be missed on purpose (the accuracy study's sweep).
+  int rebuildInterval = 0;
   std::uint64_t seed = 1;            // for anything random (jitter)
 };
 

@@ -33,7 +33,9 @@ Status Simulation::stepPhases() {
   { auto t = m_timers.time(Phase::kIntegrate1); moved = std::sqrt(m_engine->integrateFirstHalf(dt)); }
   { auto t = m_timers.time(Phase::kMeshes);     meshMoved = std::sqrt(m_engine->moveMeshes(tNext)); }
   Status s;
-  const bool rebuildNow = m_domain->anyRebuild(2 * moved > m_skin || moved + meshMoved > m_skin);
+  const bool due = m_rebuildInterval > 0 ? (m_step + 1) % m_rebuildInterval == 0  // fixed interval: may miss contacts
+                                         : 2 * moved > m_skin || moved + meshMoved > m_skin;
+  const bool rebuildNow = m_domain->anyRebuild(due);
   if (rebuildNow) s = rebuild();
   if (!rebuildNow && m_domain->ranks() > 1) s = haloAndForces(dt, tNext);  // ghosts refreshed (ranks)
   else if (s.isOk()) { auto t = m_timers.time(Phase::kForces);     s = m_engine->computeForces(dt, tNext); }
@@ -320,6 +322,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const RunConfig& config, 
                                    std::fabs(config.sim.gravity.z) * ext.z) / g : 0.0;
     sim->m_energyScale = totalMass * g * height;
   }
+  sim->m_rebuildInterval = config.sim.rebuildInterval;
   const bool single = config.sim.precision == Precision::kFloat;
   ExecutorKind kind = options.executor;
   if (kind == ExecutorKind::kAuto) kind = cudaDeviceCount() > 0 ? ExecutorKind::kCuda : ExecutorKind::kCpu;

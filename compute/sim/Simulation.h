@@ -140,6 +140,7 @@ class Simulation {
   bool m_checkpointDue = false;
   bool m_started = false;  // initialise() done: errors before are the start's (step 0)  // after the step in progress (stepPhases decides)
   std::int64_t m_rebuilds = 0;
+  int m_rebuildInterval = 0;  // SimulationSettings::rebuildInterval (0 = automatic)
   ExecutorKind m_executor = ExecutorKind::kCpu;
   bool m_overlapHalo = true;
   int m_historySlots = 0, m_wallHistorySlots = 0;  // last reported

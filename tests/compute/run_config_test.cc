@@ -8,6 +8,7 @@
 #include <string>
 
 #include "compute/sim/RunConfig.h"
+#include "compute/sim/Simulation.h"
 #include "compute/sim/TimeStep.h"
 
 namespace pflow::compute {
@@ -244,6 +245,7 @@ TEST(RunConfigValidate, SimulationSettings) {
   c.sim.historySlots = 0;
   c.sim.wallHistorySlots = 33;
   c.sim.threads = -2;
+  c.sim.rebuildInterval = -3;
   const ErrorList errors = c.validate();
   EXPECT_ERROR(errors, "simulation.dt", "0 must be > 0");
   EXPECT_ERROR(errors, "simulation.duration", "-1 must be > 0");
@@ -254,6 +256,7 @@ TEST(RunConfigValidate, SimulationSettings) {
   EXPECT_ERROR(errors, "simulation.history_slots", "0 is outside [1, 64]");
   EXPECT_ERROR(errors, "simulation.wall_history_slots", "33 is outside [1, 32]");
   EXPECT_ERROR(errors, "simulation.threads", "-2 must be >= 0");
+  EXPECT_ERROR(errors, "simulation.rebuild_interval", "-3 must be >= 0");
   // Every particle is outside the (broken) domain, but that is not checked against a broken domain.
   EXPECT_FALSE(hasError(errors, "particles.position[0]", ""));
 
@@ -371,6 +374,21 @@ TEST(TimeStep, InvalidInputsAreErrorsNotGarbage) {
   c = validConfig();
   c.particles.material[0] = 4;
   EXPECT_FALSE(chooseTimeStep(c).isOk());
+}
+
+// simulation.rebuildInterval = N rebuilds the neighbour lists exactly every N steps, whatever the particles
+// did; 0 (the default) rebuilds only when the skin criterion asks (here: never, the spheres barely move).
+TEST(RebuildInterval, FixedIntervalRebuildsExactlyEveryNSteps) {
+  for (const int every : {0, 1, 5}) {
+    RunConfig c = validConfig();
+    c.sim.rebuildInterval = every;
+    c.sim.threads = 1;
+    auto sim = Simulation::create(c);
+    ASSERT_TRUE(sim.isOk()) << sim.status().toString();
+    const std::int64_t atSetup = sim.value()->rebuilds();
+    ASSERT_TRUE(sim.value()->runSteps(20).isOk());
+    EXPECT_EQ(sim.value()->rebuilds() - atSetup, every == 0 ? 0 : 20 / every) << "every " << every;
+  }
 }
 
 }  // namespace

@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# The accuracy-speed study in one command (docs/accuracy.md): runs pflow-accuracy, then draws the charts.
+# Builds nothing: the binary comes from $PFLOW_BIN or build/bin/pflow-accuracy.
+#   bench/accuracy/run.sh [--executor cpu|cuda] [--quick] [other pflow-accuracy options]
+# Writes docs/accuracy/{study,stability}.csv and PNGs (--quick: build/accuracy-quick/, so the committed
+# study is not touched). Rows of the other executor already in study.csv are kept.
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+bin="${PFLOW_BIN:-$root/build/bin}"
+[[ -x "$bin" && ! -d "$bin" ]] || bin="$bin/pflow-accuracy"
+if [[ ! -x "$bin" ]]; then
+  echo "run.sh: no pflow-accuracy at $bin (build it: cmake --build build --target pflow-accuracy, or set PFLOW_BIN)" >&2
+  exit 1
+fi
+out="$root/docs/accuracy"
+for a in "$@"; do [[ "$a" == --quick ]] && out="$root/build/accuracy-quick"; done
+start=$(date +%s)
+"$bin" --out "$out" "$@"
+/usr/bin/python3 "$root/bench/accuracy/plot.py" "$out"
+echo "run.sh: done in $(( $(date +%s) - start )) s; results in $out" >&2
