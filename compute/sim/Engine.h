@@ -12,6 +12,7 @@
 #include "compute/contact/ForceKernel.h"
 #include "compute/neighbor/CellGrid.h"
 #include "compute/particles/ParticleSnapshot.h"
+#include "compute/sim/ModelFlags.h"
 
 namespace pflow::compute {
 
@@ -43,6 +44,8 @@ struct EngineSetup {
   int historySlots = 8;
   int wallHistorySlots = 4;
   int threads = 0;
+  // What to compute (deriveModel): 2D, tangential history, rolling torque, wall phases. Default: everything.
+  ModelFlags model;
   // Data layouts: the executor's own, or forced to the GPU's (column-major candidate rows, slot-major
   // history) or the CPU's, so the CPU executor can be compared with itself across layouts in tests.
   enum class Layout { kExecutor, kGpu, kCpu } layout = Layout::kExecutor;

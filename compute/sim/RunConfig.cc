@@ -225,6 +225,10 @@ void validateSimulation(const RunConfig& c, ErrorList& e) {
   intRange(e, "simulation.history_slots", s.historySlots, kMinHistorySlots, kMaxHistorySlots);
   intRange(e, "simulation.wall_history_slots", s.wallHistorySlots, kMinWallHistorySlots, kMaxWallHistorySlots);
   if (s.threads < 0) e.add("simulation.threads", std::to_string(s.threads) + " must be >= 0 (0 = all cores)");
+  if (s.accuracy) {
+    if (s.accuracy->quantity.empty()) e.add("simulation.accuracy.quantity", "is empty: name the reference quantity (e.g. restitution)");
+    positive(e, "simulation.accuracy.tolerance", s.accuracy->tolerance);
+  }
 }
 
 // Per-particle checks (capped per kind), particle-vs-plane checks in O(N * planes), and facing planes.

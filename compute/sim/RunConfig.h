@@ -77,6 +77,15 @@ enum class Precision { kDouble, kFloat };
 // How a distributed run splits space between ranks (compute/decomp): the seed patent's Morton-curve
 // ranges of cells, or FDPS's multi-section cuts.
 enum class DecompositionKind { kSfc, kMultiSection };
+// simulation.model: kAuto computes the least model the scene needs (compute/sim/ModelChoice.h); kFull
+// computes everything (tangential history, rolling torque, wall phases, 3D) whatever the scene.
+enum class ModelMode { kAuto, kFull };
+// simulation.accuracy: the relative error the scene tolerates on a named reference quantity (a key of the
+// accuracy study's table, compute/sim/AccuracyTable.h).
+struct AccuracyTarget {
+  std::string quantity;
+  double tolerance = 0;  // relative, > 0
+};
 
 struct SimulationSettings {
   Vec3d gravity{0, 0, -9.81};        // [m/s^2]
@@ -87,6 +96,9 @@ struct SimulationSettings {
   double snapshotInterval = 0;       // [s] between snapshots; 0 = first and last only
   std::optional<Aabb> domain;        // [m]; unset = derived from particles and walls
   Precision precision = Precision::kDouble;
+  bool precisionGiven = false;       // the scene fixed simulation.precision (else an accuracy target may pick float)
+  ModelMode model = ModelMode::kAuto;
+  std::optional<AccuracyTarget> accuracy;
   DecompositionKind decomposition = DecompositionKind::kSfc;  // used when the run has more than one rank
   int historySlots = 8;              // initial tangential-history slots per particle (grown on demand)
   int wallHistorySlots = 4;          // initial wall-contact slots per particle (grown on demand)
