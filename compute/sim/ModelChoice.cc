@@ -39,7 +39,7 @@ std::string notPlanarAlong(const RunConfig& c, int axis) {
     for (const auto& x : v) {
       for (int k = 0; k < 3; ++k) {
         const bool along = k == axis;
-        if (along != spin) continue;  // velocities: the axis component; spins: the two others
+        if (along == spin) continue;  // velocities: the axis component; spins: the two others
         if (std::fabs(component(x, k)) > 1e-12 * largest) return true;
       }
     }
@@ -110,11 +110,8 @@ ModelChoice deriveModel(const RunConfig& c, const ModelOptions& options) {
                  ", spins about " + kAxis[axis] + " only, gravity and every plane parallel to the plane, no meshes: " +
                  "neighbour search in one layer of cells (9 instead of 27), motion kept in the plane");
     } else {
-      std::string reason;
-      for (int k = 0; k < 3; ++k)
-        if (why[k].find("do not share") == std::string::npos && why[k] != "no particles")
-          reason += (reason.empty() ? "" : "; ") + std::string("along ") + kAxis[k] + ": " + why[k];
-      if (reason.empty()) reason = n == 0 ? "no particles" : "the particle centres do not lie in a plane normal to x, y or z";
+      std::string reason = n == 0 ? "no particles" : "not planar";
+      for (int k = 0; n > 0 && k < 3; ++k) reason += std::string(k ? ";" : ":") + " along " + kAxis[k] + ", " + why[k];
       decide("dimensions", "3D", reason);
     }
   }
