@@ -209,15 +209,14 @@ ModelChoice deriveModel(const RunConfig& c, const ModelOptions& options) {
       std::nth_element(r.begin(), r.begin() + std::ptrdiff_t(n / 2), r.end());
       const double median = r[n / 2];
       const double ratio = maxR / median;
-      const double cellsPerSide = 3.0;  // the searched block is 3 cells wide
       const double dims = m.flags.planarAxis < 0 ? 3.0 : 2.0;
       if (ratio > 1.5) {
-        // Candidates of a median particle: the searched block (27 or 9 cells) holds (3 cell / d_median)^dims
-        // median-sized diameters' worth of room; at equal packing the count grows with ratio^dims.
+        // The searched block (27 or 9 cells) against one of cells sized for median particles (2.2 r_median with
+        // the default skin): candidates to test grow with the ratio of their volumes (areas in 2D).
+        const double waste = std::pow(m.cellSize / (2.2 * median), dims);
         reason += "; polydisperse: the largest radius is " + g(ratio) + " × the median (" + g(median) +
-                  " m), so a median particle searches about " + g(std::pow(cellsPerSide * m.cellSize / (2 * median), dims)) +
-                  " diameters' worth of room instead of " + g(std::pow(cellsPerSide * 2.2 / 2, dims)) +
-                  " for equal spheres: wasteful, a grid per size class would cut it (not implemented)";
+                  " m), so a median particle searches " + g(waste) + " × the " + (dims == 3 ? "volume" : "area") +
+                  " that cells sized for it would: wasteful; a grid per size class would cut it (not implemented)";
       } else {
         reason += "; sizes within 1.5 × of the median: one cell size suits them";
       }
