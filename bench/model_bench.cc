@@ -2,8 +2,8 @@
 // the full model, on beds where each simplification applies. One JSON line per run on stdout.
 //   frictionless  the standard settled bed (bench/BedScene.h) with friction 0: no tangential history
 //   norolling     the standard bed as it is (friction 0.5, no rolling friction): no rolling torque
-//   planar        the standard bed one lattice layer thick (discs in the x-z plane, no y walls), rolling friction
-//                 0.01: 2D
+//   planar        the standard bed one lattice layer thick (discs in the x-z plane, no y walls, the domain
+//                 derived), rolling friction 0.01: 2D
 //   nowalls       the standard bed without its walls and gravity, spheres flying apart and colliding, rolling
 //                 friction 0.01: no wall phases
 // (frictionless also has no rolling friction, so its least model drops the rolling torque too.)
@@ -47,6 +47,8 @@ RunConfig caseScene(const std::string& name, long n, int threads) {
     c.planes = keep;
     for (auto& v : c.particles.velocity) v.y = 0;
     c.particles.angularVelocity.assign(c.particles.size(), {0, 0, 0});
+    // The domain derived around them (as a scene without `domain` gets it): several cells deep in y in 3D.
+    c.sim.domain.reset();
   } else if (name == "nowalls") {
     for (auto& m : c.materials) m.rollingFriction = 0.01;  // so that the wall phases are the only simplification
     c.planes.clear();
@@ -116,7 +118,7 @@ int main(int argc, char** argv) {
         settled.particles.angularVelocity[id[i]] = snap.find("angular_velocity")->as<pflow::Vec3d>()[i];
       }
     }
-    if (name == "nowalls") settled.sim.domain.reset();
+    if (name == "nowalls" || name == "planar") settled.sim.domain.reset();
     for (const auto& model : models) {
       RunConfig c = settled;
       c.sim.model = model == "full" ? pflow::compute::ModelMode::kFull : pflow::compute::ModelMode::kAuto;

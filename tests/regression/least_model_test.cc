@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <string>
 #include <map>
 
 #include "compute/sim/ModelChoice.h"
@@ -54,7 +56,10 @@ struct State {
 State run(RunConfig c, ModelMode mode, int steps, compute::ModelFlags* flags = nullptr, int* slots = nullptr,
           compute::CellGrid* grid = nullptr) {
   c.sim.model = mode;
-  auto sim = Simulation::create(c);
+  // PFLOW_TEST_EXECUTOR=cuda runs both models on the GPU (the same comparison of its kernels' paths).
+  compute::SimulationOptions options;
+  if (const char* e = std::getenv("PFLOW_TEST_EXECUTOR"); e && std::string(e) == "cuda") options.executor = compute::ExecutorKind::kCuda;
+  auto sim = Simulation::create(c, options);
   EXPECT_TRUE(sim.isOk()) << sim.status().toString();
   if (!sim.isOk()) return {};
   EXPECT_TRUE(sim.value()->runSteps(steps).isOk());
