@@ -111,6 +111,7 @@ json toJson(const mv1::Job& j) {
           {"started_at", j.started_at()},
           {"finished_at", j.finished_at()},
           {"exit_code", j.exit_code()},
+          {"model", j.model()},
           {"progress",
            {{"step", p.step()},
             {"total_steps", p.total_steps()},
@@ -141,6 +142,7 @@ void printJob(const mv1::Job& j) {
   std::printf("  progress   step %lld / %lld (%.1f%%), t = %.4g / %.4g s, %.3g particle-steps/s, ETA %s\n", (long long)p.step(),
               (long long)p.total_steps(), percent(j), p.time(), p.duration(), p.particle_steps_per_second(), duration(p.eta_seconds()).c_str());
   std::printf("  model      %s\n", j.model_uri().c_str());
+  if (!j.model().empty()) std::printf("  computes (the least model the scene needs):\n%s", j.model().c_str());
 }
 
 }  // namespace

@@ -192,6 +192,7 @@ int validateScene(const std::string& scenePath, bool json) {
   std::printf("              %lld steps to %.4g s\n", (long long)s.steps, scene.value().config.sim.duration);
   for (const auto& w : s.warnings) std::printf("  warning: %s\n", w.c_str());
   std::printf("  memory      about %.3g MB on the executing device (%.0f bytes per particle)\n", s.memoryBytes / 1e6, s.bytesPerParticle);
+  std::printf("Model (simulation.model: auto derives the least model; full computes everything)\n%s", s.model.text().c_str());
   return kExitOk;
 }
 

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "common/Status.h"
+#include "compute/sim/AccuracyTable.h"
 #include "compute/sim/RunConfig.h"
 
 namespace pflow::frontend {
@@ -48,6 +49,9 @@ struct LoadOptions {
   std::string baseDir;                        // relative file names in the scene resolve here; "" = current dir
   std::size_t maxParticles = std::size_t(1) << 30;
   std::size_t maxTriangles = 20'000'000;
+  // The accuracy study's table that simulation.accuracy.quantity must name a quantity of (null: the built-in
+  // one; an empty table accepts any name, and validate says it has no proposal).
+  const compute::AccuracyTable* accuracyTable = nullptr;
 };
 
 // Reads and loads a scene file. I/O problems give StatusCode::kIo, scene problems kInvalidArgument with one error per

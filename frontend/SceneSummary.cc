@@ -17,19 +17,20 @@ namespace {
 // slot-major there), the displacement since rebuild, cell key and permutation, and neighbour rows of about
 // 16 candidates of an index and a history slot each, plus the wall-candidate rows. An estimate: slots and
 // rows grow on demand (docs/performance.md, "Memory per particle", has the measured figures).
-double bytesPerParticle(const compute::SimulationSettings& sim) {
+double bytesPerParticle(const compute::SimulationSettings& sim, int historySlots, int wallHistorySlots) {
   double bytes = 0, widest = 0;
   const compute::FieldInfo* table = compute::fieldTable(sim.precision == compute::Precision::kFloat);
+  const double slotBytes = historySlots > 0 ? 1 : 0;  // each candidate's resolved slot (none without history)
   for (int k = 0; k < compute::kNumFields; ++k) {
     const auto& f = table[k];
-    const double slots = f.multiplicity == compute::Multiplicity::kContactSlots ? sim.historySlots
-                         : f.multiplicity == compute::Multiplicity::kWallSlots  ? sim.wallHistorySlots
+    const double slots = f.multiplicity == compute::Multiplicity::kContactSlots ? historySlots
+                         : f.multiplicity == compute::Multiplicity::kWallSlots  ? wallHistorySlots
                                                                                 : 1;
     bytes += double(f.elementBytes) * slots;
     widest = std::max(widest, double(f.elementBytes));
   }
   const double cellSort = 4 + 4 + 12;                              // key, permutation, displacement since rebuild
-  const double neighbours = 16 * (sizeof(pflow::Index) + 1) + 4;  // candidates, slot bytes, count
+  const double neighbours = 16 * (sizeof(pflow::Index) + slotBytes) + 4;  // candidates, slot bytes, count
   const double walls = 4 * sizeof(pflow::Index) + 4 + 4;          // wall candidates, count, plane mask
   return bytes + widest + cellSort + neighbours + walls;
 }
@@ -73,7 +74,10 @@ Result<SceneSummary> summarize(const LoadedScene& scene) {
   const double volume = e.x * e.y * e.z;
   s.domainSolidFraction = volume > 0 ? s.solidVolume / volume : 0;
 
-  s.bytesPerParticle = bytesPerParticle(c.sim);
+  s.model = compute::deriveModel(c);
+  compute::SimulationSettings sim = c.sim;
+  sim.precision = s.model.precision;
+  s.bytesPerParticle = bytesPerParticle(sim, setup.value().historySlots, setup.value().wallHistorySlots);
   const double cellBytes = 4.0 * (double(g.nx) * g.ny * g.nz + 1);
   const double triangleBytes = double(s.triangles) * (3 * sizeof(Vec3d) * 2 + 4 * 4);  // vertices (rest + moved), ids
   s.memoryBytes = s.bytesPerParticle * double(s.particles) + cellBytes + triangleBytes;
@@ -89,6 +93,13 @@ std::string toJson(const SceneSummary& s) {
                       {"solid_fraction", set.solidFraction}});
     for (const auto& f : s.surfaces)
       surfaces.push_back({{"id", f.id}, {"name", f.name}, {"wall", f.wall}, {"triangles", f.triangles}, {"area_m2", f.area}});
+    nlohmann::json model = nlohmann::json::array(), proposals = nlohmann::json::array();
+    for (const auto& d : s.model.decisions) model.push_back({{"name", d.name}, {"choice", d.choice}, {"reason", d.reason}});
+    for (const auto& p : s.model.proposals)
+      proposals.push_back({{"executor", p.executor}, {"precision", p.precision}, {"dt_fraction", p.dtFraction},
+                           {"softening", p.softening}, {"skin_fraction", p.skinFraction},
+                           {"rebuild_interval", p.rebuildInterval}, {"worst_error", p.worstError},
+                           {"wall_s_per_sim_s", p.cost}, {"problems", p.problems}});
     const nlohmann::json j{                          {"particles", s.particles},
                           {"radius_min_m", s.minRadius},
                           {"radius_max_m", s.maxRadius},
@@ -109,7 +120,9 @@ std::string toJson(const SceneSummary& s) {
                           {"warnings", s.warnings},
                           {"steps", s.steps},
                           {"bytes_per_particle", s.bytesPerParticle},
-                          {"memory_estimate_bytes", s.memoryBytes}};
+                          {"memory_estimate_bytes", s.memoryBytes},
+                          {"model", model},
+                          {"accuracy_proposals", proposals}};
   return j.dump();
 }
 

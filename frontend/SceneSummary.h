@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "common/Status.h"
+#include "compute/sim/ModelChoice.h"
 #include "frontend/SceneLoader.h"
 
 namespace pflow::frontend {
@@ -34,6 +35,9 @@ struct SceneSummary {
   std::int64_t steps = 0;        // to simulation.duration
   double bytesPerParticle = 0;   // estimate of device memory per particle at the initial slot counts
   double memoryBytes = 0;        // estimate for the whole run on one device
+  // The least model the scene needs (simulation.model), each decision with its reason; the executor is not
+  // known here, so an accuracy target picks float only where the study proposes it on every executor.
+  compute::ModelChoice model;
 };
 
 Result<SceneSummary> summarize(const LoadedScene& scene);

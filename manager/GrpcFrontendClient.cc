@@ -35,6 +35,7 @@ Result<BuiltModel> GrpcFrontendClient::buildScene(const std::string& sceneYaml, 
   m.memoryBytes = resp.summary().memory_bytes();
   m.steps = resp.summary().steps();
   m.duration = resp.summary().duration();
+  m.model = resp.summary().model();
   return m;
 }
 

@@ -8,7 +8,7 @@
 namespace pflow::manager {
 namespace {
 
-constexpr int kSchemaVersion = 1;
+constexpr int kSchemaVersion = 2;  // 2: jobs.model
 
 constexpr const char* kSchema = R"sql(
 CREATE TABLE IF NOT EXISTS schema_info(version INTEGER NOT NULL);
@@ -23,6 +23,7 @@ CREATE TABLE IF NOT EXISTS jobs(
   model_uri TEXT NOT NULL,
   particles INTEGER NOT NULL,
   memory_bytes REAL NOT NULL,
+  model TEXT NOT NULL DEFAULT '',
   max_devices INTEGER NOT NULL,
   wait INTEGER NOT NULL,
   submitted_at REAL NOT NULL,
@@ -95,7 +96,16 @@ Result<std::unique_ptr<JobStore>> JobStore::open(const std::string& path) {
   Stmt version(db, "SELECT version FROM schema_info LIMIT 1");
   if (!version.ok()) return store->error("reading the schema version");
   if (version.step() == SQLITE_ROW) {
-    const auto v = version.colI64(0);
+    auto v = version.colI64(0);
+    if (v == 1) {  // version 1 had no model column: add it (empty for the jobs it holds)
+      if (Status s = store->exec("BEGIN IMMEDIATE; ALTER TABLE jobs ADD COLUMN model TEXT NOT NULL DEFAULT ''; "
+                                 "UPDATE schema_info SET version = 2; COMMIT;");
+          !s) {
+        store->exec("ROLLBACK;");
+        return s;
+      }
+      v = 2;
+    }
     if (v != kSchemaVersion)
       return failedPrecondition("job database " + path + " has schema version " + std::to_string(v) + "; this manager knows " +
                                 std::to_string(kSchemaVersion));
@@ -134,8 +144,8 @@ Status JobStore::save(const Job& job) {
     Stmt st(m_db, R"sql(
 INSERT INTO jobs(seq, id, name, state, reason, scene_name, model_id, model_uri, particles, memory_bytes, max_devices, wait,
                  submitted_at, started_at, finished_at, exit_code, step, total_steps, sim_time, sim_duration,
-                 particle_steps_per_second, eta_seconds, progress_at, message)
-VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18, ?19, ?20, ?21, ?22, ?23, ?24)
+                 particle_steps_per_second, eta_seconds, progress_at, message, model)
+VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18, ?19, ?20, ?21, ?22, ?23, ?24, ?25)
 ON CONFLICT(id) DO UPDATE SET
   name=excluded.name, state=excluded.state, reason=excluded.reason, scene_name=excluded.scene_name,
   model_id=excluded.model_id, model_uri=excluded.model_uri, particles=excluded.particles,
@@ -143,7 +153,7 @@ ON CONFLICT(id) DO UPDATE SET
   submitted_at=excluded.submitted_at, started_at=excluded.started_at, finished_at=excluded.finished_at,
   exit_code=excluded.exit_code, step=excluded.step, total_steps=excluded.total_steps, sim_time=excluded.sim_time,
   sim_duration=excluded.sim_duration, particle_steps_per_second=excluded.particle_steps_per_second,
-  eta_seconds=excluded.eta_seconds, progress_at=excluded.progress_at, message=excluded.message
+  eta_seconds=excluded.eta_seconds, progress_at=excluded.progress_at, message=excluded.message, model=excluded.model
 )sql");
     if (!st.ok()) return fail("preparing the job update");
     st.i64(1, job.seq);
@@ -170,6 +180,7 @@ ON CONFLICT(id) DO UPDATE SET
     st.real(22, job.progress.etaSeconds);
     st.real(23, job.progressAt);
     st.text(24, job.message);
+    st.text(25, job.model);
     if (st.step() != SQLITE_DONE) return fail("saving job " + job.id);
   }
   {
@@ -204,7 +215,7 @@ Result<std::vector<Job>> JobStore::loadAll() const {
     Stmt st(m_db, R"sql(
 SELECT seq, id, name, state, reason, scene_name, model_id, model_uri, particles, memory_bytes, max_devices, wait,
        submitted_at, started_at, finished_at, exit_code, step, total_steps, sim_time, sim_duration,
-       particle_steps_per_second, eta_seconds, progress_at, message
+       particle_steps_per_second, eta_seconds, progress_at, message, model
 FROM jobs ORDER BY seq)sql");
     if (!st.ok()) return error("preparing the job query");
     int rc;
@@ -236,6 +247,7 @@ FROM jobs ORDER BY seq)sql");
       j.progress.etaSeconds = st.colReal(21);
       j.progressAt = st.colReal(22);
       j.message = st.colText(23);
+      j.model = st.colText(24);
       index[j.id] = jobs.size();
       jobs.push_back(std::move(j));
     }

@@ -260,6 +260,7 @@ Result<Job> Manager::submit(const SubmitRequest& req) {
     j.modelUri = model->modelUri;
     j.particles = model->particles;
     j.memoryBytes = model->memoryBytes;
+    j.model = model->model;
     j.maxDevices = req.maxDevices;
     j.wait = req.wait;
     j.submittedAt = m_clock.now();

@@ -46,6 +46,7 @@ mv1::Job toProto(const Job& j) {
   pr->set_particle_steps_per_second(j.progress.particleStepsPerSecond);
   pr->set_eta_seconds(j.progress.etaSeconds);
   p.set_exit_code(j.exitCode);
+  p.set_model(j.model);
   return p;
 }
 

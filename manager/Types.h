@@ -89,6 +89,7 @@ struct Job {
   double progressAt = 0;              // wall time of the last progress report
   std::string message;                // the last progress message from the worker
   int exitCode = 0;
+  std::string model;                  // the least model chosen for the scene (BuiltModel::model)
 };
 
 // What a job may use, as sent to the agent of its first device's node.
@@ -125,6 +126,7 @@ struct BuiltModel {
   double memoryBytes = 0;
   std::int64_t steps = 0;
   double duration = 0;  // simulated, s
+  std::string model;    // the least model's decisions, one per line (pflow validate's "Model" section)
 };
 
 struct HeartbeatInfo {

@@ -108,7 +108,9 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE Vec3<T> constantTorque(T rollingFriction, T n
 
 // Hertz-Mindlin with history: normal elastic + dashpot (clipped at zero), tangential Mindlin spring
 // with history and Coulomb cap, optional rolling resistance. `xiOld` is the stored displacement.
-template <class T>
+// kTangential = false leaves the tangential part out (the least model when every friction is 0: the Coulomb
+// cap would make that force exactly 0), kRolling = false the rolling torque (every rolling friction 0).
+template <bool kTangential = true, bool kRolling = true, class T>
 PFLOW_HOSTDEVICE PFLOW_FORCEINLINE ContactOutput<T> hertzMindlin(const ContactParams& p, const ContactState<T>& s,
                                                                  Vec3<T> xiOld, T dt) {
   ContactOutput<T> out;
@@ -125,16 +127,23 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE ContactOutput<T> hertzMindlin(const ContactPa
   out.normalForce = fn;
   Vec3<T> force = (-fn) * s.n;
 
-  // Tangential.
-  const Vec3<T> vt = s.vRel - vn * s.n;
-  Vec3<T> xi = tangential::rotateHistory(xiOld, s.n) + dt * vt;
-  const T st = T(8) * G * sqrtRd;
-  const Vec3<T> ft = tangential::mindlinForce(st, dampN * T(p.tangentialRatio), T(p.friction), fn, vt, xi, out.sliding);
-  force += ft;
-  out.history = xi;
+  if constexpr (kTangential) {
+    const Vec3<T> vt = s.vRel - vn * s.n;
+    Vec3<T> xi = tangential::rotateHistory(xiOld, s.n) + dt * vt;
+    const T st = T(8) * G * sqrtRd;
+    const Vec3<T> ft = tangential::mindlinForce(st, dampN * T(p.tangentialRatio), T(p.friction), fn, vt, xi, out.sliding);
+    force += ft;
+    out.history = xi;
+    out.torque = cross(s.leverArm * s.n, ft);
+  } else {
+    (void)G;
+    (void)xiOld;
+    out.history = zero3<T>();
+    out.torque = zero3<T>();
+    out.sliding = false;
+  }
   out.force = force;
-  out.torque = cross(s.leverArm * s.n, ft);
-  if (p.rollingFriction > 0) {
+  if (kRolling && p.rollingFriction > 0) {
     // Rolling resists the relative spin about tangent axes only; twisting about n is not rolling.
     const Vec3<T> wRoll = s.omegaRel - dot(s.omegaRel, s.n) * s.n;
     out.torque += rolling::constantTorque(T(p.rollingFriction), fn, s.effRadius, wRoll, s.effInertia, dt);

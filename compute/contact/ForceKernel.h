@@ -80,6 +80,8 @@ struct ForceArgs {
   double time;      // at which walls' velocities are evaluated
   double maxOverlap;  // overlap limit relative to the smaller radius (simulation.max_overlap)
   bool storeOnly;   // redo after slot growth: store the displacements that found no slot, nothing else
+  bool tangential;  // ModelFlags: false = every friction is 0: normal forces only, no history slots (slots == 0)
+  bool rolling;     // ModelFlags: false = every rolling friction is 0: no rolling torque
   Conditions* cond;
 };
 
@@ -101,6 +103,79 @@ struct ComputeForces {
   ForceArgs<R> a;
 
   PFLOW_HOSTDEVICE void operator()(Index i) const {
+    if (!a.tangential) {
+      if (a.rolling) normalOnly<true>(i);
+      else normalOnly<false>(i);
+    } else if (a.rolling) {
+      withHistory<true>(i);
+    } else {
+      withHistory<false>(i);
+    }
+  }
+
+  // The least model without friction: normal (and rolling) forces only; no slot is read or written. Without
+  // rolling either, spins do not enter: v_rel is v_i - v_j (the spin terms are normal to n, so v_n differs
+  // from the full model's by round-off only, and not at all while spins are zero).
+  template <bool kRolling>
+  PFLOW_HOSTDEVICE void normalOnly(Index i) const {
+    const Vec3d* __restrict__ pos = a.pos;
+    const V* __restrict__ vel = a.vel;
+    const R* __restrict__ radius = a.radius;
+    const R* __restrict__ mass = a.mass;
+    const std::int32_t* __restrict__ material = a.material;
+    const Index* __restrict__ nbr = a.nbr + std::size_t(i) * a.nbrLayout.rowStride;
+    const std::size_t col = a.nbrLayout.colStride;
+    const ContactParams* __restrict__ params = a.params + std::size_t(a.material[i]) * a.numMaterials;
+    const R dt = R(a.dt);
+    const Vec3d xi = pos[i];
+    const V vi = vel[i];
+    const R ri = radius[i], mi = mass[i];
+    V f = zero3<R>(), tq = zero3<R>();
+    const std::uint32_t count = a.nbrCount[i] < a.nbrCapacity ? a.nbrCount[i] : a.nbrCapacity;
+    for (std::uint32_t e = 0; e < count; ++e) {
+      const Index j = nbr[e * col];
+      const Vec3d d = pos[j] - xi;
+      const R rj = radius[j];
+      const double rs = double(ri) + double(rj);
+      const double d2 = norm2(d);
+      if (d2 >= rs * rs) continue;
+      const double dist = std::sqrt(d2);
+      const V n = vcast<R>((1.0 / dist) * d);
+      const R overlap = R(rs - dist);
+      if (overlap > R(kMaxOverlapRatio) * (ri < rj ? ri : rj)) flagDeepOverlap(a.cond, i);
+      const R mj = mass[j];
+      const ContactParams& pp = params[material[j]];
+      contact::ContactState<R> s;
+      s.n = n;
+      s.overlap = overlap;
+      s.effRadius = ri * rj / (ri + rj);
+      s.effMass = mi * mj / (mi + mj);
+      if constexpr (kRolling) {
+        const V wi = a.omega[i], wj = a.omega[j];
+        const R li = ri - R(0.5) * overlap, lj = rj - R(0.5) * overlap;
+        s.vRel = (vi + cross(wi, li * n)) - (vel[j] + cross(wj, -lj * n));
+        s.omegaRel = wi - wj;
+        const R Ii = R(0.4) * mi * ri * ri, Ij = R(0.4) * mj * rj * rj;
+        s.effInertia = pp.rollingFriction > 0 ? Ii * (Ij / (Ii + Ij)) : R(0);
+        s.leverArm = li;
+      } else {
+        s.vRel = vi - vel[j];
+        s.omegaRel = zero3<R>();
+        s.effInertia = R(0);
+        s.leverArm = ri;
+      }
+      const auto out = contact::hertzMindlin<false, kRolling>(pp, s, zero3<R>(), dt);
+      f += out.force;
+      if constexpr (kRolling) tq += out.torque;
+    }
+    if (!a.storeOnly) {
+      a.force[i] = f;
+      a.torque[i] = tq;
+    }
+  }
+
+  template <bool kRolling>
+  PFLOW_HOSTDEVICE void withHistory(Index i) const {
     // Local restrict copies: the int8 slot stores could otherwise alias every pointer in `a` and
     // force the compiler to reload them after each store.
     const Vec3d* __restrict__ pos = a.pos;
@@ -170,14 +245,14 @@ struct ComputeForces {
       s.omegaRel = wi - omega[j];
       s.effRadius = ri * rj / (ri + rj);
       s.effMass = mi * mj / (mi + mj);
-      if (pp.rollingFriction > 0) {
+      if (kRolling && pp.rollingFriction > 0) {
         const R Ij = R(0.4) * mj * rj * rj;
         s.effInertia = Ii * (Ij / (Ii + Ij));  // not Ii*Ij/(Ii+Ij): that product underflows in float below ~10 um
       } else {
         s.effInertia = R(0);  // unused without rolling resistance
       }
       s.leverArm = li;
-      const auto out = contact::hertzMindlin(pp, s, xiOld, dt);
+      const auto out = contact::hertzMindlin<true, kRolling>(pp, s, xiOld, dt);
       f += out.force;
       tq += out.torque;
       if (slot >= 0) disp[slot] = out.history;
@@ -323,6 +398,19 @@ struct ComputeWallForces {
       kept += keep[k];
     }
 
+    // Without friction (ModelFlags::tangential off) there are no wall slots: normal (and rolling) forces only.
+    if (!a.tangential) {
+      for (int k = 0; k < nwc; ++k) {
+        if (!keep[k]) continue;
+        const contact::ContactState<R> st = wallState(wc[k], vi, wi, ri, mi, Ii);
+        const auto out = a.rolling ? contact::hertzMindlin<false, true>(params[wc[k].material], st, zero3<R>(), R(a.dt))
+                                   : contact::hertzMindlin<false, false>(params[wc[k].material], st, zero3<R>(), R(a.dt));
+        f += out.force;
+        tq += out.torque;
+      }
+      return;
+    }
+
     // Slots: the same key continues; a new triangle inherits the slot of a neighbouring triangle
     // (same mesh, a shared vertex) the particle has just left, so rolling across a shared edge keeps
     // its tangential spring; otherwise a free slot. Slots of ended contacts are cleared.
@@ -361,24 +449,30 @@ struct ComputeWallForces {
       const WallContact& c = wc[k];
       const int s = slotOf[k];
       if (a.storeOnly && !claimedNow[k]) continue;  // the first pass handled it
-      const R overlap = R(c.overlap);
-      const R li = ri - R(0.5) * overlap;
-      const V n = vcast<R>(c.n);
-      contact::ContactState<R> st;
-      st.n = n;
-      st.overlap = overlap;
-      st.vRel = (vi + cross(wi, li * n)) - vcast<R>(c.wallVel);
-      st.omegaRel = wi;
-      st.effRadius = ri;
-      st.effMass = mi;
-      st.effInertia = Ii;
-      st.leverArm = li;
+      const contact::ContactState<R> st = wallState(c, vi, wi, ri, mi, Ii);
       const V xiOld = s >= 0 ? disp[s] : zero3<R>();
-      const auto out = contact::hertzMindlin(params[c.material], st, xiOld, R(a.dt));
+      const auto out = a.rolling ? contact::hertzMindlin<true, true>(params[c.material], st, xiOld, R(a.dt))
+                                 : contact::hertzMindlin<true, false>(params[c.material], st, xiOld, R(a.dt));
       f += out.force;
       tq += out.torque;
       if (s >= 0) disp[s] = out.history;
     }
+  }
+
+  PFLOW_HOSTDEVICE static contact::ContactState<R> wallState(const WallContact& c, V vi, V wi, R ri, R mi, R Ii) {
+    const R overlap = R(c.overlap);
+    const R li = ri - R(0.5) * overlap;
+    const V n = vcast<R>(c.n);
+    contact::ContactState<R> st;
+    st.n = n;
+    st.overlap = overlap;
+    st.vRel = (vi + cross(wi, li * n)) - vcast<R>(c.wallVel);
+    st.omegaRel = wi;
+    st.effRadius = ri;
+    st.effMass = mi;
+    st.effInertia = Ii;
+    st.leverArm = li;
+    return st;
   }
 
   PFLOW_HOSTDEVICE static void sortByOverlap(WallContact* wc, int n) {

@@ -27,9 +27,17 @@ struct IntegrateArgs {
   Vec3d gravity;
   double dt;
   Conditions* cond;
+  int planarAxis = -1;  // 2D (ModelFlags): 0, 1, 2 keeps the motion in the plane normal to that axis
   // The scene's explicit simulation.domain (checkDomain): a centre outside it is flagged (kLeftDomain).
   bool checkDomain = false;
   Vec3d domainLo{0, 0, 0}, domainHi{0, 0, 0};
+
+  // 2D: no velocity along the axis, spin only about it, so round-off cannot break the plane's symmetry.
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void keepPlanar(Vec3<R>& v, Vec3<R>& w) const {
+    if (planarAxis == 0) { v.x = R(0); w.y = R(0); w.z = R(0); }
+    else if (planarAxis == 1) { v.y = R(0); w.x = R(0); w.z = R(0); }
+    else if (planarAxis == 2) { v.z = R(0); w.x = R(0); w.y = R(0); }
+  }
 
   // Half kick of particle i: v += (F/m + g) dt/2 and w += T/I dt/2, with I = (2/5) m r^2.
   PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void halfKick(Index i, Vec3<R>& v, Vec3<R>& w) const {
@@ -38,6 +46,7 @@ struct IntegrateArgs {
     const R invI = invM / (R(0.4) * radius[i] * radius[i]);
     v = vel[i] + h * (invM * force[i] + vcast<R>(gravity));
     w = omega[i] + (h * invI) * torque[i];
+    keepPlanar(v, w);
   }
 };
 

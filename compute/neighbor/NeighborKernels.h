@@ -103,7 +103,8 @@ struct GatherBytes {
 // Candidates j of particle i with |x_i - x_j| < r_i + r_j + skin, in fixed-stride rows of `capacity`.
 // Each candidate's history slot (the slot of i holding j's gid, or -1) is resolved here, so the
 // force loop reaches its history directly; slots whose partner is no longer a candidate (it moved
-// beyond the skin, so the contact has ended) are cleared. R: the precision of the radii.
+// beyond the skin, so the contact has ended) are cleared. R: the precision of the radii. Without
+// tangential history (slots == 0) only the candidates are listed (nbrSlot is not touched).
 template <class R>
 struct BuildNeighbors {
   static constexpr bool kVariableCost = true;  // work per particle varies (CpuExecutor::forEach)
@@ -154,6 +155,10 @@ struct BuildNeighbors {
             if (norm2(pos[j] - xi) >= cut * cut) return;
             if (count < capacity) {
               nbr[row + count * col] = j;
+              if (slots == 0) {  // no tangential history (ModelFlags::tangential): nothing to resolve
+                ++count;
+                return;
+              }
               std::int8_t slot = -1;
               const PartnerId g = PartnerId(gid[j]);
               for (int k = 0; k < slots; ++k)

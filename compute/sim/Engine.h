@@ -12,6 +12,7 @@
 #include "compute/contact/ForceKernel.h"
 #include "compute/neighbor/CellGrid.h"
 #include "compute/particles/ParticleSnapshot.h"
+#include "compute/sim/ModelFlags.h"
 
 namespace pflow::compute {
 
@@ -53,6 +54,8 @@ struct EngineSetup {
   // the order of the rows, so a distributed run equals one process bit for bit. Set by distributed runs
   // (MpiDomain::partition) and by one-process runs that are compared with them (SimulationOptions).
   bool canonicalOrder = false;
+  // What to compute (deriveModel): 2D, tangential history, rolling torque, wall phases. Default: everything.
+  ModelFlags model;
   // Data layouts: the executor's own, or forced to the GPU's (column-major candidate rows, slot-major
   // history) or the CPU's, so the CPU executor can be compared with itself across layouts in tests.
   enum class Layout { kExecutor, kGpu, kCpu } layout = Layout::kExecutor;

@@ -179,7 +179,8 @@ class EngineImpl final : public Engine {
         build.ghostBase = m_owned;
       }
       m_exec.forEach(m_owned, build);
-      m_exec.forEach(m_owned, kernels::WallCandidates<R>{m_setup.grid, m_planes.as<PlaneParams>(), int(m_setup.planes.size()),
+      if (m_anyWalls)  // no wall phases (ModelFlags::walls): no candidates to find
+        m_exec.forEach(m_owned, kernels::WallCandidates<R>{m_setup.grid, m_planes.as<PlaneParams>(), int(m_setup.planes.size()),
                                                   m_numTri ? m_binStart.as<Index>() : nullptr, m_binItems.as<Index>(),
                                                   m_triVerts.as<Vec3d>(), m_particles.template ptr<Field::Position>(),
                                                   m_particles.template ptr<Field::Radius>(), m_setup.skin, m_wallCap,
@@ -339,7 +340,8 @@ class EngineImpl final : public Engine {
   void init();
   void allocNeighbors() {
     m_nbr.resize(std::max<std::size_t>(1, std::size_t(m_owned) * m_nbrCap) * sizeof(Index));
-    m_nbrSlot.resize(std::max<std::size_t>(1, std::size_t(m_owned) * m_nbrCap) * sizeof(std::int8_t));
+    // Without tangential history there are no slots to resolve: one byte stands in for the rows.
+    m_nbrSlot.resize(m_setup.model.tangential ? std::max<std::size_t>(1, std::size_t(m_owned) * m_nbrCap) * sizeof(std::int8_t) : 1);
   }
   // Candidate rows: the executor's preferred layout (PFLOW_LIST_LAYOUT=row|column overrides it, for
   // measurements).
@@ -491,7 +493,7 @@ class EngineImpl final : public Engine {
     kernels::IntegrateArgs<R> a{m_particles.template ptr<Field::Position>(), m_particles.template ptr<Field::Velocity>(),
             m_particles.template ptr<Field::AngularVelocity>(), m_particles.template ptr<Field::Force>(),
             m_particles.template ptr<Field::Torque>(), m_particles.template ptr<Field::Radius>(), m_particles.template ptr<Field::Mass>(),
-            m_moved.as<Vec3f>(), m_setup.gravity, dt, m_cond.as<Conditions>()};
+            m_moved.as<Vec3f>(), m_setup.gravity, dt, m_cond.as<Conditions>(), m_setup.model.planarAxis};
     a.checkDomain = m_setup.checkDomain;
     a.domainLo = m_setup.domainLo;
     a.domainHi = m_setup.domainHi;
@@ -536,6 +538,8 @@ class EngineImpl final : public Engine {
     a.time = time;
     a.maxOverlap = m_setup.maxOverlap;
     a.storeOnly = storeOnly;
+    a.tangential = m_setup.model.tangential;
+    a.rolling = m_setup.model.rolling;
     a.cond = m_cond.as<Conditions>();
     return a;
   }
@@ -628,7 +632,7 @@ void EngineImpl<Exec, R>::init() {
   upload(m_triMaterial, s.triMaterial);
   upload(m_meshMotion, s.meshMotion);
   for (const auto& m : s.meshMotion) m_anyMeshMoves |= (m.angularSpeed != 0 || norm2(m.velocity) != 0);
-  m_anyWalls = m_numTri > 0 || !s.planes.empty();
+  m_anyWalls = s.model.walls;  // deriveModel: off without planes and triangles (on in simulation.model: full)
   m_binStart.resize((std::size_t(s.grid.numCells()) + 1) * sizeof(Index));
   m_binCount.resize(std::size_t(s.grid.numCells()) * sizeof(std::uint32_t));
   m_wallCandCount.resize(std::max<std::size_t>(1, m_n) * sizeof(std::uint32_t));

@@ -237,6 +237,10 @@ void validateSimulation(const RunConfig& c, ErrorList& e) {
   if (s.checkpointSteps < 1) e.add("simulation.checkpoint_steps", std::to_string(s.checkpointSteps) + " must be >= 1");
   if (s.rebuildInterval < 0)
     e.add("simulation.rebuild_interval", std::to_string(s.rebuildInterval) + " must be >= 0 (0 = automatic from the skin)");
+  if (s.accuracy) {
+    if (s.accuracy->quantity.empty()) e.add("simulation.accuracy.quantity", "is empty: name the reference quantity (e.g. restitution)");
+    positive(e, "simulation.accuracy.tolerance", s.accuracy->tolerance);
+  }
 }
 
 // Per-particle checks (capped per kind), particle-vs-plane checks in O(N * planes), and facing planes.

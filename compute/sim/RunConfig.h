@@ -80,6 +80,15 @@ enum class DecompositionKind { kSfc, kMultiSection };
 // What a run does when a detector finds it unstable (docs/physics.md, "Instability detectors"): stop with
 // the error, or go back to the last checkpoint and halve the time step.
 enum class OnInstability { kStop, kReduceDt };
+// simulation.model: kAuto computes the least model the scene needs (compute/sim/ModelChoice.h); kFull
+// computes everything (tangential history, rolling torque, wall phases, 3D) whatever the scene.
+enum class ModelMode { kAuto, kFull };
+// simulation.accuracy: the relative error the scene tolerates on a named reference quantity (a key of the
+// accuracy study's table, compute/sim/AccuracyTable.h).
+struct AccuracyTarget {
+  std::string quantity;
+  double tolerance = 0;  // relative, > 0
+};
 
 struct SimulationSettings {
   Vec3d gravity{0, 0, -9.81};        // [m/s^2]
@@ -90,6 +99,9 @@ struct SimulationSettings {
   double snapshotInterval = 0;       // [s] between snapshots; 0 = first and last only
   std::optional<Aabb> domain;        // [m]; unset = derived from particles and walls
   Precision precision = Precision::kDouble;
+  bool precisionGiven = false;       // the scene fixed simulation.precision (else an accuracy target may pick float)
+  ModelMode model = ModelMode::kAuto;
+  std::optional<AccuracyTarget> accuracy;
   DecompositionKind decomposition = DecompositionKind::kSfc;  // used when the run has more than one rank
   int historySlots = 8;              // initial tangential-history slots per particle (grown on demand)
   int wallHistorySlots = 4;          // initial wall-contact slots per particle (grown on demand)

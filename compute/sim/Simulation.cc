@@ -6,6 +6,7 @@
 
 #include "common/Log.h"
 #include "compute/core/Memory.h"
+#include "compute/sim/ModelChoice.h"
 
 namespace pflow::compute {
 
@@ -323,9 +324,14 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const RunConfig& config, 
     sim->m_energyScale = totalMass * g * height;
   }
   sim->m_rebuildInterval = config.sim.rebuildInterval;
-  const bool single = config.sim.precision == Precision::kFloat;
   ExecutorKind kind = options.executor;
   if (kind == ExecutorKind::kAuto) kind = cudaDeviceCount() > 0 ? ExecutorKind::kCuda : ExecutorKind::kCpu;
+  // The least model (prepareEngineSetup applied its flags); the precision may follow the accuracy target.
+  ModelOptions modelOptions;
+  modelOptions.executor = kind == ExecutorKind::kCuda ? "cuda" : "cpu";
+  const ModelChoice model = deriveModel(config, modelOptions);
+  spdlog::debug("model:\n{}", model.text());
+  const bool single = model.precision == Precision::kFloat;
   Status made;
   if (kind == ExecutorKind::kCuda) {
     auto engine = makeCudaEngine(std::move(setup).value(), options.device, single);
@@ -386,6 +392,9 @@ Result<EngineSetup> prepareEngineSetup(const RunConfig& c) {
   s.gravity = c.sim.gravity;
   s.historySlots = c.sim.historySlots;
   s.wallHistorySlots = c.sim.wallHistorySlots;
+  // The least model the scene needs (simulation.model: auto): without friction, no history slots at all.
+  s.model = deriveModel(c).flags;
+  if (!s.model.tangential) s.historySlots = s.wallHistorySlots = 0;
   s.threads = c.sim.threads;
   s.maxOverlap = c.sim.maxOverlap;
   s.maxContacts = c.sim.maxContacts;
@@ -451,8 +460,15 @@ Result<EngineSetup> prepareEngineSetup(const RunConfig& c) {
   const Vec3d ext = box.hi - box.lo;
   double cell = std::max(2 * maxR + s.skin, 1e-12);
   const double maxCells = std::max(4096.0, 4.0 * double(n) + double(s.triMesh.size()));
-  const double volume = std::max(ext.x, cell) * std::max(ext.y, cell) * std::max(ext.z, cell);
-  if (volume / (cell * cell * cell) > maxCells) cell = std::cbrt(volume / maxCells);
+  const int axis = s.model.planarAxis;  // 2D: one layer of cells along it
+  if (axis < 0) {
+    const double volume = std::max(ext.x, cell) * std::max(ext.y, cell) * std::max(ext.z, cell);
+    if (volume / (cell * cell * cell) > maxCells) cell = std::cbrt(volume / maxCells);
+  } else {
+    const double e[3] = {ext.x, ext.y, ext.z};
+    const double area = std::max(e[(axis + 1) % 3], cell) * std::max(e[(axis + 2) % 3], cell);
+    if (area / (cell * cell) > maxCells) cell = std::sqrt(area / maxCells);
+  }
   s.grid.lo = box.lo;
   s.grid.cellSize = cell;
   s.grid.invCellSize = 1.0 / cell;
@@ -460,6 +476,11 @@ Result<EngineSetup> prepareEngineSetup(const RunConfig& c) {
   s.grid.nx = std::max(1, int(std::ceil(ext.x / cell)));
   s.grid.ny = std::max(1, int(std::ceil(ext.y / cell)));
   s.grid.nz = std::max(1, int(std::ceil(ext.z / cell)));
+  if (axis >= 0) {  // the layer centred on the particles' plane (the integrator keeps them in it)
+    const double at = axis == 0 ? p.position[0].x : axis == 1 ? p.position[0].y : p.position[0].z;
+    (axis == 0 ? s.grid.lo.x : axis == 1 ? s.grid.lo.y : s.grid.lo.z) = at - 0.5 * cell;
+    (axis == 0 ? s.grid.nx : axis == 1 ? s.grid.ny : s.grid.nz) = 1;
+  }
   return s;
 }
 

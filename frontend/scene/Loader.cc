@@ -246,6 +246,7 @@ void Loader::parseSimulation(const Fields& top) {
   if (const Entry* p = f->find("precision")) {
     std::string name;
     if (read(p->value, "simulation.precision", p->loc, name)) {
+      s.precisionGiven = name == "double" || name == "float";
       if (name == "double") {
         s.precision = compute::Precision::kDouble;
       } else if (name == "float") {
@@ -265,6 +266,30 @@ void Loader::parseSimulation(const Fields& top) {
       } else {
         badValue("simulation.decomposition", unknownName("decomposition", name, kDecompositions, "Choices"), d->loc);
       }
+    }
+  }
+  if (const Entry* m = f->find("model")) {
+    std::string name;
+    if (read(m->value, "simulation.model", m->loc, name)) {
+      if (name == "auto") s.model = compute::ModelMode::kAuto;
+      else if (name == "full") s.model = compute::ModelMode::kFull;
+      else badValue("simulation.model", unknownName("model", name, kModelModes, "Choices"), m->loc);
+    }
+  }
+  // The error the scene tolerates on a quantity of the accuracy study; tolerance > 0 is checked by validate().
+  if (const Entry* a = f->find("accuracy")) {
+    if (const auto af = mapping(a->value, "simulation.accuracy", a->loc, kAccuracyKeys)) {
+      compute::AccuracyTarget t;
+      const bool haveQuantity = get(*af, "quantity", t.quantity, true);
+      get(*af, "tolerance", t.tolerance, true);
+      const compute::AccuracyTable& table =
+          m_options.accuracyTable ? *m_options.accuracyTable : compute::AccuracyTable::builtIn();
+      const std::vector<std::string> known = table.quantities();
+      if (haveQuantity && !table.empty() && std::find(known.begin(), known.end(), t.quantity) == known.end()) {
+        const Entry* q = af->find("quantity");
+        badValue(af->child("quantity"), unknownName("quantity", t.quantity, known, "Quantities of the accuracy study"), q->loc);
+      }
+      s.accuracy = t;
     }
   }
   get(*f, "history_slots", s.historySlots);
@@ -287,7 +312,7 @@ void Loader::parseSimulation(const Fields& top) {
     }
   }
   // Physics switches: model no more than the scene needs. Off = the coefficient is zero for every material and
-  // pair, so the kernels skip that part (rolling resistance) or cap it at zero (friction).
+  // pair, so the least model (compute/sim/ModelChoice.h) leaves that part out.
   if (const Entry* p = f->find("physics")) {
     if (const auto pf = mapping(p->value, "simulation.physics", p->loc, kPhysicsKeys)) {
       if (const Entry* fr = pf->find("friction")) read(fr->value, pf->child("friction"), fr->loc, m_friction);

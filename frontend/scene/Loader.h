@@ -68,7 +68,10 @@ constexpr std::string_view kHopperOpenings[] = {"orifice", "top"};
 constexpr std::string_view kMotionKeys[] = {"velocity", "angular_velocity", "axis", "axis_point", "start_time"};
 constexpr std::string_view kSimulationKeys[] = {"gravity", "duration", "dt", "dt_fraction", "skin", "snapshot_interval",
                                                 "domain", "precision", "decomposition", "history_slots", "wall_history_slots", "threads", "seed", "physics",
-                                                "max_overlap", "max_contacts", "on_instability", "checkpoint_steps"};
+                                                "max_overlap", "max_contacts", "on_instability", "checkpoint_steps",
+                                                "model", "accuracy"};
+constexpr std::string_view kModelModes[] = {"auto", "full"};
+constexpr std::string_view kAccuracyKeys[] = {"quantity", "tolerance"};
 constexpr std::string_view kPhysicsKeys[] = {"friction", "rolling_resistance"};
 constexpr std::string_view kOutputKeys[] = {"file", "fields"};
 constexpr std::string_view kPrecisions[] = {"double", "float"};

@@ -44,6 +44,7 @@ void toProto(const SceneSummary& s, double duration, v1::SceneSummary* out) {
   out->set_steps(s.steps);
   out->set_duration(duration);
   out->set_memory_bytes(s.memoryBytes);
+  out->set_model(s.model.text());
 }
 
 // Scene-level errors ("line L, column C: path: message" lines of the loader) as FieldErrors.

@@ -81,6 +81,7 @@ class FakeFrontendClient final : public FrontendClient {
     m.particles = 100000;
     m.steps = 1000;
     m.duration = 1.0;
+    m.model = "  tangential history: off — every material and pair has friction 0\n";
     if (auto at = yaml.find("particles:"); at != std::string::npos) {
       unsigned long long n = 0;
       std::sscanf(yaml.c_str() + at, "particles: %llu", &n);

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstdlib>
 #include <filesystem>
 
 #include "tests/manager/Fakes.h"
@@ -545,6 +546,8 @@ TEST_F(ManagerRestartTest, ReloadsEveryJobStateAndLease) {
     EXPECT_EQ(after[i].message, before[i].message);
     EXPECT_EQ(after[i].submittedAt, before[i].submittedAt);
     EXPECT_EQ(after[i].modelUri, before[i].modelUri);
+    EXPECT_EQ(after[i].model, before[i].model);  // the least model chosen for the scene (the frontend's text)
+    EXPECT_NE(after[i].model.find("tangential history: off"), std::string::npos);
   }
   EXPECT_EQ(job(running->id).state, JobState::kRunning);
   EXPECT_EQ(job(cancelling->id).state, JobState::kCancelling);
@@ -571,6 +574,26 @@ TEST_F(ManagerRestartTest, ReloadsEveryJobStateAndLease) {
   auto next = manager->submit(submitRequest(10, true));
   ASSERT_TRUE(next);
   EXPECT_EQ(next->id, "job-000005");
+}
+
+// A job database of schema version 1 (no model column) opens, gains the column, and keeps its jobs.
+TEST_F(ManagerRestartTest, MigratesASchemaVersion1Database) {
+  ASSERT_TRUE(manager->heartbeat(nodeBeat("a", 2)));
+  auto running = manager->submit(submitRequest(10));
+  ASSERT_TRUE(running);
+  manager.reset();
+  store.reset();
+  const std::string downgrade = "sqlite3 '" + path.string() +
+                                "' 'ALTER TABLE jobs DROP COLUMN model; UPDATE schema_info SET version = 1;'";
+  if (std::system(downgrade.c_str()) != 0) GTEST_SKIP() << "no sqlite3 command to write a version 1 database";
+  reopen();
+  EXPECT_EQ(job(running->id).state, JobState::kRunning);
+  EXPECT_EQ(job(running->id).model, "");  // written before the column existed
+  ASSERT_TRUE(manager->heartbeat(nodeBeat("a", 2, 0, 80ull << 30, {running->id})));
+  auto next = manager->submit(submitRequest(10));
+  ASSERT_TRUE(next) << next.status().toString();
+  reopen();
+  EXPECT_NE(job(next->id).model.find("tangential history"), std::string::npos);
 }
 
 TEST_F(ManagerRestartTest, JobFailsWhenTheAgentDoesNotListIt) {
