@@ -21,7 +21,7 @@ inline constexpr int kMaxWallContacts = 16;  // simultaneous wall contacts of on
 
 namespace kernels {
 
-// An overlap beyond kMaxOverlapRatio: the run stops, naming the lowest such particle.
+// An overlap beyond simulation.max_overlap (ForceArgs::maxOverlap): the run stops, naming the lowest such particle.
 PFLOW_HOSTDEVICE inline void flagDeepOverlap(Conditions* cond, Index i) {
   atomicOrU32(&cond->flags, kExcessiveOverlap);
   atomicMinU32(&cond->deepParticle, i);
@@ -142,7 +142,7 @@ struct ComputeForces {
       const double dist = std::sqrt(d2);
       const V n = vcast<R>((1.0 / dist) * d);
       const R overlap = R(rs - dist);
-      if (overlap > R(kMaxOverlapRatio) * (ri < rj ? ri : rj)) flagDeepOverlap(a.cond, i);
+      if (overlap > R(a.maxOverlap) * (ri < rj ? ri : rj)) flagDeepOverlap(a.cond, i);
       const R mj = mass[j];
       const ContactParams& pp = params[material[j]];
       contact::ContactState<R> s;
