@@ -2,7 +2,7 @@
 # One call on the lent GPU machine (see bench/gpu/README.md): unpack the bundle built here, run the GPU
 # tests, measure the copy bandwidth and the settled-bed throughput, print a short table last.
 # Usage (from the repository root on the device machine):
-#   bash bench/gpu/device_run.sh [tests] [sanitize] [bench] [scaling] [largest] [cpu] [cpuab] [layouts] [mpi]
+#   bash bench/gpu/device_run.sh [tests] [sanitize] [bench] [scaling] [largest] [cpu] [cpuab] [layouts] [mpi] [model] [accuracy]
 # Logs and JSON go to $OUT (or ./out).
 set -uo pipefail
 OUT=${OUT:-out}
@@ -148,6 +148,23 @@ for line in open(sys.argv[1]):
           f'busiest={j["busiest_over_mean"]:.3f} wall={j["wall_s"]:.1f}s')
 PY
 )")
+fi
+# The least model (issue 7): each simplification on the GPU against the full model (test and benchmark).
+if has model; then
+  PFLOW_TEST_EXECUTOR=cuda "$B/least_model_test" > "$OUT/least_model_gpu.log" 2>&1
+  summary+=("least_model_test cuda rc=$? $(grep -E '^\[  (PASSED|FAILED)' "$OUT/least_model_gpu.log" | tr '\n' ' ')")
+  timeout "${MODEL_TIMEOUT:-300}" "$B/pflow-model-bench" --executor cuda -n "${MODEL_N:-500000}" --settle-steps "${MODEL_SETTLE:-10000}" \
+    --steps 1000 --repeats 2 --case frictionless,norolling,planar,nowalls --model full,auto > "$OUT/model.jsonl" 2> "$OUT/model.log"
+  summary+=("model-bench cuda rc=$?")
+  summary+=("$(tail -12 "$OUT/model.log")")
+fi
+# The accuracy study on the GPU: its rows merged into the committed CSVs (copied in, read back from $OUT).
+if has accuracy; then
+  mkdir -p "$OUT/accuracy"
+  cp docs/accuracy/*.csv "$OUT/accuracy/" 2>/dev/null
+  start=$SECONDS
+  timeout "${ACCURACY_TIMEOUT:-420}" "$B/pflow-accuracy" --executor cuda --out "$OUT/accuracy" > "$OUT/accuracy.log" 2>&1
+  summary+=("pflow-accuracy cuda rc=$? $((SECONDS - start))s")
 fi
 if [[ -s $OUT/bench.jsonl ]]; then
   summary+=("$(python3 - "$OUT/bench.jsonl" <<'PY'
