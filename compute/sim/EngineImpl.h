@@ -676,10 +676,13 @@ typename EngineImpl<Exec, R>::HostView EngineImpl<Exec, R>::hostView() const {
   h.nbrCount.resize(m_owned);
   m_mem.copyToHost(h.nbr.data(), m_nbr.data(), h.nbr.size() * sizeof(Index));
   m_mem.copyToHost(h.nbrCount.data(), m_nbrCount.data(), m_owned * sizeof(std::uint32_t));
-  h.wallCand.resize(std::size_t(m_owned) * m_wallCap);
-  h.wallCandCount.resize(m_owned);
-  m_mem.copyToHost(h.wallCand.data(), m_wallCand.data(), h.wallCand.size() * sizeof(Index));
-  m_mem.copyToHost(h.wallCandCount.data(), m_wallCandCount.data(), m_owned * sizeof(std::uint32_t));
+  // Without wall phases (ModelFlags::walls) the candidate rows are never written: no candidates.
+  h.wallCandCount.assign(m_owned, 0);
+  if (m_anyWalls) {
+    h.wallCand.resize(std::size_t(m_owned) * m_wallCap);
+    m_mem.copyToHost(h.wallCand.data(), m_wallCand.data(), h.wallCand.size() * sizeof(Index));
+    m_mem.copyToHost(h.wallCandCount.data(), m_wallCandCount.data(), m_owned * sizeof(std::uint32_t));
+  }
   h.triVerts.resize(3 * std::size_t(m_numTri));
   m_mem.copyToHost(h.triVerts.data(), m_triVerts.data(), h.triVerts.size() * sizeof(Vec3d));
   return h;
