@@ -187,10 +187,10 @@ ModelChoice deriveModel(const RunConfig& c, const ModelOptions& options) {
         }
         const bool useFloat = options.executor.empty() ? allFloat : found && chosenFloat;
         if (useFloat && !m.full) m.precision = Precision::kFloat;
-        const std::string on = options.executor.empty() ? "every executor's" : options.executor + "'s";
+        const std::string on = options.executor.empty() ? "every executor" : "the " + options.executor + " executor";
         decide("precision", useFloat && !m.full ? "float" : name,
                std::string(useFloat ? (m.full ? "float would meet " : "float meets ") : "float is not proposed for ") + target +
-                   (useFloat ? " (the cheapest settings on " + on + " executor)" : " on " + on + " executor") +
+                   (useFloat ? " (the cheapest settings on " + on + ")" : " on " + on) +
                    (m.full && useFloat ? ", but simulation.model: full keeps the scene's" : "") +
                    "; the proposed settings are listed below (set them in the scene)");
       }
