@@ -46,10 +46,14 @@ Status Simulation::stepPhases() {
   // when slots grew (a checkpoint holds rows of one slot count); the energy is checked there too, so a
   // checkpoint never holds a state the detector would reject.
   const std::int64_t next = m_step + 1;
+  const bool slotsGrew = reportSlotGrowth();  // logged in every mode
   m_checkpointDue = m_onInstability == OnInstability::kReduceDt &&
-                    (reportSlotGrowth() || (m_nextOutput >= 0 && next >= m_nextOutput) || next == m_endOutput ||
+                    (slotsGrew || (m_nextOutput >= 0 && next >= m_nextOutput) || next == m_endOutput ||
                      next - m_checkpoint.step >= m_checkpointSteps);
-  if (m_energyCheck && (next % kEnergyCheckSteps == 0 || m_checkpointDue)) PFLOW_RETURN_IF_ERROR(checkEnergy());
+  if (m_energyCheck && (next % kEnergyCheckSteps == 0 || m_checkpointDue)) {
+    auto t = m_timers.time(Phase::kIntegrate2);  // the integration's own check, like the non-finite one
+    PFLOW_RETURN_IF_ERROR(checkEnergy());
+  }
   ++m_step;
   m_time = tNext;
   return Status::ok();
