@@ -250,8 +250,10 @@ Status SnapshotStore::Ingest::appendChunk(const Chunk& chunk) {
 void SnapshotStore::Ingest::abort() {
   if (m_done) return;
   m_done = true;
-  m_assembler.reset();  // removes the scratch file
+  // The reservation goes first: once the scratch file is gone (what callers can see), the step is free again.
+  // Scratch names carry a serial, so a new stream for the step never meets this one's file.
   m_store->release(m_jobId, m_step);
+  m_assembler.reset();  // removes the scratch file
 }
 
 Result<CommitResult> SnapshotStore::Ingest::commit() {
