@@ -284,8 +284,10 @@ Status MpiDomain::exchangeGhosts(Engine& engine) {
     }
     for (int k = 0; k < destCount; ++k) to[std::size_t(dest[k])].push_back(i);
   }
-  flatten(to, m_haloRows, m_haloSend);
-  engine.pack(m_haloRows, m_haloSend, kGhost, m_out);
+  std::vector<Index> rows;
+  flatten(to, rows, m_haloSend);
+  engine.setHaloRows(rows, m_haloSend);
+  engine.packHalo(kGhost, m_out);
   engine.setGhosts(exchange(m_out, m_haloSend, engine.rowBytes(kGhost), m_haloRecv, false));
   return Status::ok();
 }
@@ -314,7 +316,7 @@ void MpiDomain::haloRanksOf(std::uint32_t c, const std::int32_t*& dest, int& cou
 // m_in stay untouched while they are in flight (nothing else exchanges until finishRefresh).
 Status MpiDomain::startRefresh(Engine& engine) {
   if (m_size == 1) return Status::ok();
-  engine.pack(m_haloRows, m_haloSend, kRefresh, m_out);
+  engine.packHalo(kRefresh, m_out);
   post(m_out, m_haloSend, engine.rowBytes(kRefresh), m_haloRecv, true);
   return Status::ok();
 }

@@ -98,8 +98,8 @@ class MpiDomain final : public Domain {
   long long m_migratedOut = 0;
   double m_lastImbalance = 1;
   std::vector<long long> m_ownedPerRank;
-  // Halo, fixed between rebuilds: rows sent (grouped by destination rank), counts both ways.
-  std::vector<Index> m_haloRows;  // grouped by destination rank, m_haloSend[r] for rank r
+  // Halo, fixed between rebuilds: rows per destination rank (the rows themselves stay in the engine,
+  // Engine::setHaloRows), counts both ways.
   std::vector<int> m_haloSend, m_haloRecv;
   std::vector<std::byte> m_out, m_in;
   std::vector<MPI_Request> m_requests;  // messages in flight (post .. complete)

@@ -159,6 +159,10 @@ class Engine {
   // as consecutive blocks of segments[0], segments[1], ... rows (one block per destination rank).
   virtual void pack(const std::vector<Index>& rows, const std::vector<int>& segments, std::uint32_t fieldFlags,
                     std::vector<std::byte>& out) const = 0;
+  // The halo's rows, fixed from one rebuild to the next: kept on the device by setHaloRows (at the rebuild),
+  // packed by packHalo (kGhost then, kRefresh every step) without uploading them again.
+  virtual void setHaloRows(const std::vector<Index>& rows, const std::vector<int>& segments) = 0;
+  virtual void packHalo(std::uint32_t fieldFlags, std::vector<std::byte>& out) const = 0;
   // The owned particles become rows `keep` (ascending or not), in that order; ghosts are dropped.
   virtual void keepOwned(const std::vector<Index>& keep) = 0;
   // Appends owned particles: blocks packed with kMigrate (every field that travels); ghosts are dropped.

@@ -71,27 +71,15 @@ class EngineImpl final : public Engine {
   }
   void pack(const std::vector<Index>& rows, const std::vector<int>& segments, std::uint32_t flags,
             std::vector<std::byte>& out) const override {
-    // Each segment field by field, each field a block of the segment's values (slot fields slot by slot
-    // when slot-major), gathered on the device into one staging buffer: one upload of the rows, one copy
-    // back to the host, whatever the number of segments.
-    const Index count = Index(rows.size());
-    out.resize(rowBytes(flags) * count);
-    if (!count) return;
-    if (m_stage.bytes() < out.size()) m_stage.resize(out.size());
-    if (m_rowsBuf.bytes() < count * sizeof(Index)) m_rowsBuf.resize(count * sizeof(Index));
-    m_mem.copyFromHost(m_rowsBuf.data(), rows.data(), count * sizeof(Index));
-    std::size_t at = 0;
-    Index first = 0;
-    for (int segment : segments) {
-      const Index n = Index(segment);
-      if (!n) continue;
-      forEachBlock(flags, [&](const unsigned char* field, std::size_t stride) {
-        m_exec.forEach(n, kernels::GatherBytes{field, m_stage.as<unsigned char>() + at, m_rowsBuf.as<Index>() + first, stride});
-        at += stride * n;
-      });
-      first += n;
-    }
-    m_mem.copyToHost(out.data(), m_stage.data(), out.size());
+    uploadRows(m_rowsBuf, rows);
+    packRows(m_rowsBuf.as<Index>(), segments, flags, out);
+  }
+  void setHaloRows(const std::vector<Index>& rows, const std::vector<int>& segments) override {
+    uploadRows(m_haloRowsBuf, rows);
+    m_haloSegments = segments;
+  }
+  void packHalo(std::uint32_t flags, std::vector<std::byte>& out) const override {
+    packRows(m_haloRowsBuf.as<Index>(), m_haloSegments, flags, out);
   }
   void keepOwned(const std::vector<Index>& keep) override {
     m_n = m_owned;
@@ -429,6 +417,32 @@ class EngineImpl final : public Engine {
     m_numBoundary = Index(m_exec.exclusiveScan(flag, scan, m_owned));
     m_exec.forEach(m_owned, kernels::SplitByFlag{flag, scan, m_numBoundary, m_split.as<Index>()});
   }
+  void uploadRows(Buffer& b, const std::vector<Index>& rows) const {
+    if (b.bytes() < rows.size() * sizeof(Index)) b.resize(rows.size() * sizeof(Index));
+    m_mem.copyFromHost(b.data(), rows.data(), rows.size() * sizeof(Index));
+  }
+  // Each segment field by field, each field a block of the segment's values (slot fields slot by slot when
+  // slot-major), gathered on the device from rows `rows` (on the device) into one staging buffer: one copy
+  // back to the host, whatever the number of segments.
+  void packRows(const Index* rows, const std::vector<int>& segments, std::uint32_t flags, std::vector<std::byte>& out) const {
+    Index count = 0;
+    for (int segment : segments) count += Index(segment);
+    out.resize(rowBytes(flags) * count);
+    if (!count) return;
+    if (m_stage.bytes() < out.size()) m_stage.resize(out.size());
+    std::size_t at = 0;
+    Index first = 0;
+    for (int segment : segments) {
+      const Index n = Index(segment);
+      if (!n) continue;
+      forEachBlock(flags, [&](const unsigned char* field, std::size_t stride) {
+        m_exec.forEach(n, kernels::GatherBytes{field, m_stage.as<unsigned char>() + at, rows + first, stride});
+        at += stride * n;
+      });
+      first += n;
+    }
+    m_mem.copyToHost(out.data(), m_stage.data(), out.size());
+  }
   // Per-particle work buffers sized for the current counts (kept when big enough).
   void sizeLocalBuffers() {
     auto atLeast = [](Buffer& b, std::size_t bytes) {
@@ -574,6 +588,8 @@ class EngineImpl final : public Engine {
   Buffer m_split{m_mem, 0}, m_splitFlag{m_mem, 0};  // boundary rows, then interior ones (splitBoundary)
   Index m_numBoundary = 0;
   mutable Buffer m_stage{m_mem, 0}, m_rowsBuf{m_mem, 0};  // pack/unpack staging
+  mutable Buffer m_haloRowsBuf{m_mem, 0};  // the halo's rows, on the device from one rebuild to the next
+  std::vector<int> m_haloSegments;
 };
 
 template <class Exec, class R>
