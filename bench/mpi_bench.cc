@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "bench/BedScene.h"
+#include "bench/BenchUtil.h"
 #include "common/Log.h"
 #include "compute/mpi/MpiDomain.h"
 #include "compute/sim/Simulation.h"
@@ -30,17 +31,7 @@ namespace {
 
 using pflow::compute::Phase;
 using pflow::compute::Simulation;
-
-std::string shell(const char* cmd) {
-  std::string out;
-  if (FILE* p = popen(cmd, "r")) {
-    char buf[256];
-    while (std::fgets(buf, sizeof buf, p)) out += buf;
-    pclose(p);
-  }
-  while (!out.empty() && (out.back() == '\n' || out.back() == ' ')) out.pop_back();
-  return out;
-}
+using pflow::bench::shell;
 
 int fail(const std::string& what) {
   std::fprintf(stderr, "pflow-bench-mpi: %s\n", what.c_str());

@@ -16,22 +16,15 @@
 #include <vector>
 
 #include "bench/BedScene.h"
+#include "bench/BenchUtil.h"
 #include "bench/LammpsRunner.h"
 #include "common/Log.h"
 #include "compute/sim/Simulation.h"
 
 namespace {
 
-std::string shell(const char* cmd) {
-  std::string out;
-  if (FILE* p = popen(cmd, "r")) {
-    char buf[256];
-    while (std::fgets(buf, sizeof buf, p)) out += buf;
-    pclose(p);
-  }
-  while (!out.empty() && (out.back() == '\n' || out.back() == ' ')) out.pop_back();
-  return out;
-}
+using pflow::bench::shell;
+using pflow::bench::today;
 
 // OpenMP threads of a CPU run, from its executor description ("OpenMP on N thread(s)").
 int threadsOf(const pflow::compute::Simulation& s) {
@@ -39,12 +32,6 @@ int threadsOf(const pflow::compute::Simulation& s) {
   return std::stoi(d.substr(d.find(" on ") + 4));
 }
 
-std::string today() {
-  std::time_t t = std::time(nullptr);
-  char buf[16];
-  std::strftime(buf, sizeof buf, "%Y-%m-%d", std::gmtime(&t));
-  return buf;
-}
 
 }  // namespace
 

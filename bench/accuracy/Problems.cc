@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "compute/sim/TimeStep.h"
+#include "tests/support/TestScenes.h"
 
 namespace pflow::bench::accuracy {
 
@@ -17,58 +18,25 @@ using compute::ParticleSnapshot;
 using compute::PlaneConfig;
 using compute::RunConfig;
 using compute::Simulation;
+// The scene builders and Hertz closed forms of the physics tests (one definition for tests and study).
+using test::addParticle;
+using test::HertzImpact;
+using test::hertzImpact;
+using test::material;
+using test::plane;
+using test::rigid;
+using test::sphereMass;
 
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // The study flags an overlap beyond this fraction of the smaller radius as "excessive overlap" (the engine
-// itself stops a run at kMaxOverlapRatio = 0.5).
+// itself stops a run at simulation.max_overlap, 0.5 by default).
 constexpr double kOverlapLimit = 0.1;
 // A rebound (or realised restitution) this much above the input is energy gain (e = 1) or a damping that no
 // longer dissipates what it should (e < 1).
 constexpr double kEnergyGainTol = 0.01;
 constexpr double kDampingTol = 0.10;
-
-MaterialConfig material(const std::string& name, double E, double nu, double rho, double e = 1.0, double mu = 0.0,
-                        double muRoll = 0.0) {
-  MaterialConfig m;
-  m.name = name;
-  m.youngsModulus = E;
-  m.poissonRatio = nu;
-  m.density = rho;
-  m.restitution = e;
-  m.friction = mu;
-  m.rollingFriction = muRoll;
-  return m;
-}
-// A practically rigid wall: E* and G* reduce to the particle's own terms (it stays rigid when softened).
-MaterialConfig rigid(double e = 1.0, double mu = 0.0) { return material("rigid", 1e30, 0.3, 1e4, e, mu); }
-
-void addParticle(RunConfig& c, Vec3d x, double r, int mat, Vec3d v = {0, 0, 0}) {
-  c.particles.position.push_back(x);
-  c.particles.radius.push_back(r);
-  c.particles.material.push_back(mat);
-  c.particles.velocity.push_back(v);
-  c.particles.angularVelocity.push_back({0, 0, 0});
-}
-PlaneConfig plane(Vec3d point, Vec3d normal, int mat, const std::string& name) {
-  PlaneConfig p;
-  p.name = name;
-  p.point = point;
-  p.normal = normal;
-  p.material = mat;
-  return p;
-}
-double sphereMass(double r, double rho) { return rho * 4.0 / 3.0 * std::numbers::pi * r * r * r; }
-
-struct Hertz {
-  double maxOverlap, maxForce, contactTime;
-};
-Hertz hertzImpact(double effYoung, double effRadius, double effMass, double v) {
-  const double dmax = std::pow(15.0 * effMass * v * v / (16.0 * effYoung * std::sqrt(effRadius)), 0.4);
-  const double fmax = 4.0 / 3.0 * effYoung * std::sqrt(effRadius) * std::pow(dmax, 1.5);
-  return {dmax, fmax, compute::hertzContactTime(effRadius, effMass, effYoung, v)};
-}
 
 // The setting applied to a configuration: every Young's modulus divided by the softening (a rigid wall
 // stays rigid), dt = fraction x the Rayleigh time of the softened particles (set as simulation.dt, so
@@ -232,8 +200,8 @@ Problem chungOoi(int test, const std::string& variant, double E, double nu, doub
     apply(c, s);
     const double Estar = wall ? E / (1 - nu * nu) : E / (2 * (1 - nu * nu));
     const double m = sphereMass(R, rho);
-    const Hertz ref = wall ? hertzImpact(Estar, R, m, v) : hertzImpact(Estar, R / 2, m / 2, 2 * v);
-    const Hertz soft = wall ? hertzImpact(Estar / s.softening, R, m, v) : hertzImpact(Estar / s.softening, R / 2, m / 2, 2 * v);
+    const HertzImpact ref = wall ? hertzImpact(Estar, R, m, v) : hertzImpact(Estar, R / 2, m / 2, 2 * v);
+    const HertzImpact soft = wall ? hertzImpact(Estar / s.softening, R, m, v) : hertzImpact(Estar / s.softening, R / 2, m / 2, 2 * v);
     Outcome o;
     Timed t(c, s);
     if (!t.ok()) {
@@ -272,7 +240,7 @@ Problem restitution(const std::string& variant, double E, double nu, double rho,
     c.planes.push_back(plane({0, 0, 0}, {0, 0, 1}, 1, "floor"));
     c.sim.gravity = {0, 0, 0};
     apply(c, s);
-    const Hertz soft = hertzImpact(E / (1 - nu * nu) / s.softening, R, sphereMass(R, rho), v);
+    const HertzImpact soft = hertzImpact(E / (1 - nu * nu) / s.softening, R, sphereMass(R, rho), v);
     Outcome o;
     Timed t(c, s);
     if (!t.ok()) {

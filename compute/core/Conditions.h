@@ -19,11 +19,6 @@ enum ConditionBits : std::uint32_t {
   kLeftDomain = 1u << 8,            // a centre outside the scene's explicit simulation.domain
 };
 
-// Default limit of an overlap relative to the smaller radius (simulation.max_overlap): overlaps this
-// deep mean the integration has failed (dt too large for the speeds, or a material far too soft). The
-// run stops with an error instead of going on.
-inline constexpr double kMaxOverlapRatio = 0.5;
-
 struct Conditions {
   std::uint32_t flags = 0;
   std::uint32_t neededNeighbors = 0;     // largest candidate count seen

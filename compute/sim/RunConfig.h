@@ -106,7 +106,9 @@ struct SimulationSettings {
   int historySlots = 8;              // initial tangential-history slots per particle (grown on demand)
   int wallHistorySlots = 4;          // initial wall-contact slots per particle (grown on demand)
   int threads = 0;                   // OpenMP threads; 0 = all
-  double maxOverlap = 0.5;           // overlap limit, fraction of the smaller radius, in (0, 1]
+  // Overlap limit, a fraction of the smaller radius, in (0, 1]: overlaps this deep mean the integration has
+  // failed (dt too large for the speeds, or a material far too soft); the run stops (excessive overlap).
+  double maxOverlap = 0.5;
   int maxContacts = 64;              // simultaneous particle contacts of one particle; more is a collapse
   OnInstability onInstability = OnInstability::kStop;
   int checkpointSteps = 1000;        // reduce_dt: steps between checkpoints (also at every output)

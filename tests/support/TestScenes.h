@@ -1,9 +1,10 @@
-// Small builders for run configurations used by the physics tests.
+// Small builders for run configurations used by the physics tests and the accuracy study (bench/accuracy).
 #pragma once
 #include <cmath>
 #include <numbers>
 
 #include "compute/sim/RunConfig.h"
+#include "compute/sim/TimeStep.h"
 
 namespace pflow::test {
 
@@ -51,8 +52,7 @@ struct HertzImpact {
 inline HertzImpact hertzImpact(double effYoung, double effRadius, double effMass, double v) {
   const double dmax = std::pow(15.0 * effMass * v * v / (16.0 * effYoung * std::sqrt(effRadius)), 0.4);
   const double fmax = 4.0 / 3.0 * effYoung * std::sqrt(effRadius) * std::pow(dmax, 1.5);
-  const double tc = 2.868 * std::pow(effMass * effMass / (effRadius * effYoung * effYoung * v), 0.2);
-  return {dmax, fmax, tc};
+  return {dmax, fmax, compute::hertzContactTime(effRadius, effMass, effYoung, v)};
 }
 
 }  // namespace pflow::test
