@@ -14,18 +14,7 @@ namespace {
 // A 4x4x4 block of slightly compressed spheres in a box, stepped at 3 Rayleigh times: the contact
 // oscillations grow without bound, and the run must stop with a clear error instead of carrying on.
 TEST(Blowup, TimeStepFarTooLargeIsReported) {
-  compute::RunConfig c;
-  c.materials = {material("glass", 4.8e10, 0.2, 2800, 0.9, 0.3)};
-  const double r = 0.01, a = 2 * r * 0.995;
-  for (int k = 0; k < 4; ++k)
-    for (int j = 0; j < 4; ++j)
-      for (int i = 0; i < 4; ++i) addParticle(c, {r + i * a, r + j * a, r + k * a}, r, 0);
-  const double side = r + 3 * a + r;
-  c.planes = {plane({0, 0, 0}, {0, 0, 1}, 0, "floor"), plane({0, 0, 0}, {1, 0, 0}, 0, "x0"),
-              plane({side, 0, 0}, {-1, 0, 0}, 0, "x1"), plane({0, 0, 0}, {0, 1, 0}, 0, "y0"),
-              plane({0, side, 0}, {0, -1, 0}, 0, "y1")};
-  c.sim.dt = 3 * compute::rayleighTime(r, 2800, 4.8e10, 0.2);
-  c.sim.duration = 2000 * *c.sim.dt;
+  const compute::RunConfig c = compressedBlock(3, 0.9);
   auto sim = compute::Simulation::create(c);
   ASSERT_TRUE(sim.isOk()) << sim.status().toString();
   EXPECT_FALSE(sim.value()->timeStep().warnings.empty());  // the user was warned up front

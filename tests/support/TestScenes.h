@@ -55,4 +55,22 @@ inline HertzImpact hertzImpact(double effYoung, double effRadius, double effMass
   return {dmax, fmax, compute::hertzContactTime(effRadius, effMass, effYoung, v)};
 }
 
+// A 4x4x4 block of glass spheres, each pair overlapping by 0.5 % of the diameter, in an open box of planes:
+// elastic (e = 1), so nothing damps an integration that gains energy.
+inline compute::RunConfig compressedBlock(double dtInRayleighTimes, double restitution = 1.0) {
+  compute::RunConfig c;
+  c.materials = {material("glass", 4.8e10, 0.2, 2800, restitution, 0.3)};
+  const double r = 0.01, a = 2 * r * 0.995;
+  for (int k = 0; k < 4; ++k)
+    for (int j = 0; j < 4; ++j)
+      for (int i = 0; i < 4; ++i) addParticle(c, {r + i * a, r + j * a, r + k * a}, r, 0);
+  const double side = r + 3 * a + r;
+  c.planes = {plane({0, 0, 0}, {0, 0, 1}, 0, "floor"), plane({0, 0, 0}, {1, 0, 0}, 0, "x0"),
+              plane({side, 0, 0}, {-1, 0, 0}, 0, "x1"), plane({0, 0, 0}, {0, 1, 0}, 0, "y0"),
+              plane({0, side, 0}, {0, -1, 0}, 0, "y1")};
+  c.sim.dt = dtInRayleighTimes * compute::rayleighTime(r, 2800, 4.8e10, 0.2);
+  c.sim.duration = 2000 * *c.sim.dt;
+  return c;
+}
+
 }  // namespace pflow::test
