@@ -36,6 +36,12 @@ BedSpec bedSpecFor(std::int64_t n, bool polydisperse);
 // contact history starts empty (it rebuilds within a few steps of a resettle).
 compute::RunConfig tiledBed(const compute::RunConfig& bed, const compute::ParticleSnapshot& settled, int tx, int ty);
 
+// A settled bed's state kept between runs (pflow-bench --base-cache): the snapshot's arrays in a plain binary
+// file headed by `key`, a text naming what was settled and how. loadSettledBed returns false (and leaves
+// `out` alone) when the file is missing, unreadable or was written for another key.
+bool saveSettledBed(const std::string& path, const std::string& key, const compute::ParticleSnapshot& state);
+bool loadSettledBed(const std::string& path, const std::string& key, compute::ParticleSnapshot& out);
+
 // The fewest bytes per particle that each phase of a step must move through device memory (every array it
 // needs read once, every result written once; neighbours' data assumed to come from cache), for `realBytes`
 // of 4 (float) or 8 (double), `candidates` and `contacts` per particle. docs/performance.md derives it.

@@ -440,6 +440,14 @@ Result<LammpsResult> runLammps(const LammpsBed& bed, const LammpsOptions& option
     std::sscanf(l.back().c_str(), "Neighbor list builds = %ld", &r.neighborBuilds);
   if (auto l = linesStarting(run->log, "Dangerous builds = "); !l.empty())
     std::sscanf(l.back().c_str(), "Dangerous builds = %ld", &r.dangerousBuilds);
+  for (const char* section : {"Pair", "Neigh", "Comm", "Output", "Modify", "Other"}) {
+    // "Pair    | 1.2 | 1.3 | 1.4 |   2.0 | 45.61": min, avg, max over ranks (the last line of that name)
+    const auto l = linesStarting(run->log, std::string(section) + " ");
+    double mn = 0, avg = 0;
+    char name[16];
+    if (!l.empty() && std::sscanf(l.back().c_str(), "%15s | %lf | %lf", name, &mn, &avg) == 3)
+      r.sections.emplace_back(section, avg);
+  }
   if (auto l = linesStarting(run->log, "LAMMPS ("); !l.empty()) {
     const auto& v = l.front();
     r.lammpsVersion = v.substr(8, v.rfind(')') == std::string::npos ? std::string::npos : v.rfind(')') - 8);

@@ -18,6 +18,7 @@
 #pragma once
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/Status.h"
@@ -67,6 +68,9 @@ struct LammpsResult {
   long dangerousBuilds = -1;          // "Dangerous builds = N" (-1 when absent)
   double tsujiInput = 0;              // the restitution passed to `damping tsuji`
   std::string lammpsVersion;          // e.g. "29 Sep 2021 - Update 2"
+  // "MPI task timing breakdown": each section's average seconds over ranks (Pair, Neigh, Comm, Output,
+  // Modify, Other), in the log's order; empty when the log has none.
+  std::vector<std::pair<std::string, double>> sections;
   std::string command;                // the shell command that ran LAMMPS
   std::string logPath;                // LAMMPS log; empty when the work directory was removed
 };

@@ -61,6 +61,10 @@ int main(int argc, char** argv) {
                  "settle a bed of about this many spheres for --settle-steps, then build each size from copies of it "
                  "and resettle those for --resettle-steps (0: settle every size itself)");
   app.add_option("--resettle-steps", resettleSteps, "steps a tiled bed settles before timing")->capture_default_str();
+  std::string baseCache;
+  app.add_option("--base-cache", baseCache,
+                 "with --tile-from: keep the settled small bed in this file and reuse it when a later run asks for "
+                 "the same bed and settling (saves the settling on a machine without a GPU)");
   std::vector<std::string> precisions{"double"};
   app.add_option("--precision", precisions, "double, float, or both (comma-separated)")
       ->delimiter(',')
@@ -139,9 +143,15 @@ int main(int argc, char** argv) {
     auto spec = pflow::bench::bedSpecFor(tileFrom, poly);
     spec.threads = threads;
     baseBed = pflow::bench::bedScene(spec);
-    auto base = settle(baseBed, settleSteps, baseSettleWall);
-    if (!base) return 1;
-    baseState = base->snapshot();
+    const std::string key = "tile-from " + std::to_string(tileFrom) + (poly ? " poly" : " mono") + " settle-steps " +
+                            std::to_string(settleSteps);
+    if (baseCache.empty() || !pflow::bench::loadSettledBed(baseCache, key, baseState)) {
+      auto base = settle(baseBed, settleSteps, baseSettleWall);
+      if (!base) return 1;
+      baseState = base->snapshot();
+      if (!baseCache.empty() && !pflow::bench::saveSettledBed(baseCache, key, baseState))
+        std::fprintf(stderr, "warning: could not write the settled bed to %s\n", baseCache.c_str());
+    }
   }
 
   for (long n : sizes) {
@@ -272,6 +282,9 @@ int main(int argc, char** argv) {
                       {"pflow_over_lammps", rate / l.particleStepsPerSecond},
                       {"pflow_precision", rates.front().first}, {"device", device},
                       {"commit", commit}, {"command", l.command}};
+    nlohmann::json sections = nlohmann::json::object();
+    for (const auto& [name, secs] : l.sections) sections[name] = secs;
+    jl["sections_s"] = sections;  // LAMMPS's own timing breakdown (average over ranks)
     std::printf("%s\n", jl.dump().c_str());
     std::fflush(stdout);
     std::fprintf(stderr, "| %s | %s | %s | LAMMPS %s | double | %s | %ld | %d ranks | %.3g | `%s` (ratio pflow/LAMMPS %.2f) |\n",
