@@ -28,8 +28,10 @@ struct ContactState {
 
 template <class T>
 struct ContactOutput {
-  Vec3<T> force;      // on i [N]
-  Vec3<T> torque;     // on i about its centre [N m]
+  Vec3<T> force;            // on i [N]; the partner feels -force
+  Vec3<T> torque;           // on i about its centre [N m]: (leverArm n) x tangentialForce + rollingTorque
+  Vec3<T> tangentialForce;  // the tangential part of `force` [N]
+  Vec3<T> rollingTorque;    // rolling resistance on i [N m]; the partner feels its negative
   Vec3<T> history;    // new tangential displacement xi [m]
   T normalForce;      // |F_n| after clipping [N]
   bool sliding;       // Coulomb cap active
@@ -134,21 +136,33 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE ContactOutput<T> hertzMindlin(const ContactPa
     const Vec3<T> ft = tangential::mindlinForce(st, dampN * T(p.tangentialRatio), T(p.friction), fn, vt, xi, out.sliding);
     force += ft;
     out.history = xi;
+    out.tangentialForce = ft;
     out.torque = cross(s.leverArm * s.n, ft);
   } else {
     (void)G;
     (void)xiOld;
     out.history = zero3<T>();
+    out.tangentialForce = zero3<T>();
     out.torque = zero3<T>();
     out.sliding = false;
   }
   out.force = force;
+  out.rollingTorque = zero3<T>();
   if (kRolling && p.rollingFriction > 0) {
     // Rolling resists the relative spin about tangent axes only; twisting about n is not rolling.
     const Vec3<T> wRoll = s.omegaRel - dot(s.omegaRel, s.n) * s.n;
-    out.torque += rolling::constantTorque(T(p.rollingFriction), fn, s.effRadius, wRoll, s.effInertia, dt);
+    out.rollingTorque = rolling::constantTorque(T(p.rollingFriction), fn, s.effRadius, wRoll, s.effInertia, dt);
+    out.torque += out.rollingTorque;
   }
   return out;
+}
+
+// The torque of the same contact on the partner j about j's centre, from i's evaluation (a pair evaluated
+// once): j's contact point lies -leverArmJ n from its centre and j feels -F_t, so the sliding part is
+// (-leverArmJ n) x (-F_t) = leverArmJ (n x F_t); the rolling couple acts on j the other way.
+template <class T>
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE Vec3<T> partnerTorque(const ContactOutput<T>& out, Vec3<T> n, T leverArmJ) {
+  return cross(leverArmJ * n, out.tangentialForce) - out.rollingTorque;
 }
 
 }  // namespace pflow::compute::contact

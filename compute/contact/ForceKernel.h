@@ -8,6 +8,8 @@
 // pass that records just the displacements that could not be stored, so growth changes no result.
 #pragma once
 #include <cstdint>
+#include <utility>
+#include <vector>
 
 #include "compute/contact/ContactModels.h"
 #include "compute/core/Atomics.h"
@@ -96,6 +98,43 @@ struct WallContact {
   bool isFace;
 };
 
+// The contact of particle i with partner j as i sees it, for d = x_j - x_i with |d|^2 = d2 < rs^2 (rs = r_i + r_j),
+// shared by the pair kernels. kSpin = false (no friction and no rolling resistance) leaves the spins out:
+// v_rel = v_i - v_j (the spin terms are normal to n, so v_n differs from the full model's by round-off only).
+// `rollingPair`: this pair has rolling resistance (its effective inertia is needed).
+template <class R, bool kSpin>
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE contact::ContactState<R> pairState(Vec3d d, double d2, double rs, Vec3<R> vi, Vec3<R> wi,
+                                                                    R ri, R mi, R Ii, Vec3<R> vj, Vec3<R> wj, R rj, R mj,
+                                                                    bool rollingPair) {
+  const double dist = std::sqrt(d2);
+  const Vec3<R> n = vcast<R>((1.0 / dist) * d);
+  const R overlap = R(rs - dist);
+  contact::ContactState<R> s;
+  s.n = n;
+  s.overlap = overlap;
+  s.effRadius = ri * rj / (ri + rj);
+  s.effMass = mi * mj / (mi + mj);
+  if constexpr (kSpin) {
+    const R li = ri - R(0.5) * overlap, lj = rj - R(0.5) * overlap;
+    s.vRel = (vi + cross(wi, li * n)) - (vj + cross(wj, -lj * n));
+    s.omegaRel = wi - wj;
+    s.leverArm = li;
+    if (rollingPair) {
+      const R Ij = R(0.4) * mj * rj * rj;
+      s.effInertia = Ii * (Ij / (Ii + Ij));  // not Ii*Ij/(Ii+Ij): that product underflows in float below ~10 um
+    } else {
+      s.effInertia = R(0);  // unused without rolling resistance
+    }
+  } else {
+    (void)wi, (void)wj, (void)Ii, (void)rollingPair;
+    s.vRel = vi - vj;
+    s.omegaRel = zero3<R>();
+    s.effInertia = R(0);
+    s.leverArm = ri;
+  }
+  return s;
+}
+
 template <class R>
 struct ComputeForces {
   static constexpr bool kVariableCost = true;  // work per particle varies (CpuExecutor::forEach)
@@ -132,6 +171,7 @@ struct ComputeForces {
     const R ri = radius[i], mi = mass[i];
     V f = zero3<R>(), tq = zero3<R>();
     const std::uint32_t count = a.nbrCount[i] < a.nbrCapacity ? a.nbrCount[i] : a.nbrCapacity;
+    const R Ii = R(0.4) * mi * ri * ri;
     for (std::uint32_t e = 0; e < count; ++e) {
       const Index j = nbr[e * col];
       const Vec3d d = pos[j] - xi;
@@ -139,31 +179,12 @@ struct ComputeForces {
       const double rs = double(ri) + double(rj);
       const double d2 = norm2(d);
       if (d2 >= rs * rs) continue;
-      const double dist = std::sqrt(d2);
-      const V n = vcast<R>((1.0 / dist) * d);
-      const R overlap = R(rs - dist);
-      if (overlap > R(a.maxOverlap) * (ri < rj ? ri : rj)) flagDeepOverlap(a.cond, i);
       const R mj = mass[j];
       const ContactParams& pp = params[material[j]];
-      contact::ContactState<R> s;
-      s.n = n;
-      s.overlap = overlap;
-      s.effRadius = ri * rj / (ri + rj);
-      s.effMass = mi * mj / (mi + mj);
-      if constexpr (kRolling) {
-        const V wi = a.omega[i], wj = a.omega[j];
-        const R li = ri - R(0.5) * overlap, lj = rj - R(0.5) * overlap;
-        s.vRel = (vi + cross(wi, li * n)) - (vel[j] + cross(wj, -lj * n));
-        s.omegaRel = wi - wj;
-        const R Ii = R(0.4) * mi * ri * ri, Ij = R(0.4) * mj * rj * rj;
-        s.effInertia = pp.rollingFriction > 0 ? Ii * (Ij / (Ii + Ij)) : R(0);
-        s.leverArm = li;
-      } else {
-        s.vRel = vi - vel[j];
-        s.omegaRel = zero3<R>();
-        s.effInertia = R(0);
-        s.leverArm = ri;
-      }
+      const V wj = kRolling ? a.omega[j] : zero3<R>();
+      const contact::ContactState<R> s = pairState<R, kRolling>(d, d2, rs, vi, kRolling ? a.omega[i] : zero3<R>(), ri, mi, Ii,
+                                                                vel[j], wj, rj, mj, kRolling && pp.rollingFriction > 0);
+      if (s.overlap > R(a.maxOverlap) * (ri < rj ? ri : rj)) flagDeepOverlap(a.cond, i);
       const auto out = contact::hertzMindlin<false, kRolling>(pp, s, zero3<R>(), dt);
       f += out.force;
       if constexpr (kRolling) tq += out.torque;
@@ -231,27 +252,11 @@ struct ComputeForces {
         overflow |= slot < 0;
         if (storeOnly && slot < 0) continue;
       }
-      const double dist = std::sqrt(d2);
-      const V n = vcast<R>((1.0 / dist) * d);
-      const R overlap = R(rs - dist);
-      if (overlap > R(a.maxOverlap) * (ri < rj ? ri : rj)) flagDeepOverlap(a.cond, i);
       const R mj = mass[j];
       const ContactParams& pp = params[material[j]];
-      const R li = ri - R(0.5) * overlap, lj = rj - R(0.5) * overlap;
-      contact::ContactState<R> s;
-      s.n = n;
-      s.overlap = overlap;
-      s.vRel = (vi + cross(wi, li * n)) - (vel[j] + cross(omega[j], -lj * n));
-      s.omegaRel = wi - omega[j];
-      s.effRadius = ri * rj / (ri + rj);
-      s.effMass = mi * mj / (mi + mj);
-      if (kRolling && pp.rollingFriction > 0) {
-        const R Ij = R(0.4) * mj * rj * rj;
-        s.effInertia = Ii * (Ij / (Ii + Ij));  // not Ii*Ij/(Ii+Ij): that product underflows in float below ~10 um
-      } else {
-        s.effInertia = R(0);  // unused without rolling resistance
-      }
-      s.leverArm = li;
+      const contact::ContactState<R> s =
+          pairState<R, true>(d, d2, rs, vi, wi, ri, mi, Ii, vel[j], omega[j], rj, mj, kRolling && pp.rollingFriction > 0);
+      if (s.overlap > R(a.maxOverlap) * (ri < rj ? ri : rj)) flagDeepOverlap(a.cond, i);
       const auto out = contact::hertzMindlin<true, kRolling>(pp, s, xiOld, dt);
       f += out.force;
       tq += out.torque;
@@ -277,6 +282,235 @@ struct ComputeForces {
         return k;
       }
     return -1;
+  }
+};
+
+// The CPU executor's pair forces with each pair evaluated once, half the arithmetic of ComputeForces.
+// Particle i evaluates its contact with candidate j when it owns the pair: slab(i) < slab(j), or the same
+// slab and i < j (OwnedFirst puts those candidates at the head of its row). It adds -F and j's torque to
+// j's sums. The tangential displacement is kept by the owner alone, in its slots keyed by j's gid as
+// ComputeForces keeps it; when a rebuild hands a pair to the other partner, PullHistory moves it over.
+// No two tasks write the same particle: slabs are one cell layer thick along one axis and a candidate
+// lies in the same layer or the next, so an owner writes only its own slab and the next one. The slabs
+// run in two colours (even ones, then odd ones), one slab per task, its particles in ascending order:
+// the sums are the same whatever the number of threads. An even slab's task zeroes its own and the next
+// slab's forces and torques first (only it writes into the next slab in that colour). Host only.
+template <class R>
+struct ComputePairsOnce {
+  using V = Vec3<R>;
+  ForceArgs<R> a;
+  const Index* slabStart;        // [numSlabs + 1]
+  const Index* slabItems;        // particles by slab, ascending within each
+  const std::uint32_t* owned;    // [particle]: how many candidates at the head of its row it owns (OwnedFirst)
+  Index numSlabs;
+
+  void operator()(Index slab) const {
+    if (!a.storeOnly && slab % 2 == 0)
+      for (Index s = slab; s < slab + 2 && s < numSlabs; ++s)
+        for (Index k = slabStart[s]; k < slabStart[s + 1]; ++k) {
+          a.force[slabItems[k]] = zero3<R>();
+          a.torque[slabItems[k]] = zero3<R>();
+        }
+    for (Index k = slabStart[slab]; k < slabStart[slab + 1]; ++k) {
+      const Index i = slabItems[k];
+      if (!a.tangential) {
+        if (a.rolling) row<false, true>(i);
+        else row<false, false>(i);
+      } else if (a.rolling) {
+        row<true, true>(i);
+      } else {
+        row<true, false>(i);
+      }
+    }
+  }
+
+  template <bool kTangential, bool kRolling>
+  void row(Index i) const {
+    constexpr bool kSpin = kTangential || kRolling;
+    const Vec3d* __restrict__ pos = a.pos;
+    const V* __restrict__ vel = a.vel;
+    const V* __restrict__ omega = a.omega;
+    const R* __restrict__ radius = a.radius;
+    const R* __restrict__ mass = a.mass;
+    const std::int32_t* __restrict__ material = a.material;
+    V* __restrict__ force = a.force;
+    V* __restrict__ torque = a.torque;
+    const Index* __restrict__ nbr = a.nbr + std::size_t(i) * a.nbrLayout.rowStride;
+    std::int8_t* __restrict__ nbrSlot = a.nbrSlot + std::size_t(i) * a.nbrLayout.rowStride;
+    const std::size_t col = a.nbrLayout.colStride;
+    const ContactParams* __restrict__ params = a.params + std::size_t(material[i]) * a.numMaterials;
+    const R dt = R(a.dt);
+    const bool storeOnly = a.storeOnly;
+    const SlotRow<PartnerId> partner = a.histLayout.at(a.histPartner, i);
+    const SlotRow<V> disp = a.histLayout.at(a.histDisp, i);
+
+    const Vec3d xi = pos[i];
+    const V vi = vel[i], wi = kSpin ? omega[i] : zero3<R>();
+    const R ri = radius[i], mi = mass[i];
+    const R Ii = R(0.4) * mi * ri * ri;
+    V f = zero3<R>(), tq = zero3<R>();
+    bool overflow = false;
+    std::uint32_t contacts = 0;
+    const std::uint32_t count = owned[i];
+    for (std::uint32_t e = 0; e < count; ++e) {
+      const Index j = nbr[e * col];
+      const Vec3d d = pos[j] - xi;
+      const R rj = radius[j];
+      const double rs = double(ri) + double(rj);
+      const double d2 = norm2(d);
+      int slot = -1;
+      V xiOld = zero3<R>();
+      if constexpr (kTangential) {
+        // As in ComputeForces: nbrSlot[e] >= 0 exactly when that slot of i holds j's history.
+        slot = nbrSlot[e * col];
+        if (d2 >= rs * rs) {
+          if (slot >= 0) {  // the contact has ended: forget its history
+            partner[slot] = kNoPartner;
+            nbrSlot[e * col] = -1;
+          }
+          continue;
+        }
+        ++contacts;
+        if (slot >= 0) {
+          if (storeOnly) continue;  // stored by the first pass
+          xiOld = disp[slot];
+        } else {
+          slot = ComputeForces<R>::claimSlot(partner, a.slots, a.gid[j]);
+          overflow |= slot < 0;
+          if (storeOnly && slot < 0) continue;
+        }
+      } else {
+        if (d2 >= rs * rs) continue;
+      }
+      const R mj = mass[j];
+      const ContactParams& pp = params[material[j]];
+      const contact::ContactState<R> s = pairState<R, kSpin>(d, d2, rs, vi, wi, ri, mi, Ii, vel[j],
+                                                             kSpin ? omega[j] : zero3<R>(), rj, mj,
+                                                             kRolling && pp.rollingFriction > 0);
+      if (s.overlap > R(a.maxOverlap) * (ri < rj ? ri : rj)) {
+        flagDeepOverlap(a.cond, i);
+        flagDeepOverlap(a.cond, j);
+      }
+      const auto out = contact::hertzMindlin<kTangential, kRolling>(pp, s, xiOld, dt);
+      if constexpr (kTangential) {
+        if (slot >= 0) disp[slot] = out.history;
+        nbrSlot[e * col] = std::int8_t(slot);
+      }
+      if (storeOnly) continue;
+      f += out.force;
+      force[j] -= out.force;
+      if constexpr (kSpin) {
+        tq += out.torque;
+        torque[j] += contact::partnerTorque(out, s.n, rj - R(0.5) * s.overlap);
+      }
+    }
+    if (overflow) {  // the host grows the slots and reruns the pass with storeOnly (EngineImpl::computeForces)
+      // Sized, and held to simulation.max_contacts, by all of i's contacts, as when both partners evaluate
+      // a pair: the limit means the same in every mode, and a pair changing owner finds a free slot.
+      atomicOrU32(&a.cond->flags, kHistoryOverflow);
+      atomicMaxU32(&a.cond->neededHistory, contacts + touchingNotOwned(i));
+    }
+    if (!storeOnly) {
+      force[i] += f;
+      torque[i] += tq;
+    }
+  }
+
+  // How many of the candidates particle i does not own touch it (counted only when its slots overflow).
+  std::uint32_t touchingNotOwned(Index i) const {
+    const std::uint32_t count = a.nbrCount[i] < a.nbrCapacity ? a.nbrCount[i] : a.nbrCapacity;
+    std::uint32_t n = 0;
+    for (std::uint32_t e = owned[i]; e < count; ++e) {
+      const Index j = a.nbr[a.nbrLayout.at(i, e)];
+      const double rs = double(a.radius[i]) + double(a.radius[j]);
+      n += norm2(a.pos[j] - a.pos[i]) < rs * rs;
+    }
+    return n;
+  }
+};
+
+// Before ComputePairsOnce: the candidates whose pair particle i owns (slab(i) < slab(j), or the same slab
+// and i < j) moved to the head of its row, in their order, with their slots; owned[i] says how many.
+struct OwnedFirst {
+  static constexpr bool kVariableCost = true;  // work per particle varies (CpuExecutor::forEach)
+  const std::uint32_t* slabOf;
+  Index* nbr;
+  std::int8_t* nbrSlot;  // null without history slots
+  const std::uint32_t* nbrCount;
+  Index capacity;
+  ListLayout layout;
+  std::uint32_t* owned;
+  void operator()(Index i) const {
+    const std::uint32_t count = nbrCount[i] < capacity ? nbrCount[i] : capacity;
+    thread_local std::vector<std::pair<Index, std::int8_t>> others;
+    others.clear();
+    const std::uint32_t si = slabOf[i];
+    std::uint32_t w = 0;
+    for (std::uint32_t e = 0; e < count; ++e) {
+      const Index j = nbr[layout.at(i, e)];
+      const std::int8_t slot = nbrSlot ? nbrSlot[layout.at(i, e)] : std::int8_t(-1);
+      const std::uint32_t sj = slabOf[j];
+      if (sj > si || (sj == si && j > i)) {
+        nbr[layout.at(i, w)] = j;
+        if (nbrSlot) nbrSlot[layout.at(i, w)] = slot;
+        ++w;
+      } else {
+        others.emplace_back(j, slot);
+      }
+    }
+    owned[i] = w;
+    for (const auto& [j, slot] : others) {
+      nbr[layout.at(i, w)] = j;
+      if (nbrSlot) nbrSlot[layout.at(i, w)] = slot;
+      ++w;
+    }
+  }
+};
+
+// After OwnedFirst, per slab in the two colours of ComputePairsOnce: a pair whose history its partner j
+// holds (j owned it before this rebuild) moves into the owner's slots (negated: it is the displacement
+// seen from the other side), and the slot of j is freed. Runs once at each rebuild; a pair keeps its
+// owner until the next. When the owner has no free slot it raises the overflow flag; the host grows the
+// slots and runs the pass again (what moved already is found in place).
+template <class R>
+struct PullHistory {
+  using V = Vec3<R>;
+  const Index* slabStart;
+  const Index* slabItems;
+  const std::uint32_t* owned;
+  const Index* nbr;
+  std::int8_t* nbrSlot;
+  ListLayout layout;
+  PartnerId* histPartner;
+  V* histDisp;
+  SlotLayout histLayout;
+  int slots;
+  const Gid* gid;
+  Conditions* cond;
+  void operator()(Index slab) const {
+    for (Index k = slabStart[slab]; k < slabStart[slab + 1]; ++k) {
+      const Index i = slabItems[k];
+      const PartnerId gi = PartnerId(gid[i]);
+      const SlotRow<PartnerId> mine = histLayout.at(histPartner, i);
+      for (std::uint32_t e = 0; e < owned[i]; ++e) {
+        if (nbrSlot[layout.at(i, e)] >= 0) continue;  // i holds it already (or the pair has none)
+        const Index j = nbr[layout.at(i, e)];
+        const SlotRow<PartnerId> theirs = histLayout.at(histPartner, j);
+        int from = -1;
+        for (int s = 0; s < slots; ++s)
+          if (theirs[s] == gi) from = s;
+        if (from < 0) continue;  // no history: not in contact
+        const int to = ComputeForces<R>::claimSlot(mine, slots, gid[j]);
+        if (to < 0) {
+          atomicOrU32(&cond->flags, kHistoryOverflow);
+          atomicMaxU32(&cond->neededHistory, std::uint32_t(slots) + 1);
+          continue;
+        }
+        histLayout.at(histDisp, i)[to] = -histLayout.at(histDisp, j)[from];
+        theirs[from] = kNoPartner;
+        nbrSlot[layout.at(i, e)] = std::int8_t(to);
+      }
+    }
   }
 };
 

@@ -14,6 +14,7 @@ class CpuExecutor {
   static constexpr const char* kName = "cpu";
   static constexpr bool kColumnMajorLists = false;  // each core walks its own candidate rows
   static constexpr bool kSlotMajor = false;         // and its particles' history slots (SlotLayout)
+  static constexpr bool kPairsOnce = true;          // forEachTwoColours: each contact evaluated once (ComputePairsOnce)
   explicit CpuExecutor(int threads = 0);
   // Below this many iterations a loop runs on the calling thread: waking a team costs more.
   static constexpr Index kMinParallel = 512;
@@ -37,6 +38,17 @@ class CpuExecutor {
     }
 #pragma omp parallel for schedule(static) num_threads(m_threads) if (n >= kMinParallel)
     for (std::int64_t i = 0; i < static_cast<std::int64_t>(n); ++i) f(static_cast<Index>(i));
+  }
+
+  // f(k) for k in [0, n) in two colours: every even k, then, once all of those have returned, every odd k.
+  // Items of one colour run in parallel, one item per task handed to whichever thread is free.
+  template <class F>
+  void forEachTwoColours(Index n, const F& f) const {
+#pragma omp parallel num_threads(m_threads) if (n > 2)
+    for (int c = 0; c < 2; ++c) {
+#pragma omp for schedule(dynamic, 1)
+      for (std::int64_t k = c; k < static_cast<std::int64_t>(n); k += 2) f(static_cast<Index>(k));
+    }
   }
 
   // max over i of f(i) (f returns double); 0 for n == 0.

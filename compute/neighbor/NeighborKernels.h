@@ -72,6 +72,19 @@ struct CellKey {
   PFLOW_HOSTDEVICE void operator()(Index i) const { key[i] = grid.cellOf(pos[i]); }
 };
 
+// key[i] = the cell layer of particle i along `axis` (0 x, 1 y, 2 z): its slab for ComputePairsOnce.
+struct SlabKey {
+  CellGrid grid;
+  const Vec3d* pos;
+  int axis;
+  std::uint32_t* key;
+  PFLOW_HOSTDEVICE void operator()(Index i) const {
+    int c[3];
+    grid.coords(pos[i], c[0], c[1], c[2]);
+    key[i] = std::uint32_t(c[axis]);
+  }
+};
+
 // dst[k] = src[perm[k]] for elements of `stride` bytes: one field of the table at a time.
 struct GatherBytes {
   const unsigned char* src;

@@ -54,6 +54,10 @@ struct EngineSetup {
   // the order of the rows, so a distributed run equals one process bit for bit. Set by distributed runs
   // (MpiDomain::partition) and by one-process runs that are compared with them (SimulationOptions).
   bool canonicalOrder = false;
+  // Executors that can (the CPU's), in one process without canonicalOrder: each contact evaluated once and
+  // its reaction added to the partner (kernels::ComputePairsOnce), half the arithmetic of evaluating it from
+  // both sides. The sums then depend on the cell grid (the slabs), not on the thread count.
+  bool pairsOnce = true;
   // What to compute (deriveModel): 2D, tangential history, rolling torque, wall phases. Default: everything.
   ModelFlags model;
   // Data layouts: the executor's own, or forced to the GPU's (column-major candidate rows, slot-major
@@ -75,8 +79,10 @@ struct ContactStats {
   double kineticEnergy = 0;          // translational + rotational [J]
   double translationalEnergy = 0;    // translational part [J] (a rattler may spin freely in its void)
   double maxSpeed = 0;               // [m/s]
+  // Tangential histories held, particle and wall, as the evaluation from both sides keeps them: a particle
+  // pair's counts twice (once per partner) also where its owner alone keeps it (EngineSetup::pairsOnce).
   std::size_t historyEntries = 0;
-  double candidatesPerParticle = 0;  // mean length of the neighbour candidate lists    // occupied tangential-history slots (particle and wall)
+  double candidatesPerParticle = 0;  // mean length of the neighbour candidate lists
 };
 
 // One particle as the host sees it, for error messages (copied off the device on the error path only).

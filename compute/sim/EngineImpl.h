@@ -188,7 +188,7 @@ class EngineImpl final : public Engine {
       }
     }
     splitBoundary();
-    return Status::ok();
+    return buildSlabs();
   }
   std::size_t boundaryParticles() const override { return m_numBoundary; }
 
@@ -394,6 +394,14 @@ class EngineImpl final : public Engine {
   void launchForces(double dt, double time, ForceSet set, bool storeOnly) {
     const kernels::ForceArgs<R> args = forceArgs(dt, time, storeOnly);
     if (set == ForceSet::kAll || (m_numBoundary == 0 && set == ForceSet::kInterior)) {
+      if constexpr (Exec::kPairsOnce) {
+        if (m_numSlabs) {
+          m_exec.forEachTwoColours(m_numSlabs, kernels::ComputePairsOnce<R>{args, m_slabStart.as<Index>(), m_slabItems.as<Index>(),
+                                                                            m_owned1.as<std::uint32_t>(), m_numSlabs});
+          if (m_anyWalls) m_exec.forEach(m_owned, kernels::ComputeWallForces<R>{args});
+          return;
+        }
+      }
       m_exec.forEach(m_owned, kernels::ComputeForces<R>{args});
       if (m_anyWalls) m_exec.forEach(m_owned, kernels::ComputeWallForces<R>{args});
       return;
@@ -402,6 +410,56 @@ class EngineImpl final : public Engine {
     const Index count = set == ForceSet::kBoundary ? m_numBoundary : m_owned - m_numBoundary;
     m_exec.forEach(count, kernels::OverList<kernels::ComputeForces<R>>{{args}, list});
     if (m_anyWalls) m_exec.forEach(count, kernels::OverList<kernels::ComputeWallForces<R>>{{args}, list});
+  }
+  // After the candidate lists, where each pair is evaluated once (EngineSetup::pairsOnce): the particles by
+  // slab, one cell layer thick along the slower of y and z with more layers (x when both have fewer than 4:
+  // a slab's particles are then runs of one cell, poor for the caches), ascending within each slab.
+  Status buildSlabs() {
+    m_numSlabs = 0;
+    if constexpr (Exec::kPairsOnce) {
+      const CellGrid& g = m_setup.grid;
+      if (!m_setup.pairsOnce || m_setup.canonicalOrder || m_n != m_owned || m_owned == 0) return Status::ok();
+      // The particles' extent in cell layers along each axis (a bed fills the bottom of a tall domain).
+      const Vec3d* x = m_particles.template ptr<Field::Position>();
+      double span[3];
+      for (int k = 0; k < 3; ++k) {
+        const double hi = m_exec.maxOf(m_owned, [x, k](Index i) { return (&x[i].x)[k]; });
+        const double lo = -m_exec.maxOf(m_owned, [x, k](Index i) { return -(&x[i].x)[k]; });
+        span[k] = (hi - lo) * g.invCellSize;
+      }
+      int axis = span[2] >= span[1] ? 2 : 1;
+      if (span[axis] < 4 && span[0] >= 4) axis = 0;
+      const Index layers = Index(axis == 0 ? g.nx : axis == 1 ? g.ny : g.nz);
+      if (layers < 2) return Status::ok();  // one slab: every pair would be evaluated by one task
+      if (m_slabOf.bytes() < m_owned * sizeof(std::uint32_t)) {
+        m_slabOf.resize(m_owned * sizeof(std::uint32_t));
+        m_slabItems.resize(m_owned * sizeof(Index));
+        m_owned1.resize(m_owned * sizeof(std::uint32_t));
+      }
+      if (m_slabStart.bytes() < (layers + 1) * sizeof(Index)) m_slabStart.resize((layers + 1) * sizeof(Index));
+      m_exec.forEach(m_owned, kernels::SlabKey{g, m_particles.template ptr<Field::Position>(), axis, m_slabOf.as<std::uint32_t>()});
+      m_exec.sortByKey(m_slabOf.as<std::uint32_t>(), m_owned, std::uint32_t(layers), m_slabItems.as<Index>(),
+                       m_slabStart.as<Index>());
+      const bool slots = m_setup.model.tangential;
+      m_exec.forEach(m_owned, kernels::OwnedFirst{m_slabOf.as<std::uint32_t>(), m_nbr.as<Index>(),
+                                                  slots ? m_nbrSlot.as<std::int8_t>() : nullptr, m_nbrCount.as<std::uint32_t>(),
+                                                  m_nbrCap, nbrLayout(), m_owned1.as<std::uint32_t>()});
+      while (slots) {  // histories of pairs that changed owner move to the new owner
+        resetConditions();
+        m_exec.forEachTwoColours(layers, kernels::PullHistory<R>{
+            m_slabStart.as<Index>(), m_slabItems.as<Index>(), m_owned1.as<std::uint32_t>(), m_nbr.as<Index>(),
+            m_nbrSlot.as<std::int8_t>(), nbrLayout(), m_particles.template ptr<Field::HistoryPartner>(),
+            m_particles.template ptr<Field::HistoryDisp>(), m_particles.layout(Multiplicity::kContactSlots),
+            m_particles.contactSlots(), m_particles.template ptr<Field::Gid>(), m_cond.as<Conditions>()});
+        const Conditions c = readConditions();
+        if (!(c.flags & kHistoryOverflow)) break;
+        const int grown = m_particles.contactSlots() + 1;
+        if (grown > std::min(127, m_setup.maxContacts)) return slotOverflowError(m_setup.dt);
+        m_particles.resizeSlots(Multiplicity::kContactSlots, grown);
+      }
+      m_numSlabs = layers;
+    }
+    return Status::ok();
   }
   // After the candidate lists: which owned particles have a ghost candidate (their forces wait for the
   // halo), as one list with those first. Without ghosts nothing is boundary.
@@ -586,6 +644,9 @@ class EngineImpl final : public Engine {
   Buffer m_params{m_mem, 0}, m_cond{m_mem, sizeof(Conditions)};
   Buffer m_ghostCellStart{m_mem, 0}, m_ghostItems{m_mem, 0};
   Buffer m_split{m_mem, 0}, m_splitFlag{m_mem, 0};  // boundary rows, then interior ones (splitBoundary)
+  // buildSlabs (pairs evaluated once): slab per particle, particles by slab, slab starts, owned candidates per row
+  Buffer m_slabOf{m_mem, 0}, m_slabItems{m_mem, 0}, m_slabStart{m_mem, 0}, m_owned1{m_mem, 0};
+  Index m_numSlabs = 0;  // 0: every particle evaluates all its pairs (ComputeForces)
   Index m_numBoundary = 0;
   mutable Buffer m_stage{m_mem, 0}, m_rowsBuf{m_mem, 0};  // pack/unpack staging
   mutable Buffer m_haloRowsBuf{m_mem, 0};  // the halo's rows, on the device from one rebuild to the next
@@ -960,17 +1021,17 @@ ContactStats EngineImpl<Exec, R>::contactStats() const {
     }
   }
   st.coordinationNumber = n ? 2.0 * double(st.particleContacts) / n : 0.0;
-  auto occupied = [&]<class T>(Field f, T empty) {
+  auto occupied = [&]<class T>(Field f, T empty, std::size_t weight) {
     std::vector<T> keys(m_particles.buffer(f).bytes() / sizeof(T));
     m_mem.copyToHost(keys.data(), m_particles.buffer(f).data(), keys.size() * sizeof(T));
     const FieldInfo& info = kFieldTableOf<R>[int(f)];
     const SlotLayout layout = m_particles.layout(info.multiplicity);
     for (Index i = 0; i < n; ++i)  // owned particles only (ghost and spare rows hold nothing)
       for (std::size_t k = 0; k < m_particles.valuesPerParticle(info); ++k)
-        st.historyEntries += keys[std::size_t(i) * layout.row + k * layout.col] != empty;
+        st.historyEntries += weight * (keys[std::size_t(i) * layout.row + k * layout.col] != empty);
   };
-  occupied(Field::HistoryPartner, kNoPartner);
-  occupied(Field::WallKey, kNoGid);
+  occupied(Field::HistoryPartner, kNoPartner, m_numSlabs ? 2 : 1);  // pairs once: the owner's stands for both
+  occupied(Field::WallKey, kNoGid, 1);
   return st;
 }
 
