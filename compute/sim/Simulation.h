@@ -29,6 +29,9 @@ struct SimulationOptions {
   // Candidates in global-id order (EngineSetup::canonicalOrder): one process reproducing a distributed run
   // bit for bit. Distributed runs always use it.
   bool canonicalOrder = false;
+  // The CPU executor in one process evaluates each contact once (EngineSetup::pairsOnce); false: from both
+  // sides, as the GPU does (tests compare the two).
+  bool pairsOnce = true;
 };
 
 // "cpu" | "cuda" | "auto" -> kind; an error naming the flag otherwise.
