@@ -135,68 +135,36 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE contact::ContactState<R> pairState(Vec3d d, d
   return s;
 }
 
+// Contact forces of particle i from its candidate row. Every pair is evaluated by both partners
+// (operator(), the GPU's way: each thread writes only its own particle, no atomics), or, on the CPU, by
+// its owner only (kOnce, from ComputePairsOnce), which then also adds the reaction to the partner.
 template <class R>
 struct ComputeForces {
   static constexpr bool kVariableCost = true;  // work per particle varies (CpuExecutor::forEach)
   using V = Vec3<R>;
   ForceArgs<R> a;
 
-  PFLOW_HOSTDEVICE void operator()(Index i) const {
+  PFLOW_HOSTDEVICE void operator()(Index i) const { dispatch<false>(i, nullptr); }
+
+  // The least model picks the loop: without friction (ModelFlags::tangential) no slot is read or written;
+  // without rolling resistance either, spins do not enter (pairState's kSpin).
+  template <bool kOnce>
+  PFLOW_HOSTDEVICE void dispatch(Index i, const std::uint32_t* owned) const {
     if (!a.tangential) {
-      if (a.rolling) normalOnly<true>(i);
-      else normalOnly<false>(i);
+      if (a.rolling) row<false, true, kOnce>(i, owned);
+      else row<false, false, kOnce>(i, owned);
     } else if (a.rolling) {
-      withHistory<true>(i);
+      row<true, true, kOnce>(i, owned);
     } else {
-      withHistory<false>(i);
+      row<true, false, kOnce>(i, owned);
     }
   }
 
-  // The least model without friction: normal (and rolling) forces only; no slot is read or written. Without
-  // rolling either, spins do not enter: v_rel is v_i - v_j (the spin terms are normal to n, so v_n differs
-  // from the full model's by round-off only, and not at all while spins are zero).
-  template <bool kRolling>
-  PFLOW_HOSTDEVICE void normalOnly(Index i) const {
-    const Vec3d* __restrict__ pos = a.pos;
-    const V* __restrict__ vel = a.vel;
-    const R* __restrict__ radius = a.radius;
-    const R* __restrict__ mass = a.mass;
-    const std::int32_t* __restrict__ material = a.material;
-    const Index* __restrict__ nbr = a.nbr + std::size_t(i) * a.nbrLayout.rowStride;
-    const std::size_t col = a.nbrLayout.colStride;
-    const ContactParams* __restrict__ params = a.params + std::size_t(a.material[i]) * a.numMaterials;
-    const R dt = R(a.dt);
-    const Vec3d xi = pos[i];
-    const V vi = vel[i];
-    const R ri = radius[i], mi = mass[i];
-    V f = zero3<R>(), tq = zero3<R>();
-    const std::uint32_t count = a.nbrCount[i] < a.nbrCapacity ? a.nbrCount[i] : a.nbrCapacity;
-    const R Ii = R(0.4) * mi * ri * ri;
-    for (std::uint32_t e = 0; e < count; ++e) {
-      const Index j = nbr[e * col];
-      const Vec3d d = pos[j] - xi;
-      const R rj = radius[j];
-      const double rs = double(ri) + double(rj);
-      const double d2 = norm2(d);
-      if (d2 >= rs * rs) continue;
-      const R mj = mass[j];
-      const ContactParams& pp = params[material[j]];
-      const V wj = kRolling ? a.omega[j] : zero3<R>();
-      const contact::ContactState<R> s = pairState<R, kRolling>(d, d2, rs, vi, kRolling ? a.omega[i] : zero3<R>(), ri, mi, Ii,
-                                                                vel[j], wj, rj, mj, kRolling && pp.rollingFriction > 0);
-      if (s.overlap > R(a.maxOverlap) * (ri < rj ? ri : rj)) flagDeepOverlap(a.cond, i);
-      const auto out = contact::hertzMindlin<false, kRolling>(pp, s, zero3<R>(), dt);
-      f += out.force;
-      if constexpr (kRolling) tq += out.torque;
-    }
-    if (!a.storeOnly) {
-      a.force[i] = f;
-      a.torque[i] = tq;
-    }
-  }
-
-  template <bool kRolling>
-  PFLOW_HOSTDEVICE void withHistory(Index i) const {
+  // kOnce: only the first owned[i] candidates, the pairs i owns (OwnedFirst); -F and the partner's torque
+  // are added to j's sums, and i's are added to what its partners already put there.
+  template <bool kTangential, bool kRolling, bool kOnce>
+  PFLOW_HOSTDEVICE void row(Index i, const std::uint32_t* owned) const {
+    constexpr bool kSpin = kTangential || kRolling;
     // Local restrict copies: the int8 slot stores could otherwise alias every pointer in `a` and
     // force the compiler to reload them after each store.
     const Vec3d* __restrict__ pos = a.pos;
@@ -206,152 +174,27 @@ struct ComputeForces {
     const R* __restrict__ mass = a.mass;
     const std::int32_t* __restrict__ material = a.material;
     const Gid* __restrict__ gid = a.gid;
+    V* __restrict__ force = a.force;
+    V* __restrict__ torque = a.torque;
     const Index* __restrict__ nbr = a.nbr + std::size_t(i) * a.nbrLayout.rowStride;
     std::int8_t* __restrict__ nbrSlot = a.nbrSlot + std::size_t(i) * a.nbrLayout.rowStride;
     const std::size_t col = a.nbrLayout.colStride;
     const int slots = a.slots;
     const SlotRow<PartnerId> partner = a.histLayout.at(a.histPartner, i);
     const SlotRow<V> disp = a.histLayout.at(a.histDisp, i);
-    const ContactParams* __restrict__ params = a.params + std::size_t(a.material[i]) * a.numMaterials;
-    const R dt = R(a.dt);
-    const bool storeOnly = a.storeOnly;
-
-    const Vec3d xi = pos[i];
-    const V vi = vel[i], wi = omega[i];
-    const R ri = radius[i], mi = mass[i];
-    const R Ii = R(0.4) * mi * ri * ri;
-    V f = zero3<R>(), tq = zero3<R>();
-
-    // ---- particle-particle ----
-    const std::uint32_t count = a.nbrCount[i] < a.nbrCapacity ? a.nbrCount[i] : a.nbrCapacity;
-    std::uint32_t contacts = 0;
-    bool overflow = false;
-    for (std::uint32_t e = 0; e < count; ++e) {
-      const Index j = nbr[e * col];
-      const Vec3d d = pos[j] - xi;
-      const R rj = radius[j];
-      const double rs = double(ri) + double(rj);
-      const double d2 = norm2(d);
-      // Invariant: nbrSlot[e] >= 0 exactly when slot nbrSlot[e] holds j's history (set at rebuild,
-      // on claiming, cleared here when the contact ends), so the hot path never reads gid[j].
-      int slot = nbrSlot[e * col];
-      if (d2 >= rs * rs) {
-        if (slot >= 0) {  // the contact has ended: forget its history
-          partner[slot] = kNoPartner;
-          nbrSlot[e * col] = -1;
-        }
-        continue;
-      }
-      ++contacts;
-      V xiOld = zero3<R>();
-      if (slot >= 0) {
-        if (storeOnly) continue;  // stored by the first pass
-        xiOld = disp[slot];
-      } else {
-        slot = claimSlot(partner, slots, gid[j]);
-        overflow |= slot < 0;
-        if (storeOnly && slot < 0) continue;
-      }
-      const R mj = mass[j];
-      const ContactParams& pp = params[material[j]];
-      const contact::ContactState<R> s =
-          pairState<R, true>(d, d2, rs, vi, wi, ri, mi, Ii, vel[j], omega[j], rj, mj, kRolling && pp.rollingFriction > 0);
-      if (s.overlap > R(a.maxOverlap) * (ri < rj ? ri : rj)) flagDeepOverlap(a.cond, i);
-      const auto out = contact::hertzMindlin<true, kRolling>(pp, s, xiOld, dt);
-      f += out.force;
-      tq += out.torque;
-      if (slot >= 0) disp[slot] = out.history;
-      nbrSlot[e * col] = std::int8_t(slot);
-    }
-    if (overflow) {
-      atomicOrU32(&a.cond->flags, kHistoryOverflow);
-      atomicMaxU32(&a.cond->neededHistory, contacts);
-    }
-
-    if (!storeOnly) {
-      a.force[i] = f;
-      a.torque[i] = tq;
-    }
-  }
-
-  // Claims an empty slot for partner g, or returns -1 when all are taken.
-  PFLOW_HOSTDEVICE static int claimSlot(SlotRow<PartnerId> partner, int slots, Gid g) {
-    for (int k = 0; k < slots; ++k)
-      if (partner[k] == kNoPartner) {
-        partner[k] = PartnerId(g);
-        return k;
-      }
-    return -1;
-  }
-};
-
-// The CPU executor's pair forces with each pair evaluated once, half the arithmetic of ComputeForces.
-// Particle i evaluates its contact with candidate j when it owns the pair: slab(i) < slab(j), or the same
-// slab and i < j (OwnedFirst puts those candidates at the head of its row). It adds -F and j's torque to
-// j's sums. The tangential displacement is kept by the owner alone, in its slots keyed by j's gid as
-// ComputeForces keeps it; when a rebuild hands a pair to the other partner, PullHistory moves it over.
-// No two tasks write the same particle: slabs are one cell layer thick along one axis and a candidate
-// lies in the same layer or the next, so an owner writes only its own slab and the next one. The slabs
-// run in two colours (even ones, then odd ones), one slab per task, its particles in ascending order:
-// the sums are the same whatever the number of threads. An even slab's task zeroes its own and the next
-// slab's forces and torques first (only it writes into the next slab in that colour). Host only.
-template <class R>
-struct ComputePairsOnce {
-  using V = Vec3<R>;
-  ForceArgs<R> a;
-  const Index* slabStart;        // [numSlabs + 1]
-  const Index* slabItems;        // particles by slab, ascending within each
-  const std::uint32_t* owned;    // [particle]: how many candidates at the head of its row it owns (OwnedFirst)
-  Index numSlabs;
-
-  void operator()(Index slab) const {
-    if (!a.storeOnly && slab % 2 == 0)
-      for (Index s = slab; s < slab + 2 && s < numSlabs; ++s)
-        for (Index k = slabStart[s]; k < slabStart[s + 1]; ++k) {
-          a.force[slabItems[k]] = zero3<R>();
-          a.torque[slabItems[k]] = zero3<R>();
-        }
-    for (Index k = slabStart[slab]; k < slabStart[slab + 1]; ++k) {
-      const Index i = slabItems[k];
-      if (!a.tangential) {
-        if (a.rolling) row<false, true>(i);
-        else row<false, false>(i);
-      } else if (a.rolling) {
-        row<true, true>(i);
-      } else {
-        row<true, false>(i);
-      }
-    }
-  }
-
-  template <bool kTangential, bool kRolling>
-  void row(Index i) const {
-    constexpr bool kSpin = kTangential || kRolling;
-    const Vec3d* __restrict__ pos = a.pos;
-    const V* __restrict__ vel = a.vel;
-    const V* __restrict__ omega = a.omega;
-    const R* __restrict__ radius = a.radius;
-    const R* __restrict__ mass = a.mass;
-    const std::int32_t* __restrict__ material = a.material;
-    V* __restrict__ force = a.force;
-    V* __restrict__ torque = a.torque;
-    const Index* __restrict__ nbr = a.nbr + std::size_t(i) * a.nbrLayout.rowStride;
-    std::int8_t* __restrict__ nbrSlot = a.nbrSlot + std::size_t(i) * a.nbrLayout.rowStride;
-    const std::size_t col = a.nbrLayout.colStride;
     const ContactParams* __restrict__ params = a.params + std::size_t(material[i]) * a.numMaterials;
     const R dt = R(a.dt);
     const bool storeOnly = a.storeOnly;
-    const SlotRow<PartnerId> partner = a.histLayout.at(a.histPartner, i);
-    const SlotRow<V> disp = a.histLayout.at(a.histDisp, i);
 
     const Vec3d xi = pos[i];
     const V vi = vel[i], wi = kSpin ? omega[i] : zero3<R>();
     const R ri = radius[i], mi = mass[i];
     const R Ii = R(0.4) * mi * ri * ri;
     V f = zero3<R>(), tq = zero3<R>();
-    bool overflow = false;
+
+    const std::uint32_t count = kOnce ? owned[i] : (a.nbrCount[i] < a.nbrCapacity ? a.nbrCount[i] : a.nbrCapacity);
     std::uint32_t contacts = 0;
-    const std::uint32_t count = owned[i];
+    bool overflow = false;
     for (std::uint32_t e = 0; e < count; ++e) {
       const Index j = nbr[e * col];
       const Vec3d d = pos[j] - xi;
@@ -361,7 +204,8 @@ struct ComputePairsOnce {
       int slot = -1;
       V xiOld = zero3<R>();
       if constexpr (kTangential) {
-        // As in ComputeForces: nbrSlot[e] >= 0 exactly when that slot of i holds j's history.
+        // Invariant: nbrSlot[e] >= 0 exactly when slot nbrSlot[e] holds j's history (set at rebuild,
+        // on claiming, cleared here when the contact ends), so the hot path never reads gid[j].
         slot = nbrSlot[e * col];
         if (d2 >= rs * rs) {
           if (slot >= 0) {  // the contact has ended: forget its history
@@ -375,7 +219,7 @@ struct ComputePairsOnce {
           if (storeOnly) continue;  // stored by the first pass
           xiOld = disp[slot];
         } else {
-          slot = ComputeForces<R>::claimSlot(partner, a.slots, a.gid[j]);
+          slot = claimSlot(partner, slots, gid[j]);
           overflow |= slot < 0;
           if (storeOnly && slot < 0) continue;
         }
@@ -389,35 +233,51 @@ struct ComputePairsOnce {
                                                              kRolling && pp.rollingFriction > 0);
       if (s.overlap > R(a.maxOverlap) * (ri < rj ? ri : rj)) {
         flagDeepOverlap(a.cond, i);
-        flagDeepOverlap(a.cond, j);
+        if (kOnce) flagDeepOverlap(a.cond, j);  // as j's own evaluation would
       }
       const auto out = contact::hertzMindlin<kTangential, kRolling>(pp, s, xiOld, dt);
       if constexpr (kTangential) {
         if (slot >= 0) disp[slot] = out.history;
         nbrSlot[e * col] = std::int8_t(slot);
       }
-      if (storeOnly) continue;
       f += out.force;
-      force[j] -= out.force;
-      if constexpr (kSpin) {
-        tq += out.torque;
-        torque[j] += contact::partnerTorque(out, s.n, rj - R(0.5) * s.overlap);
+      if constexpr (kSpin) tq += out.torque;
+      if constexpr (kOnce) {
+        if (!storeOnly) {
+          force[j] -= out.force;
+          if constexpr (kSpin) torque[j] += contact::partnerTorque(out, s.n, rj - R(0.5) * s.overlap);
+        }
       }
     }
-    if (overflow) {  // the host grows the slots and reruns the pass with storeOnly (EngineImpl::computeForces)
-      // Sized, and held to simulation.max_contacts, by all of i's contacts, as when both partners evaluate
-      // a pair: the limit means the same in every mode, and a pair changing owner finds a free slot.
+    if (overflow) {
+      // Slots are sized, and held to simulation.max_contacts, by all of i's contacts in both ways of
+      // evaluating: the limit means the same, and a pair changing owner finds a free slot.
+      if constexpr (kOnce) contacts += touchingNotOwned(i, owned);
       atomicOrU32(&a.cond->flags, kHistoryOverflow);
-      atomicMaxU32(&a.cond->neededHistory, contacts + touchingNotOwned(i));
+      atomicMaxU32(&a.cond->neededHistory, contacts);
     }
-    if (!storeOnly) {
+    if (storeOnly) return;
+    if constexpr (kOnce) {
       force[i] += f;
       torque[i] += tq;
+    } else {
+      force[i] = f;
+      torque[i] = tq;
     }
   }
 
+  // Claims an empty slot for partner g, or returns -1 when all are taken.
+  PFLOW_HOSTDEVICE static int claimSlot(SlotRow<PartnerId> partner, int slots, Gid g) {
+    for (int k = 0; k < slots; ++k)
+      if (partner[k] == kNoPartner) {
+        partner[k] = PartnerId(g);
+        return k;
+      }
+    return -1;
+  }
+
   // How many of the candidates particle i does not own touch it (counted only when its slots overflow).
-  std::uint32_t touchingNotOwned(Index i) const {
+  PFLOW_HOSTDEVICE std::uint32_t touchingNotOwned(Index i, const std::uint32_t* owned) const {
     const std::uint32_t count = a.nbrCount[i] < a.nbrCapacity ? a.nbrCount[i] : a.nbrCapacity;
     std::uint32_t n = 0;
     for (std::uint32_t e = owned[i]; e < count; ++e) {
@@ -426,6 +286,36 @@ struct ComputePairsOnce {
       n += norm2(a.pos[j] - a.pos[i]) < rs * rs;
     }
     return n;
+  }
+};
+
+// The CPU executor's pair forces with each pair evaluated once, half the arithmetic of evaluating it from
+// both sides: ComputeForces::row with kOnce, over the particles of one slab. Particle i owns its pair with
+// candidate j when slab(i) < slab(j), or the same slab and i < j (OwnedFirst puts those candidates at the
+// head of its row). The tangential displacement is kept by the owner alone, in its slots keyed by j's gid;
+// when a rebuild hands a pair to the other partner, PullHistory moves it over.
+// No two tasks write the same particle: slabs are one cell layer thick along one axis and a candidate
+// lies in the same layer or the next, so an owner writes only its own slab and the next one. The slabs
+// run in two colours (even ones, then odd ones), one slab per task, its particles in ascending order:
+// the sums are the same whatever the number of threads. An even slab's task zeroes its own and the next
+// slab's forces and torques first (only it writes into the next slab in that colour). Host only.
+template <class R>
+struct ComputePairsOnce {
+  ComputeForces<R> pairs;
+  const Index* slabStart;        // [numSlabs + 1]
+  const Index* slabItems;        // particles by slab, ascending within each
+  const std::uint32_t* owned;    // [particle]: how many candidates at the head of its row it owns (OwnedFirst)
+  Index numSlabs;
+
+  void operator()(Index slab) const {
+    const ForceArgs<R>& a = pairs.a;
+    if (!a.storeOnly && slab % 2 == 0)
+      for (Index s = slab; s < slab + 2 && s < numSlabs; ++s)
+        for (Index k = slabStart[s]; k < slabStart[s + 1]; ++k) {
+          a.force[slabItems[k]] = zero3<R>();
+          a.torque[slabItems[k]] = zero3<R>();
+        }
+    for (Index k = slabStart[slab]; k < slabStart[slab + 1]; ++k) pairs.template dispatch<true>(slabItems[k], owned);
   }
 };
 

@@ -45,6 +45,21 @@ __global__ void forEachKernel(Index n, F f) {
   if (i < n) f(i);
 }
 
+// The block's reduction of v by `op` (warp shuffles, then one warp over the warps' results in shared
+// memory); valid in thread 0 only.
+template <class Op>
+__device__ double blockReduce(double v, Op op) {
+  for (int o = 16; o > 0; o >>= 1) v = op(v, __shfl_down_sync(0xffffffffu, v, o));
+  __shared__ double perWarp[32];
+  const int lane = threadIdx.x & 31, warp = threadIdx.x >> 5;
+  if (lane == 0) perWarp[warp] = v;
+  __syncthreads();
+  if (warp != 0) return v;
+  v = lane < int((blockDim.x + 31) >> 5) ? perWarp[lane] : 0.0;
+  for (int o = 16; o > 0; o >>= 1) v = op(v, __shfl_down_sync(0xffffffffu, v, o));
+  return v;
+}
+
 // max over the items of f(i) >= 0: a warp-shuffle and shared-memory block reduction, then one atomic
 // per block on the double's bit pattern (non-negative doubles order like their bits).
 template <class F>
@@ -52,16 +67,8 @@ __global__ void maxOfKernel(Index n, F f, unsigned long long* result) {
   const Index i = blockIdx.x * blockDim.x + threadIdx.x;
   double v = i < n ? f(i) : 0.0;
   v = v > 0.0 ? v : 0.0;  // also drops NaN, as the OpenMP executor's `if (v > result)` does
-  for (int o = 16; o > 0; o >>= 1) v = fmax(v, __shfl_down_sync(0xffffffffu, v, o));
-  __shared__ double warpMax[32];
-  const int lane = threadIdx.x & 31, warp = threadIdx.x >> 5;
-  if (lane == 0) warpMax[warp] = v;
-  __syncthreads();
-  if (warp == 0) {
-    v = lane < int((blockDim.x + 31) >> 5) ? warpMax[lane] : 0.0;
-    for (int o = 16; o > 0; o >>= 1) v = fmax(v, __shfl_down_sync(0xffffffffu, v, o));
-    if (lane == 0 && v > 0.0) atomicMax(result, static_cast<unsigned long long>(__double_as_longlong(v)));
-  }
+  v = blockReduce(v, [](double a, double b) { return fmax(a, b); });
+  if (threadIdx.x == 0 && v > 0.0) atomicMax(result, static_cast<unsigned long long>(__double_as_longlong(v)));
 }
 
 // sum over the items of f(i): a warp-shuffle and shared-memory block reduction, then one atomicAdd per
@@ -69,17 +76,8 @@ __global__ void maxOfKernel(Index n, F f, unsigned long long* result) {
 template <class F>
 __global__ void sumOfKernel(Index n, F f, double* result) {
   const Index i = blockIdx.x * blockDim.x + threadIdx.x;
-  double v = i < n ? f(i) : 0.0;
-  for (int o = 16; o > 0; o >>= 1) v += __shfl_down_sync(0xffffffffu, v, o);
-  __shared__ double warpSum[32];
-  const int lane = threadIdx.x & 31, warp = threadIdx.x >> 5;
-  if (lane == 0) warpSum[warp] = v;
-  __syncthreads();
-  if (warp == 0) {
-    v = lane < int((blockDim.x + 31) >> 5) ? warpSum[lane] : 0.0;
-    for (int o = 16; o > 0; o >>= 1) v += __shfl_down_sync(0xffffffffu, v, o);
-    if (lane == 0) atomicAdd(result, v);
-  }
+  const double v = blockReduce(i < n ? f(i) : 0.0, [](double a, double b) { return a + b; });
+  if (threadIdx.x == 0) atomicAdd(result, v);
 }
 
 // Per-kernel block size by measurement (see the file comment).

@@ -136,4 +136,12 @@ struct PotentialEnergy {
   PFLOW_HOSTDEVICE double operator()(Index i) const { return -double(mass[i]) * dot(gravity, pos[i] - origin); }
 };
 
+// Kinetic plus gravitational energy of particle i [J] (sumOf): the energy detector's one pass.
+template <class R>
+struct MechanicalEnergy {
+  KineticEnergy<R> kinetic;
+  PotentialEnergy<R> potential;
+  PFLOW_HOSTDEVICE double operator()(Index i) const { return kinetic(i) + potential(i); }
+};
+
 }  // namespace pflow::compute::kernels

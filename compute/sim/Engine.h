@@ -2,6 +2,7 @@
 // per phase of the step. Simulation (host orchestration) drives it; an executor (OpenMP now, CUDA
 // next) runs it. Nothing here includes an executor-specific header.
 #pragma once
+#include <cstdio>
 #include <memory>
 #include <string>
 #include <utility>
@@ -103,10 +104,19 @@ inline double suggestedDt(double dt, const ParticleProbe& p) {
   return s;
 }
 
-struct MechanicalEnergy {
-  double kinetic = 0;    // translational + rotational [J]
-  double potential = 0;  // gravitational, relative to the lower corner of the grid [J]
-};
+// How the detectors' errors name a particle: "particle G (radius r m at (x, y, z) m, speed v m/s)".
+inline std::string describeParticle(const ParticleProbe& p) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "particle %llu (radius %.4g m at (%.6g, %.6g, %.6g) m, speed %.4g m/s)",
+                (unsigned long long)p.gid, p.radius, p.position.x, p.position.y, p.position.z, p.speed);
+  return buf;
+}
+// The end of a detector's error: "; suggested dt X s (now Y s)".
+inline std::string dtSuggestion(double dt, const ParticleProbe& p) {
+  char buf[128];
+  std::snprintf(buf, sizeof buf, "; suggested dt %.3g s (now %.3g s)", suggestedDt(dt, p), dt);
+  return buf;
+}
 
 class Engine {
  public:
@@ -141,8 +151,10 @@ class Engine {
   virtual ParticleSnapshot snapshot(std::int64_t step, double time, const std::vector<std::string>& fields) const = 0;
   virtual GeometrySnapshot geometry() const = 0;
   virtual ContactStats contactStats() const = 0;
-  // Device reductions over the owned particles (one sum each; the host reads 16 bytes).
-  virtual MechanicalEnergy mechanicalEnergy() const = 0;
+  // Device reductions over the owned particles, one pass and 8 bytes to the host each: kinetic (translational
+  // plus rotational) and gravitational energy (relative to the grid's lower corner), and the kinetic alone [J].
+  virtual double mechanicalEnergy() const = 0;
+  virtual double kineticEnergy() const = 0;
   // Elastic energy stored in the owned particles' contacts now (the Hertz potential (8/15) E* sqrt(R*)
   // delta^5/2; a pair with another owned particle counted half by each, so ranks' values add up). Host
   // copies: called once, at the start.

@@ -17,6 +17,7 @@
 #include "compute/neighbor/NeighborKernels.h"
 #include "compute/particles/ParticleData.h"
 #include "compute/sim/Engine.h"
+#include "compute/sim/TimeStep.h"
 
 namespace pflow::compute {
 
@@ -25,7 +26,6 @@ template <class Exec, class R>
 class EngineImpl final : public Engine {
  public:
   using Engine::computeForces;
- public:
   using V = Vec3<R>;
 
   explicit EngineImpl(EngineSetup s)
@@ -198,7 +198,7 @@ class EngineImpl final : public Engine {
     if (set == ForceSet::kInterior) return Status::ok();  // queued; the boundary pass reads the flags
     Conditions c = readConditions();
     // A particle behind a wall is also deep in it: the tunnelling is the cause to name.
-    if (c.flags & kTunnelled) return tunnelError(c.tunnelParticle, dt, time);
+    if (c.flags & kTunnelled) return tunnelError(c.tunnelParticle, dt);
     if (c.flags & kExcessiveOverlap) return deepOverlapError(c.deepParticle, dt);
     if (c.flags & kTooManyWallContacts)
       return Status(StatusCode::kResourceExhausted,
@@ -289,17 +289,15 @@ class EngineImpl final : public Engine {
 
   ContactStats contactStats() const override;
 
-  MechanicalEnergy mechanicalEnergy() const override {
-    MechanicalEnergy e;
-    e.kinetic = m_exec.sumOf(m_owned, kernels::KineticEnergy<R>{m_particles.template ptr<Field::Velocity>(),
-                                                                 m_particles.template ptr<Field::AngularVelocity>(),
-                                                                 m_particles.template ptr<Field::Mass>(),
-                                                                 m_particles.template ptr<Field::Radius>()});
-    if (norm2(m_setup.gravity) > 0)
-      e.potential = m_exec.sumOf(m_owned, kernels::PotentialEnergy<R>{m_particles.template ptr<Field::Position>(),
-                                                                       m_particles.template ptr<Field::Mass>(),
-                                                                       m_setup.gravity, m_setup.grid.lo});
-    return e;
+  double mechanicalEnergy() const override {
+    return m_exec.sumOf(m_owned, kernels::MechanicalEnergy<R>{kineticOf(), {m_particles.template ptr<Field::Position>(),
+                                                                            m_particles.template ptr<Field::Mass>(),
+                                                                            m_setup.gravity, m_setup.grid.lo}});
+  }
+  double kineticEnergy() const override { return m_exec.sumOf(m_owned, kineticOf()); }
+  kernels::KineticEnergy<R> kineticOf() const {
+    return {m_particles.template ptr<Field::Velocity>(), m_particles.template ptr<Field::AngularVelocity>(),
+            m_particles.template ptr<Field::Mass>(), m_particles.template ptr<Field::Radius>()};
   }
   double elasticEnergy() const override;
   ParticleProbe fastestParticle() const override;
@@ -396,7 +394,7 @@ class EngineImpl final : public Engine {
     if (set == ForceSet::kAll || (m_numBoundary == 0 && set == ForceSet::kInterior)) {
       if constexpr (Exec::kPairsOnce) {
         if (m_numSlabs) {
-          m_exec.forEachTwoColours(m_numSlabs, kernels::ComputePairsOnce<R>{args, m_slabStart.as<Index>(), m_slabItems.as<Index>(),
+          m_exec.forEachTwoColours(m_numSlabs, kernels::ComputePairsOnce<R>{{args}, m_slabStart.as<Index>(), m_slabItems.as<Index>(),
                                                                             m_owned1.as<std::uint32_t>(), m_numSlabs});
           if (m_anyWalls) m_exec.forEach(m_owned, kernels::ComputeWallForces<R>{args});
           return;
@@ -526,7 +524,7 @@ class EngineImpl final : public Engine {
   }
   Status nonFiniteError(Index i, double dt) const;
   Status deepOverlapError(Index i, double dt) const;
-  Status tunnelError(Index i, double dt, double time) const;
+  Status tunnelError(Index i, double dt) const;
   Status leftDomainError(Index i, double dt) const;
   Status slotOverflowError(double dt) const;
   ParticleProbe probe(Index i) const;
@@ -549,16 +547,7 @@ class EngineImpl final : public Engine {
   };
   Deepest deepestContact(const HostView& h, Index i) const;
   std::string suggestion(double dt, const ParticleProbe& p) const {
-    if (!(dt > 0)) dt = m_setup.dt;  // the forces at the start are computed with dt = 0
-    char buf[128];
-    std::snprintf(buf, sizeof buf, "; suggested dt %.3g s (now %.3g s)", suggestedDt(dt, p), dt);
-    return buf;
-  }
-  std::string describe(const ParticleProbe& p) const {
-    char buf[256];
-    std::snprintf(buf, sizeof buf, "particle %llu (radius %.4g m at (%.6g, %.6g, %.6g) m, speed %.4g m/s)",
-                  (unsigned long long)p.gid, p.radius, p.position.x, p.position.y, p.position.z, p.speed);
-    return buf;
+    return dtSuggestion(dt > 0 ? dt : m_setup.dt, p);  // the forces at the start are computed with dt = 0
   }
 
   kernels::IntegrateArgs<R> integrateArgs(double dt) {
@@ -809,8 +798,7 @@ ParticleProbe EngineImpl<Exec, R>::probe(Index i) const {
   // Hertz contact time of an impact on its own kind: R* = r/2, m* = m/2 (physics-reference.md).
   const double effYoung = m_setup.contactTable[std::size_t(mat) * m_setup.numMaterials + std::size_t(mat)].effYoung;
   if (p.speed > 0 && std::isfinite(p.speed) && effYoung > 0) {
-    const double effR = 0.5 * double(r), effM = 0.5 * double(m);
-    p.contactTime = 2.868 * std::pow(effM * effM / (effR * effYoung * effYoung * p.speed), 0.2);
+    p.contactTime = hertzContactTime(0.5 * double(r), 0.5 * double(m), effYoung, p.speed);
   }
   return p;
 }
@@ -844,12 +832,12 @@ Status EngineImpl<Exec, R>::deepOverlapError(Index i, double dt) const {
   std::snprintf(buf, sizeof buf,
                 "excessive overlap: %s and %s overlap by %.4g m, %.1f%% of the smaller radius (simulation.max_overlap: %.1f%%): "
                 "the contact is not resolved (time step too large for these speeds, or the material too soft)",
-                describe(p).c_str(), d.partner.c_str(), d.overlap, 100 * d.ratio, 100 * m_setup.maxOverlap);
+                describeParticle(p).c_str(), d.partner.c_str(), d.overlap, 100 * d.ratio, 100 * m_setup.maxOverlap);
   return numericalError(buf + suggestion(dt, p));
 }
 
 template <class Exec, class R>
-Status EngineImpl<Exec, R>::tunnelError(Index i, double dt, double time) const {
+Status EngineImpl<Exec, R>::tunnelError(Index i, double dt) const {
   const ParticleProbe p = probe(i);
   std::string wall;
   for (std::size_t k = 0; k < m_setup.planes.size() && wall.empty(); ++k) {
@@ -875,8 +863,7 @@ Status EngineImpl<Exec, R>::tunnelError(Index i, double dt, double time) const {
     }
     if (wall.empty()) wall = "a wall";
   }
-  (void)time;
-  return numericalError("tunnelling: " + describe(p) + " passed through " + wall +
+  return numericalError("tunnelling: " + describeParticle(p) + " passed through " + wall +
                         " within one step: the step carries it further than a contact can stop it (time step too large "
                         "for this speed)" + suggestion(dt, p));
 }
@@ -888,7 +875,7 @@ Status EngineImpl<Exec, R>::leftDomainError(Index i, double dt) const {
   char buf[256];
   std::snprintf(buf, sizeof buf, " is outside simulation.domain (min (%.6g, %.6g, %.6g), max (%.6g, %.6g, %.6g) m)", lo.x, lo.y,
                 lo.z, hi.x, hi.y, hi.z);
-  return numericalError("left the domain: " + describe(p) + buf +
+  return numericalError("left the domain: " + describeParticle(p) + buf +
                         ": a wall is missing or was passed through, or the time step is too large" + suggestion(dt, p));
 }
 
@@ -910,7 +897,7 @@ Status EngineImpl<Exec, R>::slotOverflowError(double dt) const {
     }
   }
   const ParticleProbe p = probe(worst);
-  return numericalError("contact-slot overflow: " + describe(p) + " has " + std::to_string(most) +
+  return numericalError("contact-slot overflow: " + describeParticle(p) + " has " + std::to_string(most) +
                         " simultaneous contacts, above simulation.max_contacts (" + std::to_string(m_setup.maxContacts) +
                         "): the packing has collapsed (time step too large, or the material too soft)" + suggestion(dt, p));
 }
@@ -920,8 +907,7 @@ double EngineImpl<Exec, R>::elasticEnergy() const {
   const HostView h = hostView();
   const int nm = m_setup.numMaterials;
   auto table = [&](int a, int b) { return m_setup.contactTable[std::size_t(a) * nm + std::size_t(b)].effYoung; };
-  // Hertz potential (8/15) E* sqrt(R*) delta^(5/2), whose derivative is the Hertz force (4/3) E* sqrt(R*) delta^(3/2).
-  auto hertz = [](double effYoung, double effR, double delta) { return 8.0 / 15.0 * effYoung * std::sqrt(effR) * std::pow(delta, 2.5); };
+  const auto hertz = contact::normal::hertzEnergy<double>;
   double u = 0;
   for (Index i = 0; i < m_owned; ++i) {
     const double ri = double(h.rad[i]);

@@ -135,20 +135,18 @@ Status Simulation::step() {
 // it can exceed the start only by the elastic energy stored in the start's contacts. Growth beyond that
 // plus the tolerance is energy the integration made up: the step is too large (docs/physics.md).
 Status Simulation::checkEnergy() {
-  const MechanicalEnergy e = m_engine->mechanicalEnergy();
-  const double total = m_domain->sum(e.kinetic + e.potential);  // the same decision on every rank
+  const double total = m_domain->sum(m_engine->mechanicalEnergy());  // the same decision on every rank
   const double excess = total - m_energyStart;
   if (excess <= m_energyAllowance) return Status::ok();
   const ParticleProbe p = m_engine->fastestParticle();
-  char buf[768];
+  char buf[512];
   std::snprintf(buf, sizeof buf,
                 "energy growth: the mechanical energy (kinetic + gravitational, %.4g J) is %.4g J above its start, beyond "
                 "the %.4g J allowed (the elastic energy stored at the start plus %.0f%% of the energy scale %.4g J) with "
-                "no energy input; the fastest is particle %llu (radius %.4g m at (%.6g, %.6g, %.6g) m, speed %.4g m/s): "
-                "the integration gains energy (time step too large for these contacts); suggested dt %.3g s (now %.3g s)",
-                total, excess, m_energyAllowance, 100 * kEnergyTolerance, m_energyScale, (unsigned long long)p.gid, p.radius,
-                p.position.x, p.position.y, p.position.z, p.speed, suggestedDt(m_timeStep.dt, p), m_timeStep.dt);
-  return numericalError(buf);
+                "no energy input; the fastest is ",
+                total, excess, m_energyAllowance, 100 * kEnergyTolerance, m_energyScale);
+  return numericalError(buf + describeParticle(p) + ": the integration gains energy (time step too large for these contacts)" +
+                        dtSuggestion(m_timeStep.dt, p));
 }
 
 void Simulation::takeCheckpoint() {
@@ -264,9 +262,8 @@ Status Simulation::initialise() {
   if (m_energyCheck) {
     // The reference of the energy detector: the mechanical energy now, the elastic energy stored in the
     // start's contacts (which may turn into kinetic energy) and the energy scale of the tolerance.
-    const MechanicalEnergy e = m_engine->mechanicalEnergy();
-    m_energyStart = m_domain->sum(e.kinetic + e.potential);
-    const double kinetic = m_domain->sum(e.kinetic), elastic = m_domain->sum(m_engine->elasticEnergy());
+    m_energyStart = m_domain->sum(m_engine->mechanicalEnergy());
+    const double kinetic = m_domain->sum(m_engine->kineticEnergy()), elastic = m_domain->sum(m_engine->elasticEnergy());
     m_energyScale = kinetic + elastic + m_energyScale;  // m_energyScale held M |g| H (create)
     m_energyAllowance = elastic + kEnergyTolerance * m_energyScale;
   }
