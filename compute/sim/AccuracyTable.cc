@@ -1,4 +1,5 @@
 #include "compute/sim/AccuracyTable.h"
+#include "compute/core/Format.h"
 
 #include <algorithm>
 #include <cerrno>
@@ -39,12 +40,6 @@ std::string percent(double x) {
   return buf;
 }
 
-std::string g(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", x);
-  return buf;
-}
-
 }  // namespace
 
 Result<AccuracyTable> AccuracyTable::parse(std::string_view csv, const std::string& source) {
@@ -60,10 +55,7 @@ Result<AccuracyTable> AccuracyTable::parse(std::string_view csv, const std::stri
     start = end + 1;
     ++lineNo;
     while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.remove_suffix(1);
-    if (line.empty() || line.front() == '#') {
-      if (end == csv.size()) break;
-      continue;
-    }
+    if (line.empty() || line.front() == '#') continue;
     const std::string where = source + ":" + std::to_string(lineNo);
     const auto f = split(line);
     if (!header) {
@@ -89,7 +81,10 @@ Result<AccuracyTable> AccuracyTable::parse(std::string_view csv, const std::stri
     auto integer = [&](std::size_t k, std::int64_t& out) {
       double v = 0;
       number(k, v);
-      out = std::int64_t(v);
+      if (v != std::floor(v) || std::fabs(v) > 9e15)
+        errors.add(where + " column " + std::string(columns[k]), "`" + std::string(f[k]) + "` is not an integer");
+      else
+        out = std::int64_t(v);
     };
     r.problem = f[0];
     r.quantity = f[1];
@@ -110,9 +105,7 @@ Result<AccuracyTable> AccuracyTable::parse(std::string_view csv, const std::stri
     if (r.problem.empty() || r.quantity.empty() || r.executor.empty())
       errors.add(where, "problem, quantity and executor must not be empty");
     table.m_rows.push_back(std::move(r));
-    if (end == csv.size()) break;
   }
-  if (!header && !csv.empty() && errors.empty() && !table.m_rows.empty()) errors.add(source, "no header line");
   if (!errors.empty()) return errors.toStatus("accuracy table " + source);
   return table;
 }
@@ -143,6 +136,27 @@ Result<std::vector<AccuracyProposal>> AccuracyTable::propose(const std::string& 
     return invalidArgument("'" + quantity + "' is not a quantity of the accuracy study" +
                            (known.empty() ? std::string(" (its table is empty)") : "; known: " + list));
   }
+  std::map<std::string, AccuracyProposal> best;
+  for (AccuracyProposal& p : meeting(quantity, tolerance)) {
+    auto it = best.find(p.executor);
+    if (it == best.end() || p.cost < it->second.cost || (p.cost == it->second.cost && p.worstError < it->second.worstError))
+      best[p.executor] = std::move(p);
+  }
+  std::vector<AccuracyProposal> out;
+  for (auto& [executor, p] : best) out.push_back(std::move(p));
+  return out;
+}
+
+bool AccuracyTable::meetsAt(const std::string& quantity, double tolerance, const std::string& executor,
+                            const std::string& precision, double minDtFraction) const {
+  for (const AccuracyProposal& p : meeting(quantity, tolerance))
+    if (p.executor == executor && p.precision == precision && p.softening == 1 && p.rebuildInterval == 0 &&
+        p.dtFraction >= minDtFraction * (1 - 1e-9))
+      return true;
+  return false;
+}
+
+std::vector<AccuracyProposal> AccuracyTable::meeting(const std::string& quantity, double tolerance) const {
   // Settings group -> problem -> (worst error, cost, every row ok).
   using Key = std::tuple<std::string, std::string, double, double, double, std::int64_t>;
   struct PerProblem {
@@ -159,7 +173,7 @@ Result<std::vector<AccuracyProposal>> AccuracyTable::propose(const std::string& 
     p.cost = std::max(p.cost, r.wallSecondsPerSimSecond);
     p.ok = p.ok && r.status == "ok" && r.error == r.error;  // NaN error: not ok
   }
-  std::map<std::string, AccuracyProposal> best;
+  std::vector<AccuracyProposal> out;
   for (const auto& [key, problems] : groups) {
     const auto& [executor, precision, dtFraction, softening, skinFraction, rebuildInterval] = key;
     if (problems.size() != problemsOf[executor].size()) continue;  // not measured on every problem: no worst case
@@ -171,23 +185,17 @@ Result<std::vector<AccuracyProposal>> AccuracyTable::propose(const std::string& 
       p.cost += pp.cost;
       p.problems.push_back(problem);
     }
-    if (!meets) continue;
-    auto it = best.find(executor);
-    if (it == best.end() || p.cost < it->second.cost ||
-        (p.cost == it->second.cost && p.worstError < it->second.worstError))
-      best[executor] = std::move(p);
+    if (meets) out.push_back(std::move(p));
   }
-  std::vector<AccuracyProposal> out;
-  for (auto& [executor, p] : best) out.push_back(std::move(p));
   return out;
 }
 
 std::string AccuracyProposal::text() const {
   std::string list;
   for (const auto& p : problems) list += (list.empty() ? "" : ", ") + p;
-  return executor + ": precision " + precision + ", dt_fraction " + g(dtFraction) + ", softening " + g(softening) +
-         ", skin_fraction " + g(skinFraction) + ", rebuild_interval " + std::to_string(rebuildInterval) + " (worst error " +
-         percent(worstError) + " over " + list + "; " + g(cost) + " wall s per simulated s)";
+  return executor + ": precision " + precision + ", dt_fraction " + format::num(dtFraction) + ", softening " + format::num(softening) +
+         ", skin_fraction " + format::num(skinFraction) + ", rebuild_interval " + std::to_string(rebuildInterval) + " (worst error " +
+         percent(worstError) + " over " + list + "; " + format::num(cost) + " wall s per simulated s)";
 }
 
 }  // namespace pflow::compute

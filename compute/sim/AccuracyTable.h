@@ -52,8 +52,16 @@ class AccuracyTable {
   // One proposal per executor that can meet the target (sorted by executor); empty when none can. An error
   // naming the known quantities when `quantity` is not among them.
   Result<std::vector<AccuracyProposal>> propose(const std::string& quantity, double tolerance) const;
+  // Whether `precision` on `executor` met the target at full stiffness (softening 1) with automatic rebuilds
+  // at some dt_fraction >= minDtFraction, over every problem measuring the quantity: since the error grows
+  // with dt, the target then holds at a scene's own dt_fraction too. False for an unknown quantity.
+  bool meetsAt(const std::string& quantity, double tolerance, const std::string& executor, const std::string& precision,
+               double minDtFraction) const;
 
  private:
+  // Every settings group (executor, precision, dt, softening, skin, rebuild) measured on every problem that
+  // measures the quantity, with its worst error and summed cost, that meets the tolerance.
+  std::vector<AccuracyProposal> meeting(const std::string& quantity, double tolerance) const;
   std::vector<AccuracyRow> m_rows;
 };
 

@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <set>
 
 #include "compute/contact/ContactParams.h"
+#include "compute/sim/TimeStep.h"
 
 namespace pflow::compute {
 
@@ -177,22 +179,26 @@ ModelChoice deriveModel(const RunConfig& c, const ModelOptions& options) {
         decide("precision", name, "no settings of the accuracy study meet " + target);
       } else {
         m.proposals = proposals.value();
-        bool allFloat = true, found = false, chosenFloat = false;
-        for (const auto& pr : m.proposals) {
-          allFloat = allFloat && pr.precision == "float";
-          if (pr.executor == options.executor) {
-            found = true;
-            chosenFloat = pr.precision == "float";
-          }
-        }
-        const bool useFloat = options.executor.empty() ? allFloat : found && chosenFloat;
+        // Float where the study measured it meeting the target at this scene's conditions: full stiffness,
+        // automatic rebuilds and a dt_fraction at least the scene's (the error grows with dt), on this
+        // executor (on every executor of the study when the executor is not known yet).
+        const auto ts = chooseTimeStep(c);
+        const double dtFraction = ts && ts.value().fractionOfRayleigh > 0 ? ts.value().fractionOfRayleigh : c.sim.dtFraction;
+        std::set<std::string> executors;
+        if (options.executor.empty())
+          for (const auto& r : study.rows()) executors.insert(r.executor);
+        else
+          executors.insert(options.executor);
+        bool useFloat = true;
+        for (const auto& e : executors) useFloat = useFloat && study.meetsAt(t.quantity, t.tolerance, e, "float", dtFraction);
         if (useFloat && !m.full) m.precision = Precision::kFloat;
         const std::string on = options.executor.empty() ? "every executor" : "the " + options.executor + " executor";
+        const std::string at = " at dt_fraction " + g(dtFraction) + " or more, full stiffness, automatic rebuilds, on " + on;
         decide("precision", useFloat && !m.full ? "float" : name,
-               std::string(useFloat ? (m.full ? "float would meet " : "float meets ") : "float is not proposed for ") + target +
-                   (useFloat ? " (the cheapest settings on " + on + ")" : " on " + on) +
-                   (m.full && useFloat ? ", but simulation.model: full keeps the scene's" : "") +
-                   "; the proposed settings are listed below (set them in the scene)");
+               std::string(useFloat ? (m.full ? "float would meet " : "float meets ") : "the study has no float run meeting ") +
+                   target + at + (m.full && useFloat ? ", but simulation.model: full keeps the scene's" : "") +
+                   "; the study's cheapest settings meeting it are listed below (softening, skin and rebuild interval "
+                   "are study parameters: soften by lowering youngs_modulus)");
       }
     }
   }

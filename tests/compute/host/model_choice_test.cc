@@ -245,6 +245,12 @@ TEST(ModelChoice, AccuracyTargetChoosesFloatWhereTheStudyAllowsIt) {
       << m.text();
   o.executor = "cpu";  // the study proposes double there
   EXPECT_EQ(deriveModel(c, o).precision, compute::Precision::kDouble);
+  // At the scene's own step only: float met 1 % on cuda at dt_fraction 0.2, not at 0.4 (energy gain on one
+  // problem), so a scene at 0.3 stays double though the study has a float proposal.
+  o.executor = "cuda";
+  c.sim.dtFraction = 0.3;
+  EXPECT_EQ(deriveModel(c, o).precision, compute::Precision::kDouble);
+  c.sim.dtFraction = 0.2;
   o.executor = "";  // unknown: float only if every executor's proposal is float
   EXPECT_EQ(deriveModel(c, o).precision, compute::Precision::kDouble);
   // A precision fixed by the scene wins.
@@ -257,6 +263,19 @@ TEST(ModelChoice, AccuracyTargetChoosesFloatWhereTheStudyAllowsIt) {
   const AccuracyTable empty;
   o.table = &empty;
   EXPECT_NE(decision(deriveModel(c, o), "precision").reason.find("the accuracy table is empty"), std::string::npos);
+}
+
+// The table built into pflow (docs/accuracy/study.csv) parses and is not empty: otherwise every accuracy
+// target would go without proposals and unchecked.
+TEST(ModelChoice, BuiltInStudyTableParses) {
+  std::ifstream in(std::string(PFLOW_SOURCE_DIR) + "/docs/accuracy/study.csv");
+  ASSERT_TRUE(in) << "docs/accuracy/study.csv";
+  std::stringstream text;
+  text << in.rdbuf();
+  const auto parsed = AccuracyTable::parse(text.str());
+  ASSERT_TRUE(parsed.isOk()) << parsed.status().toString();
+  EXPECT_GT(parsed.value().rows().size(), 1000u);
+  EXPECT_EQ(AccuracyTable::builtIn().rows().size(), parsed.value().rows().size());
 }
 
 TEST(ModelChoice, AccuracyTargetIsValidated) {
