@@ -3,9 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
-#include <fstream>
+#include <filesystem>
 #include <random>
+
+#include "backend/store/SnapshotFile.h"
 
 namespace pflow::bench {
 
@@ -112,74 +113,51 @@ BedSpec bedSpecFor(std::int64_t n, bool polydisperse) {
   return s;
 }
 
-namespace {
-constexpr char kBedMagic[8] = {'p', 'f', 'b', 'e', 'd', '0', '0', '1'};
-
-void putU64(std::ofstream& out, std::uint64_t v) { out.write(reinterpret_cast<const char*>(&v), sizeof v); }
-void putText(std::ofstream& out, const std::string& t) {
-  putU64(out, t.size());
-  out.write(t.data(), std::streamsize(t.size()));
-}
-bool getU64(std::ifstream& in, std::uint64_t& v) { return bool(in.read(reinterpret_cast<char*>(&v), sizeof v)); }
-bool getText(std::ifstream& in, std::string& t, std::uint64_t limit = 1 << 20) {
-  std::uint64_t n = 0;
-  if (!getU64(in, n) || n > limit) return false;
-  t.resize(n);
-  return bool(in.read(t.data(), std::streamsize(n)));
-}
-}  // namespace
-
-bool saveSettledBed(const std::string& path, const std::string& key, const compute::ParticleSnapshot& state) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) return false;
-    out.write(kBedMagic, sizeof kBedMagic);
-    putText(out, key);
-    putU64(out, std::uint64_t(state.step));
-    out.write(reinterpret_cast<const char*>(&state.time), sizeof state.time);
-    putU64(out, state.n);
-    putU64(out, state.arrays.size());
-    for (const auto& a : state.arrays) {
-      putText(out, a.name);
-      putU64(out, std::uint64_t(a.type));
-      putU64(out, std::uint64_t(a.components));
-      putText(out, a.unit);
-      putU64(out, a.data.size());
-      out.write(reinterpret_cast<const char*>(a.data.data()), std::streamsize(a.data.size()));
-    }
-    if (!out) return false;
+compute::RunConfig tiledBed(const compute::RunConfig& bed, const compute::ParticleSnapshot& settled, long n) {
+  const double copies = std::max(1.0, double(n) / double(std::max<std::size_t>(settled.n, 1)));
+  int tx = 1, ty = 1;
+  double best = 1e300;
+  for (int a = 1; a <= int(std::ceil(std::sqrt(copies))) + 1; ++a) {
+    const int b = std::max(1, int(std::lround(copies / a)));
+    const double miss = std::fabs(double(a) * b - copies) + 1e-3 * std::abs(a - b);
+    if (miss < best) best = miss, tx = std::max(a, b), ty = std::min(a, b);
   }
-  return std::rename(tmp.c_str(), path.c_str()) == 0;
+  return tiledBed(bed, settled, tx, ty);
 }
 
-bool loadSettledBed(const std::string& path, const std::string& key, compute::ParticleSnapshot& out) {
-  std::ifstream in(path, std::ios::binary);
-  char magic[sizeof kBedMagic];
-  if (!in || !in.read(magic, sizeof magic) || !std::equal(magic, magic + sizeof magic, kBedMagic)) return false;
-  std::string storedKey;
-  if (!getText(in, storedKey) || storedKey != key) return false;
-  compute::ParticleSnapshot s;
-  std::uint64_t step = 0, n = 0, arrays = 0;
-  if (!getU64(in, step) || !in.read(reinterpret_cast<char*>(&s.time), sizeof s.time) || !getU64(in, n) ||
-      !getU64(in, arrays) || arrays > 64)
-    return false;
-  s.step = std::int64_t(step);
-  s.n = n;
-  for (std::uint64_t k = 0; k < arrays; ++k) {
-    compute::SnapshotArray a;
-    std::uint64_t type = 0, components = 0, bytes = 0;
-    if (!getText(in, a.name) || !getU64(in, type) || !getU64(in, components) || !getText(in, a.unit) ||
-        !getU64(in, bytes) || type > std::uint64_t(compute::ScalarType::kI8) || components < 1 || components > 64)
-      return false;
-    a.type = compute::ScalarType(type);
-    a.components = int(components);
-    if (bytes != n * components * compute::scalarBytesOf(a.type)) return false;
-    a.data.resize(bytes);
-    if (!in.read(reinterpret_cast<char*>(a.data.data()), std::streamsize(bytes))) return false;
-    s.arrays.push_back(std::move(a));
+compute::RunConfig withState(compute::RunConfig cfg, const compute::ParticleSnapshot& state) {
+  const auto* x = state.find("position")->as<Vec3d>();
+  const auto* v = state.find("velocity")->as<Vec3d>();
+  const auto* w = state.find("angular_velocity")->as<Vec3d>();
+  const auto* id = state.find("id")->as<Gid>();
+  cfg.particles.velocity.resize(cfg.particles.size());
+  cfg.particles.angularVelocity.resize(cfg.particles.size());
+  for (std::size_t k = 0; k < state.n; ++k) {
+    cfg.particles.position[id[k]] = x[k];
+    cfg.particles.velocity[id[k]] = v[k];
+    cfg.particles.angularVelocity[id[k]] = w[k];
   }
-  out = std::move(s);
+  return cfg;
+}
+
+std::string settledBedPath(const std::string& dir, long size, bool polydisperse, int settleSteps, const std::string& executor) {
+  return dir + "/settled-" + std::to_string(size) + (polydisperse ? "-poly-" : "-mono-") + std::to_string(settleSteps) +
+         "-" + executor + ".h5";
+}
+
+Status saveSettledBed(const std::string& path, const compute::ParticleSnapshot& state) {
+  auto writer = backend::SnapshotWriter::create(path);
+  if (!writer) return writer.status();
+  return writer.value()->writeSnapshot(state);
+}
+
+bool loadSettledBed(const std::string& path, compute::ParticleSnapshot& out) {
+  if (!std::filesystem::exists(path)) return false;
+  auto reader = backend::SnapshotReader::open(path);
+  if (!reader || reader.value()->steps().empty()) return false;
+  auto state = reader.value()->read(reader.value()->steps().back());
+  if (!state) return false;
+  out = std::move(state).value();
   return true;
 }
 

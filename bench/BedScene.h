@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/Status.h"
 #include "compute/particles/ParticleSnapshot.h"
 #include "compute/sim/RunConfig.h"
 
@@ -35,12 +36,18 @@ BedSpec bedSpecFor(std::int64_t n, bool polydisperse);
 // at 10^6..10^8 spheres without settling each at full size. Positions, velocities and spins are copied;
 // contact history starts empty (it rebuilds within a few steps of a resettle).
 compute::RunConfig tiledBed(const compute::RunConfig& bed, const compute::ParticleSnapshot& settled, int tx, int ty);
+// The same with about n spheres: the tx x ty closest to n / settled.n copies, as square as possible.
+compute::RunConfig tiledBed(const compute::RunConfig& bed, const compute::ParticleSnapshot& settled, long n);
 
-// A settled bed's state kept between runs (pflow-bench --base-cache): the snapshot's arrays in a plain binary
-// file headed by `key`, a text naming what was settled and how. loadSettledBed returns false (and leaves
-// `out` alone) when the file is missing, unreadable or was written for another key.
-bool saveSettledBed(const std::string& path, const std::string& key, const compute::ParticleSnapshot& state);
-bool loadSettledBed(const std::string& path, const std::string& key, compute::ParticleSnapshot& out);
+// `cfg` with the positions, velocities and spins of `state` (a snapshot of a run of cfg: rows by gid).
+compute::RunConfig withState(compute::RunConfig cfg, const compute::ParticleSnapshot& state);
+
+// A settled bed's state kept between runs (pflow-bench --base-cache DIR): a pflow snapshot file (HDF5 with its
+// XDMF sidecar, so ParaView shows the bed) whose name says what was settled and how, e.g.
+// DIR/settled-200000-mono-30000-cuda.h5. loadSettledBed returns false when there is none.
+std::string settledBedPath(const std::string& dir, long size, bool polydisperse, int settleSteps, const std::string& executor);
+Status saveSettledBed(const std::string& path, const compute::ParticleSnapshot& state);
+bool loadSettledBed(const std::string& path, compute::ParticleSnapshot& out);
 
 // The fewest bytes per particle that each phase of a step must move through device memory (every array it
 // needs read once, every result written once; neighbours' data assumed to come from cache), for `realBytes`

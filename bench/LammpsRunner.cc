@@ -443,9 +443,9 @@ Result<LammpsResult> runLammps(const LammpsBed& bed, const LammpsOptions& option
   for (const char* section : {"Pair", "Neigh", "Comm", "Output", "Modify", "Other"}) {
     // "Pair    | 1.2 | 1.3 | 1.4 |   2.0 | 45.61": min, avg, max over ranks (the last line of that name)
     const auto l = linesStarting(run->log, std::string(section) + " ");
-    double mn = 0, avg = 0;
+    double avg = 0;
     char name[16];
-    if (!l.empty() && std::sscanf(l.back().c_str(), "%15s | %lf | %lf", name, &mn, &avg) == 3)
+    if (!l.empty() && std::sscanf(l.back().c_str(), "%15s | %*f | %lf", name, &avg) == 2)
       r.sections.emplace_back(section, avg);
   }
   if (auto l = linesStarting(run->log, "LAMMPS ("); !l.empty()) {

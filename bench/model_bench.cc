@@ -75,7 +75,9 @@ int main(int argc, char** argv) {
   long n = 20000;
   int settle = 20000, warm = 50, steps = 1000, threads = 0, repeats = 1;
   std::string executor = "cpu", precision = "double";
-  app.add_option("--case", cases, "frictionless, norolling, planar, nowalls (comma-separated)")->delimiter(',');
+  app.add_option("--case", cases, "frictionless, norolling, planar, nowalls (comma-separated)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"frictionless", "norolling", "planar", "nowalls"}));
   app.add_option("--model", models, "full, auto, or both (comma-separated)")->delimiter(',')->check(CLI::IsMember({"full", "auto"}));
   app.add_option("-n,--particles", n, "particles (about)")->capture_default_str();
   app.add_option("--settle-steps", settle, "steps that settle each case's bed once, before any timing")->capture_default_str();
@@ -108,17 +110,8 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "%s: %s\n", name.c_str(), s.toString().c_str());
         return 1;
       }
-      const auto snap = sim.value()->snapshot();
-      const auto* id = snap.find("id")->as<pflow::Gid>();
-      settled.particles.velocity.resize(settled.particles.size());
-      settled.particles.angularVelocity.resize(settled.particles.size());
-      for (std::size_t i = 0; i < snap.n; ++i) {
-        settled.particles.position[id[i]] = snap.find("position")->as<pflow::Vec3d>()[i];
-        settled.particles.velocity[id[i]] = snap.find("velocity")->as<pflow::Vec3d>()[i];
-        settled.particles.angularVelocity[id[i]] = snap.find("angular_velocity")->as<pflow::Vec3d>()[i];
-      }
+      settled = pflow::bench::withState(std::move(settled), sim.value()->snapshot());
     }
-    if (name == "nowalls" || name == "planar") settled.sim.domain.reset();
     for (const auto& model : models) {
       RunConfig c = settled;
       c.sim.model = model == "full" ? pflow::compute::ModelMode::kFull : pflow::compute::ModelMode::kAuto;
@@ -139,8 +132,7 @@ int main(int argc, char** argv) {
           std::fprintf(stderr, "%s: %s\n", name.c_str(), s.toString().c_str());
           return 1;
         }
-        sim.value()->timers() = pflow::compute::PhaseTimers{};
-        if (so.executor != pflow::compute::ExecutorKind::kCpu) sim.value()->timers().setFence([e = &sim.value()->engine()] { e->fence(); });
+        sim.value()->timers().reset();
         const std::int64_t rebuilds0 = sim.value()->rebuilds();
         const auto t0 = std::chrono::steady_clock::now();
         if (auto s = sim.value()->runSteps(steps); !s.isOk()) {

@@ -142,15 +142,7 @@ int main(int argc, char** argv) {
     settled = sim.value()->snapshot();
   }
   broadcast(settled);
-  const double copies = std::max(1.0, double(n) / double(settled.n));
-  int tx = 1, ty = 1;
-  double best = 1e300;
-  for (int a = 1; a <= int(std::ceil(std::sqrt(copies))) + 1; ++a) {
-    const int b = std::max(1, int(std::lround(copies / a)));
-    const double miss = std::fabs(double(a) * b - copies) + 1e-3 * std::abs(a - b);
-    if (miss < best) best = miss, tx = std::max(a, b), ty = std::min(a, b);
-  }
-  pflow::compute::RunConfig cfg = pflow::bench::tiledBed(base, settled, tx, ty);
+  pflow::compute::RunConfig cfg = pflow::bench::tiledBed(base, settled, long(n));
   cfg.sim.precision = precision == "float" ? pflow::compute::Precision::kFloat : pflow::compute::Precision::kDouble;
   cfg.sim.threads = threads;
 
@@ -205,7 +197,7 @@ int main(int argc, char** argv) {
                      {"ranks", ranks}, {"threads_per_rank", so.executor == pflow::compute::ExecutorKind::kCuda ? 0 : threads},
                      {"precision", precision}, {"decomposition", domain->strategyName()}, {"overlap", on}, {"canonical_order", mo.canonicalOrder},
                      {"case", "settled_bed_mono"}, {"n", owned}, {"per_rank", double(owned) / ranks},
-                     {"busiest_over_mean", double(busiest) * ranks / double(owned)}, {"tiles", tx * ty},
+                     {"busiest_over_mean", double(busiest) * ranks / double(owned)}, {"tiles", cfg.particles.size() / settled.n},
                      {"steps", steps}, {"wall_s", wall}, {"particle_steps_per_s", rate},
                      {"comm_share", mean > 0 ? comm / mean : 0.0}, {"ghosts_per_owned", double(ghostSum) / double(owned)},
                      {"boundary_share_mean", sum[std::size_t(np)] / ranks}, {"rebuilds", s.rebuilds() - rebuilds0},

@@ -63,8 +63,8 @@ int main(int argc, char** argv) {
   app.add_option("--resettle-steps", resettleSteps, "steps a tiled bed settles before timing")->capture_default_str();
   std::string baseCache;
   app.add_option("--base-cache", baseCache,
-                 "with --tile-from: keep the settled small bed in this file and reuse it when a later run asks for "
-                 "the same bed and settling (saves the settling on a machine without a GPU)");
+                 "with --tile-from: keep the settled small bed in this directory (a snapshot file named after the bed, "
+                 "the settle steps and the settling executor) and reuse it when a later run asks for the same");
   std::vector<std::string> precisions{"double"};
   app.add_option("--precision", precisions, "double, float, or both (comma-separated)")
       ->delimiter(',')
@@ -114,20 +114,7 @@ int main(int argc, char** argv) {
     }
     wallOut = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (settleOptions.executor == so.executor) return std::move(sim).value();
-    const auto state = sim.value()->snapshot();
-    pflow::compute::RunConfig moved = cfg;
-    const auto* x = state.find("position")->as<pflow::Vec3d>();
-    const auto* v = state.find("velocity")->as<pflow::Vec3d>();
-    const auto* w = state.find("angular_velocity")->as<pflow::Vec3d>();
-    const auto* id = state.find("id")->as<pflow::Gid>();
-    moved.particles.velocity.resize(state.n);
-    moved.particles.angularVelocity.resize(state.n);
-    for (std::size_t k = 0; k < state.n; ++k) {
-      moved.particles.position[id[k]] = x[k];
-      moved.particles.velocity[id[k]] = v[k];
-      moved.particles.angularVelocity[id[k]] = w[k];
-    }
-    auto timed = pflow::compute::Simulation::create(moved, so);
+    auto timed = pflow::compute::Simulation::create(pflow::bench::withState(cfg, sim.value()->snapshot()), so);
     if (!timed) {
       std::fprintf(stderr, "%s\n", timed.status().toString().c_str());
       return nullptr;
@@ -143,30 +130,23 @@ int main(int argc, char** argv) {
     auto spec = pflow::bench::bedSpecFor(tileFrom, poly);
     spec.threads = threads;
     baseBed = pflow::bench::bedScene(spec);
-    const std::string key = "tile-from " + std::to_string(tileFrom) + (poly ? " poly" : " mono") + " settle-steps " +
-                            std::to_string(settleSteps);
-    if (baseCache.empty() || !pflow::bench::loadSettledBed(baseCache, key, baseState)) {
+    const std::string cached = baseCache.empty() ? std::string()
+                                                 : pflow::bench::settledBedPath(baseCache, tileFrom, poly, settleSteps,
+                                                                                settleExecutor.empty() ? executor : settleExecutor);
+    if (cached.empty() || !pflow::bench::loadSettledBed(cached, baseState)) {
       auto base = settle(baseBed, settleSteps, baseSettleWall);
       if (!base) return 1;
       baseState = base->snapshot();
-      if (!baseCache.empty() && !pflow::bench::saveSettledBed(baseCache, key, baseState))
-        std::fprintf(stderr, "warning: could not write the settled bed to %s\n", baseCache.c_str());
+      if (!cached.empty())
+        if (pflow::Status st = pflow::bench::saveSettledBed(cached, baseState); !st.isOk())
+          std::fprintf(stderr, "warning: the settled bed was not kept: %s\n", st.toString().c_str());
     }
   }
 
   for (long n : sizes) {
     pflow::compute::RunConfig cfg;
-    int tx = 1, ty = 1;
     if (tileFrom > 0) {
-      const double copies = std::max(1.0, double(n) / double(baseState.n));
-      // The tx x ty closest to the copies asked for, as square as possible.
-      double best = 1e300;
-      for (int a = 1; a <= int(std::ceil(std::sqrt(copies))) + 1; ++a) {
-        const int b = std::max(1, int(std::lround(copies / a)));
-        const double miss = std::fabs(double(a) * b - copies) + 1e-3 * std::abs(a - b);
-        if (miss < best) best = miss, tx = std::max(a, b), ty = std::min(a, b);
-      }
-      cfg = pflow::bench::tiledBed(baseBed, baseState, tx, ty);
+      cfg = pflow::bench::tiledBed(baseBed, baseState, n);
     } else {
       auto spec = pflow::bench::bedSpecFor(n, poly);
       spec.threads = threads;
@@ -213,7 +193,7 @@ int main(int argc, char** argv) {
                      {"precision", s.engine().precisionName()},
                      {"case", caseName}, {"n", s.numParticles()}, {"settle_steps", settleSteps},
                      {"settle_s", settleWall}, {"tiled_from", tileFrom > 0 ? long(baseState.n) : 0L},
-                     {"tiles", tx * ty}, {"resettle_steps", tileFrom > 0 ? resettleSteps : 0},
+                     {"tiles", tileFrom > 0 ? cfg.particles.size() / baseState.n : 1}, {"resettle_steps", tileFrom > 0 ? resettleSteps : 0},
                      {"base_settle_s", baseSettleWall}, {"steps", steps}, {"wall_s", wall},
                      {"particle_steps_per_s", rate}, {"phases_s", phases}, {"traffic", achieved},
                      {"copy_bandwidth_gb_per_s", copyBandwidth},

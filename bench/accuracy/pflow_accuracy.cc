@@ -18,25 +18,15 @@
 #include <vector>
 
 #include "bench/accuracy/Problems.h"
+#include "compute/sim/AccuracyTable.h"
 #include "common/Log.h"
 
 namespace pflow::bench::accuracy {
 namespace {
 
-const char* kHeader =
-    "problem,quantity,reference,executor,precision,dt_fraction,softening,skin_fraction,rebuild_interval,value,error,"
-    "wall_s_per_sim_s,steps,status";
-
-struct Row {
-  std::string problem, quantity;
-  double reference = 0;
-  std::string executor, precision;
-  double dt = 0, softening = 1, skin = 0.1;
-  int rebuild = 0;
-  double value = 0, error = 0, wall = 0;
-  long long steps = 0;
-  std::string status;
-};
+// study.csv is read and written with the format `pflow validate` reads (compute::AccuracyTable): one type,
+// one header.
+using Row = compute::AccuracyRow;
 
 std::string num(double v) {
   if (!std::isfinite(v)) return "nan";
@@ -44,12 +34,14 @@ std::string num(double v) {
   std::snprintf(buf, sizeof buf, "%.6g", v);
   return buf;
 }
-double parseNum(const std::string& s) {
-  try {
-    return std::stod(s);
-  } catch (...) {
-    return std::nan("");
-  }
+
+// The setting every other is compared with: the finest step in double at full stiffness, default skin,
+// automatic rebuilds (Setting's defaults but the step).
+constexpr double kReferenceDt = 0.05;
+bool isReference(const std::string& precision, double dt, double softening, double skin, std::int64_t rebuild) {
+  const Setting d;
+  return precision == "double" && dt == kReferenceDt && softening == d.softening && skin == d.skinFraction &&
+         rebuild == d.rebuildInterval;
 }
 std::vector<std::string> split(const std::string& line) {
   std::vector<std::string> out;
@@ -60,31 +52,28 @@ std::vector<std::string> split(const std::string& line) {
   return out;
 }
 
+// The rows already in `path`; none when it is absent or does not parse (then it is written afresh).
 std::vector<Row> readCsv(const std::filesystem::path& path) {
-  std::vector<Row> rows;
   std::ifstream in(path);
-  std::string line;
-  if (!std::getline(in, line) || line != kHeader) return rows;  // absent or another format: start afresh
-  while (std::getline(in, line)) {
-    const auto f = split(line);
-    if (f.size() != 14) continue;
-    Row r;
-    r.problem = f[0], r.quantity = f[1], r.reference = parseNum(f[2]), r.executor = f[3], r.precision = f[4];
-    r.dt = parseNum(f[5]), r.softening = parseNum(f[6]), r.skin = parseNum(f[7]), r.rebuild = std::stoi(f[8]);
-    r.value = parseNum(f[9]), r.error = parseNum(f[10]), r.wall = parseNum(f[11]), r.steps = std::stoll(f[12]);
-    r.status = f[13];
-    rows.push_back(r);
+  if (!in) return {};
+  std::stringstream text;
+  text << in.rdbuf();
+  auto table = compute::AccuracyTable::parse(text.str(), path.string());
+  if (!table) {
+    std::fprintf(stderr, "warning: %s is not kept: %s\n", path.c_str(), table.status().toString().c_str());
+    return {};
   }
-  return rows;
+  return table.value().rows();
 }
 
 void writeCsv(const std::filesystem::path& path, const std::vector<Row>& rows) {
   std::ofstream out(path);
-  out << kHeader << "\n";
+  out << compute::AccuracyTable::kColumns << "\n";
   for (const auto& r : rows)
-    out << r.problem << ',' << r.quantity << ',' << num(r.reference) << ',' << r.executor << ',' << r.precision << ','
-        << num(r.dt) << ',' << num(r.softening) << ',' << num(r.skin) << ',' << r.rebuild << ',' << num(r.value) << ','
-        << num(r.error) << ',' << num(r.wall) << ',' << r.steps << ',' << r.status << "\n";
+    out << r.problem << ',' << r.quantity << ',' << r.reference << ',' << r.executor << ',' << r.precision << ','
+        << num(r.dtFraction) << ',' << num(r.softening) << ',' << num(r.skinFraction) << ',' << r.rebuildInterval << ','
+        << num(r.value) << ',' << num(r.error) << ',' << num(r.wallSecondsPerSimSecond) << ',' << r.steps << ','
+        << r.status << "\n";
 }
 
 // Per problem, executor, precision and softening, over the dt sweep (default skin, automatic rebuilds): the
@@ -93,7 +82,8 @@ void writeStability(const std::filesystem::path& path, const std::vector<Row>& r
   using Key = std::tuple<std::string, std::string, std::string, double>;
   std::map<Key, std::map<double, std::string>> runs;  // dt -> status of the run (its rows share it)
   for (const auto& r : rows)
-    if (r.skin == 0.1 && r.rebuild == 0) runs[{r.problem, r.executor, r.precision, r.softening}][r.dt] = r.status;
+    if (r.skinFraction == Setting{}.skinFraction && r.rebuildInterval == Setting{}.rebuildInterval)
+      runs[{r.problem, r.executor, r.precision, r.softening}][r.dtFraction] = r.status;
   std::ofstream out(path);
   out << "problem,executor,precision,softening,largest_stable_dt_fraction,failed_dt_fraction,failure\n";
   for (const auto& [key, byDt] : runs) {
@@ -132,9 +122,7 @@ class Study {
     const Outcome o = p.run(s);
     m_lastStatus = o.status;
     // The reference setting of a bulk problem: its packings' own values (noise.csv, the noise floor).
-    const bool reference = s.precision == compute::Precision::kDouble && s.dtFraction == 0.05 && s.softening == 1 &&
-                           s.skinFraction == 0.1 && s.rebuildInterval == 0;
-    if (reference)
+    if (isReference(precisionName(s.precision), s.dtFraction, s.softening, s.skinFraction, s.rebuildInterval))
       for (std::size_t i = 0; i < o.packings.size(); ++i)
         for (std::size_t k = 0; k < o.packings[i].size(); ++k)
           m_noise.push_back(p.name + ',' + o.quantities[i].name + ',' + executorName(s.executor) + ',' + std::to_string(k) +
@@ -142,10 +130,10 @@ class Study {
     std::string line;
     for (const auto& q : o.quantities) {
       Row r;
-      r.problem = p.name, r.quantity = q.name, r.reference = q.reference, r.executor = executorName(s.executor);
-      r.precision = precisionName(s.precision), r.dt = s.dtFraction, r.softening = s.softening, r.skin = s.skinFraction;
-      r.rebuild = s.rebuildInterval, r.value = q.value, r.wall = o.wallPerSimSecond, r.steps = o.steps;
-      r.status = o.status;
+      r.problem = p.name, r.quantity = q.name, r.reference = num(q.reference), r.executor = executorName(s.executor);
+      r.precision = precisionName(s.precision), r.dtFraction = s.dtFraction, r.softening = s.softening;
+      r.skinFraction = s.skinFraction, r.rebuildInterval = s.rebuildInterval, r.value = q.value;
+      r.wallSecondsPerSimSecond = o.wallPerSimSecond, r.steps = o.steps, r.status = o.status;
       r.error = std::fabs(q.value - q.reference) / std::fabs(q.reference);
       m_rows.push_back(r);
       line += " " + q.name + "=" + num(q.value);
@@ -190,7 +178,7 @@ class Study {
       for (double skin : {0.02, 0.05, 0.2, 0.5}) run(p, {.dtFraction = 0.2, .skinFraction = skin});
       for (int every : {1, 10, 100, 1000, 10000}) run(p, {.dtFraction = 0.2, .rebuildInterval = every});
     } else {
-      const std::vector<double> dts = {0.05, 0.1, 0.2, 0.4, 0.7, 1.0, 1.4, 2.0};
+      const std::vector<double> dts = {kReferenceDt, 0.1, 0.2, 0.4, 0.7, 1.0, 1.4, 2.0};
       for (Precision prec : precisions) dtSweep(p, {.precision = prec}, dts);
       for (double soft : {10.0, 100.0, 1000.0})
         for (double dt : {0.1, 0.2, 0.4}) run(p, {.dtFraction = dt, .softening = soft});
@@ -201,13 +189,13 @@ class Study {
       std::map<std::string, double> ref;
       for (std::size_t i = first; i < m_rows.size(); ++i) {
         const Row& r = m_rows[i];
-        if (r.precision == "double" && r.dt == 0.05 && r.softening == 1 && r.skin == 0.1 && r.rebuild == 0)
-          ref[r.quantity] = r.value;
+        if (isReference(r.precision, r.dtFraction, r.softening, r.skinFraction, r.rebuildInterval)) ref[r.quantity] = r.value;
       }
       for (std::size_t i = first; i < m_rows.size(); ++i) {
         Row& r = m_rows[i];
-        r.reference = ref.count(r.quantity) ? ref[r.quantity] : std::nan("");
-        r.error = std::fabs(r.value - r.reference) / std::fabs(r.reference);
+        const double reference = ref.count(r.quantity) ? ref[r.quantity] : std::nan("");
+        r.reference = num(reference);
+        r.error = std::fabs(r.value - reference) / std::fabs(reference);
       }
     }
   }

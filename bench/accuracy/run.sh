@@ -12,9 +12,16 @@ if [[ ! -x "$bin" ]]; then
   echo "run.sh: no pflow-accuracy at $bin (build it: cmake --build build --target pflow-accuracy, or set PFLOW_BIN)" >&2
   exit 1
 fi
-out="$root/docs/accuracy"
-for a in "$@"; do [[ "$a" == --quick ]] && out="$root/build/accuracy-quick"; done
+# The output directory: --out as given, else docs/accuracy (build/accuracy-quick with --quick).
+out="$root/docs/accuracy" given=""
+prev=""
+for a in "$@"; do
+  [[ "$a" == --quick && -z "$given" ]] && out="$root/build/accuracy-quick"
+  [[ "$prev" == --out ]] && out="$a" given=1
+  [[ "$a" == --out=* ]] && out="${a#--out=}" given=1
+  prev="$a"
+done
 start=$(date +%s)
-"$bin" --out "$out" "$@"
+if [[ -n "$given" ]]; then "$bin" "$@"; else "$bin" --out "$out" "$@"; fi
 /usr/bin/python3 "$root/bench/accuracy/plot.py" "$out"
 echo "run.sh: done in $(( $(date +%s) - start )) s; results in $out" >&2

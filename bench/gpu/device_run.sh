@@ -10,6 +10,10 @@ mkdir -p "$OUT"
 tar xzf .gpuz/b.tgz
 source .gpu/env.sh
 B=.gpu/bin
+# Settled small beds kept for every pflow-bench call of this machine (pflow-bench --base-cache): each bed is
+# settled once per call, not once per stage. Outside $OUT: they need not come back.
+BEDS=${BEDS:-/tmp/pflow-beds}
+mkdir -p "$BEDS"
 stages=("$@")
 ((${#stages[@]})) || stages=(tests bench)
 has() { local s; for s in "${stages[@]}"; do [[ $s == "$1" ]] && return 0; done; return 1; }
@@ -44,7 +48,7 @@ fi
 if has bench; then
   # One settled 200 000-sphere bed per polydispersity, tiled up to each size (bench/README.md).
   for poly in "" "--poly"; do
-    timeout "${BENCH_TIMEOUT:-240}" "$B/pflow-bench" --executor cuda -n "${BENCH_SIZES:-1000000,4000000}" \
+    timeout "${BENCH_TIMEOUT:-240}" "$B/pflow-bench" --base-cache "$BEDS" --executor cuda -n "${BENCH_SIZES:-1000000,4000000}" \
       --tile-from 200000 --settle-steps "${SETTLE:-30000}" --resettle-steps "${RESETTLE:-1000}" \
       --steps "${STEPS:-1000}" --no-lammps --precision "${PRECISIONS:-double,float}" --copy-bandwidth "$bw" \
       ${BENCH_ARGS:-} --device "$dev" --commit "$commit" $poly \
@@ -54,7 +58,7 @@ if has bench; then
 fi
 # Throughput against size (where one GPU saturates: the manager's --particles-per-gpu), from a 50 000 bed.
 if has scaling; then
-  timeout "${SCALING_TIMEOUT:-240}" "$B/pflow-bench" --executor cuda -n "${SCALING_SIZES:-50000,100000,200000,500000,1000000,2000000}" \
+  timeout "${SCALING_TIMEOUT:-240}" "$B/pflow-bench" --base-cache "$BEDS" --executor cuda -n "${SCALING_SIZES:-50000,100000,200000,500000,1000000,2000000}" \
     --tile-from 50000 --settle-steps "${SETTLE:-30000}" --resettle-steps 500 --steps 1000 --no-lammps \
     --precision double,float --copy-bandwidth "$bw" --device "$dev" --commit "$commit" >> "$OUT/bench.jsonl" 2>> "$OUT/bench.log"
   summary+=("scaling rc=$?")
@@ -62,7 +66,7 @@ fi
 # The largest beds that fit, one per precision (LARGEST="float:N double:N"), timed briefly.
 if has largest; then
   for spec in ${LARGEST:-float:100000000}; do
-    timeout "${LARGEST_TIMEOUT:-300}" "$B/pflow-bench" --executor cuda -n "${spec#*:}" --tile-from 200000 \
+    timeout "${LARGEST_TIMEOUT:-300}" "$B/pflow-bench" --base-cache "$BEDS" --executor cuda -n "${spec#*:}" --tile-from 200000 \
       --settle-steps "${SETTLE:-30000}" --resettle-steps 300 --steps 300 --no-lammps --precision "${spec%%:*}" \
       --copy-bandwidth "$bw" --device "$dev" --commit "$commit" >> "$OUT/bench.jsonl" 2>> "$OUT/bench.log"
     summary+=("largest $spec rc=$?")
@@ -74,7 +78,7 @@ if has cpu; then
   for bed in ${CPU_BEDS:-mono poly}; do
     poly=""
     [[ $bed == poly ]] && poly=--poly
-    timeout "${CPU_TIMEOUT:-300}" "$B/pflow-bench" --executor cpu --settle-executor cuda -n "${CPU_SIZES:-1000000}" \
+    timeout "${CPU_TIMEOUT:-300}" "$B/pflow-bench" --base-cache "$BEDS" --executor cpu --settle-executor cuda -n "${CPU_SIZES:-1000000}" \
       --tile-from 200000 --settle-steps "${SETTLE:-30000}" --resettle-steps "${RESETTLE:-1000}" --steps "${CPU_STEPS:-300}" \
       --threads "$cores" --lammps-ranks "$cores" --precision double,float $poly \
       --device "$(lscpu | sed -n 's/^Model name: *//p' | head -1), $cores cores" \
@@ -93,7 +97,7 @@ if has cpuab; then
     local envs=()
     while [[ $1 != -- ]]; do envs+=("$1"); shift; done  # VAR=value ... before --, pflow-bench options after
     shift
-    env "${envs[@]}" "$B/pflow-bench" --executor cpu --settle-executor cuda -n "${CPU_SIZES:-1000000}" --tile-from 200000 \
+    env "${envs[@]}" "$B/pflow-bench" --base-cache "$BEDS" --executor cpu --settle-executor cuda -n "${CPU_SIZES:-1000000}" --tile-from 200000 \
       --settle-steps "${SETTLE:-30000}" --resettle-steps "${RESETTLE:-1000}" --steps "${CPU_STEPS:-300}" \
       --precision "${AB_PRECISIONS:-double}" --device "$(lscpu | sed -n 's/^Model name: *//p' | head -1), $cores cores ($label)" \
       --commit "$commit" "$@" >> "$OUT/bench.jsonl" 2>> "$OUT/bench.log"
@@ -155,8 +159,12 @@ if has model; then
   summary+=("least_model_test cuda rc=$? $(grep -E '^\[  (PASSED|FAILED)' "$OUT/least_model_gpu.log" | tr '\n' ' ')")
   timeout "${MODEL_TIMEOUT:-300}" "$B/pflow-model-bench" --executor cuda -n "${MODEL_N:-500000}" --settle-steps "${MODEL_SETTLE:-10000}" \
     --steps 1000 --repeats 2 --case frictionless,norolling,planar,nowalls --model full,auto > "$OUT/model.jsonl" 2> "$OUT/model.log"
-  summary+=("model-bench cuda rc=$?")
-  summary+=("$(tail -12 "$OUT/model.log")")
+  summary+=("model-bench cuda rc=$? $(tail -3 "$OUT/model.log" | tr '\n' ' ')")
+  while read -r line; do summary+=("$line"); done < <(python3 -c '
+import json, sys
+for l in open(sys.argv[1]):
+    j = json.loads(l)
+    print(j.get("case"), j.get("model"), "%.3g particle-steps/s" % j.get("particle_steps_per_s", 0))' "$OUT/model.jsonl" 2>/dev/null)
 fi
 # The accuracy study on the GPU: its rows merged into the committed CSVs (copied in, read back from $OUT).
 if has accuracy; then
