@@ -1,5 +1,7 @@
 #include "cli/RunCommand.h"
 
+#include "cli/SphRunCommand.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -59,6 +61,8 @@ std::string humanSeconds(double s) {
 Result<RunSummary> runScene(const RunOptions& o) {
   auto scene = frontend::loadScene(o.scenePath);
   if (!scene) return scene.status();
+  if (scene.value().config.solver == compute::Solver::kSph)
+    return runSphScene(o, scene.value(), o.outputPath.empty() ? defaultOutput(scene.value(), o.scenePath) : o.outputPath);
   if (o.initialOnly) {  // `pflow build`: the frontend's initial-state writer, the one the model store uses
     RunSummary sum;
     sum.outputPath = o.outputPath.empty() ? defaultOutput(scene.value(), o.scenePath) : o.outputPath;
@@ -160,6 +164,7 @@ int validateScene(const std::string& scenePath, bool json) {
     else std::fprintf(stderr, "%s\n", scene.status().message().c_str());
     return exitCodeFor(scene.status());
   }
+  if (scene.value().config.solver == compute::Solver::kSph) return validateSphScene(scenePath, scene.value(), json);
   auto summary = frontend::summarize(scene.value());
   if (!summary) {
     std::fprintf(stderr, "%s\n", summary.status().message().c_str());

@@ -3,6 +3,7 @@
 // writes DIR/study.csv (one row per run and quantity; rows of other executors are kept, so a CPU and a GPU
 // run give one file) and DIR/stability.csv (per problem, executor, precision and softening: the largest
 // stable dt fraction and how the next one failed).
+#include "bench/accuracy/SphStudy.h"
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -256,7 +257,21 @@ int main(int argc, char** argv) {
                                                 "default docs/accuracy, with --quick build/accuracy-quick)");
   app.add_option("--only", o.only, "run only the problems whose name starts with this (e.g. chung_ooi_1, settled_bed)");
   app.add_option("--threads", o.threads, "OpenMP threads (0 = all)");
+  std::string solver = "dem", precision = "double";
+  app.add_option("--solver", solver, "dem: the DEM problems (docs/accuracy.md); sph: the dam break's convergence (docs/sph.md)")
+      ->check(CLI::IsMember({"dem", "sph"}));
+  app.add_option("--precision", precision, "sph: float | double")->check(CLI::IsMember({"float", "double"}));
   CLI11_PARSE(app, argc, argv);
+  if (solver == "sph") {
+    SphStudyOptions so;
+    so.executor = executor == "cuda" ? pflow::compute::ExecutorKind::kCuda : pflow::compute::ExecutorKind::kCpu;
+    so.precision = precision == "float" ? pflow::compute::Precision::kFloat : pflow::compute::Precision::kDouble;
+    so.quick = o.quick;
+    so.threads = o.threads;
+    so.out = outOpt->count() ? o.out : (o.quick ? "build/sph-quick" : "docs/sph");
+    spdlog::set_level(spdlog::level::warn);
+    return runSphStudy(so);
+  }
   if (o.quick && outOpt->count() == 0) o.out = "build/accuracy-quick";  // never mixed into the committed study
   o.executor = executor == "cuda" ? pflow::compute::ExecutorKind::kCuda : pflow::compute::ExecutorKind::kCpu;
   spdlog::set_level(spdlog::level::warn);  // the engine's per-run info lines would drown the table

@@ -2,7 +2,7 @@
 # One call on the lent GPU machine (see bench/README.md): unpack the bundle built here, run the GPU
 # tests, measure the copy bandwidth and the settled-bed throughput, print a short table last.
 # Usage (from the repository root on the device machine):
-#   bash bench/gpu/device_run.sh [tests] [sanitize] [bench] [scaling] [largest] [cpu] [cpuab] [layouts] [mpi] [model] [accuracy]
+#   bash bench/gpu/device_run.sh [tests] [sanitize] [bench] [scaling] [largest] [cpu] [cpuab] [layouts] [mpi] [model] [accuracy] [sph]
 # Logs and JSON go to $OUT (or ./out).
 set -uo pipefail
 OUT=${OUT:-out}
@@ -173,6 +173,27 @@ if has accuracy; then
   start=$SECONDS
   timeout "${ACCURACY_TIMEOUT:-420}" "$B/pflow-accuracy" --executor cuda --out "$OUT/accuracy" > "$OUT/accuracy.log" 2>&1
   summary+=("pflow-accuracy cuda rc=$? $((SECONDS - start))s")
+fi
+# SPH (docs/sph.md): the GPU tests against the CPU, the dam break's convergence study on the GPU (double and
+# float), and the refined 2D dam break run end to end by `pflow run` (its PERFORMANCE line).
+if has sph; then
+  for t in sph_gpu_test sph_flow_test; do
+    start=$SECONDS
+    timeout 600 "$B/$t" > "$OUT/$t.log" 2>&1
+    rc=$?
+    summary+=("$t rc=$rc $((SECONDS - start))s $(grep -E '^\[  (PASSED|FAILED)|largest CPU-GPU' "$OUT/$t.log" | tr '\n' ' ')")
+  done
+  for prec in double float; do
+    start=$SECONDS
+    timeout "${SPH_STUDY_TIMEOUT:-600}" "$B/pflow-accuracy" --solver sph --executor cuda --precision $prec ${SPH_STUDY_ARGS:-} \
+      --out "$OUT/sph_$prec" > "$OUT/sph_study_$prec.log" 2>&1
+    summary+=("sph study $prec rc=$? $((SECONDS - start))s")
+  done
+  summary+=("$(cat "$OUT/sph_study_double.log" | head -40)")
+  sed 's/spacing: 0.01 /spacing: 0.002 /' examples/dam_break_2d.yaml > "$OUT/dam_break_2d_refined.yaml"
+  timeout 300 "$B/pflow" run "$OUT/dam_break_2d_refined.yaml" --executor cuda -o "$OUT/dam_break_refined.h5" > "$OUT/sph_run.log" 2>&1
+  summary+=("pflow run refined 2D rc=$? $(grep -E 'PERFORMANCE|done:' "$OUT/sph_run.log" | tr '\n' ' ')")
+  rm -f "$OUT"/dam_break_refined.h5
 fi
 if [[ -s $OUT/bench.jsonl ]]; then
   summary+=("$(python3 - "$OUT/bench.jsonl" <<'PY'

@@ -17,6 +17,7 @@ enum ConditionBits : std::uint32_t {
   kExcessiveOverlap = 1u << 6,      // an overlap beyond the run's limit (simulation.max_overlap): blow-up
   kTunnelled = 1u << 7,             // a centre behind a plane, or carried through a triangle's face
   kLeftDomain = 1u << 8,            // a centre outside the scene's explicit simulation.domain
+  kDensityOutOfRange = 1u << 9,     // SPH: a fluid particle's density outside the run's bounds (sph.density_bounds)
 };
 
 struct Conditions {
@@ -29,6 +30,7 @@ struct Conditions {
   std::uint32_t deepParticle = kNoIndex; // lowest local index with an excessive overlap
   std::uint32_t tunnelParticle = kNoIndex;  // lowest local index that tunnelled through a wall
   std::uint32_t outsideParticle = kNoIndex; // lowest local index outside the explicit domain
+  std::uint32_t densityParticle = kNoIndex; // SPH: lowest local index with a density out of range
 };
 
 namespace kernels {

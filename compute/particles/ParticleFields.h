@@ -1,5 +1,6 @@
-// THE list of per-particle fields. Reorder, snapshots, and (later) migration and halo exchange
-// iterate over this table, so adding a field is one line here.
+// THE list of the DEM solver's per-particle fields. Reorder, snapshots, migration and halo exchange
+// iterate over this table (compute/particles/FieldRows.h), so adding a field is one line here. The SPH
+// solver's table, on the same machinery, is compute/sph/SphFields.h.
 //
 // Columns: enum name, output name, element type, multiplicity (one value, one per contact slot, or
 // one per wall slot), SI unit, flags. `Real` and `Real3` are the run's precision (float or double,
@@ -7,19 +8,9 @@
 #pragma once
 #include <cstdint>
 
-#include "compute/core/VectorMath.h"
-#include "compute/particles/ParticleSnapshot.h"
+#include "compute/particles/FieldInfo.h"
 
 namespace pflow::compute {
-
-enum FieldFlags : std::uint32_t {
-  kSnapshot = 1u << 0,  // written to snapshot files
-  kMigrate = 1u << 1,   // travels with a particle that changes rank
-  kGhost = 1u << 2,     // what a ghost (a copy in a neighbouring rank's halo) holds, sent at each rebuild
-  kRefresh = 1u << 3,   // refreshed in the ghosts every step between rebuilds
-};
-
-enum class Multiplicity : std::uint8_t { kOne, kContactSlots, kWallSlots };
 
 // clang-format off
 #define PFLOW_PARTICLE_FIELDS(X)                                                                                       \
@@ -57,25 +48,7 @@ template <Field F, class R> struct FieldType;
 PFLOW_PARTICLE_FIELDS(PFLOW_X)
 #undef PFLOW_X
 
-template <class T> constexpr ScalarType scalarTypeOf();
-template <> constexpr ScalarType scalarTypeOf<double>() { return ScalarType::kF64; }
-template <> constexpr ScalarType scalarTypeOf<Vec3d>() { return ScalarType::kF64; }
-template <> constexpr ScalarType scalarTypeOf<float>() { return ScalarType::kF32; }
-template <> constexpr ScalarType scalarTypeOf<Vec3f>() { return ScalarType::kF32; }
-template <> constexpr ScalarType scalarTypeOf<std::int32_t>() { return ScalarType::kI32; }
-template <> constexpr ScalarType scalarTypeOf<std::uint64_t>() { return ScalarType::kU64; }
-template <> constexpr ScalarType scalarTypeOf<std::uint32_t>() { return ScalarType::kU32; }
-
-struct FieldInfo {
-  Field id;
-  const char* name;
-  std::size_t elementBytes;  // one value (times the slot count for slot fields)
-  ScalarType scalar;
-  int components;
-  Multiplicity multiplicity;
-  const char* unit;
-  std::uint32_t flags;
-};
+using FieldInfo = FieldInfoOf<Field>;
 
 // The table for a run of precision R.
 template <class R>
@@ -94,5 +67,15 @@ inline constexpr const FieldInfo (&kFieldTable)[kNumFields] = kFieldTableOf<doub
 inline const FieldInfo* fieldTable(bool singlePrecision) {
   return singlePrecision ? kFieldTableOf<float> : kFieldTableOf<double>;
 }
+
+// The DEM field set, as FieldStore (compute/particles/FieldStore.h) sees it.
+struct DemFieldSet {
+  using Id = Field;
+  static constexpr int kCount = kNumFields;
+  template <class R> static constexpr const FieldInfo* table() { return kFieldTableOf<R>; }
+  template <Field F, class R> using Type = typename FieldType<F, R>::type;
+  // Bytes of an empty slot: partner and wall keys all ones (kNoPartner, kNoGid), displacements zero.
+  static constexpr unsigned char emptySlotByte(Field f) { return f == Field::HistoryPartner || f == Field::WallKey ? 0xFF : 0x00; }
+};
 
 }  // namespace pflow::compute

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "common/Status.h"
+#include "compute/core/ExecutorKind.h"
 #include "compute/contact/ContactParams.h"
 #include "compute/contact/ForceKernel.h"
 #include "compute/neighbor/CellGrid.h"
@@ -211,8 +212,5 @@ std::unique_ptr<Engine> makeCpuEngine(EngineSetup setup, bool singlePrecision = 
 // The CUDA engine on `device` (compute/cuda/CudaEngine.cu). An error, never a fall-back, where this pflow
 // was built without CUDA or the device is missing.
 Result<std::unique_ptr<Engine>> makeCudaEngine(EngineSetup setup, int device, bool singlePrecision = false);
-// Usable CUDA devices: 0 without CUDA in the build, a driver or a GPU.
-int cudaDeviceCount();
-bool cudaBuiltIn();
 
 }  // namespace pflow::compute

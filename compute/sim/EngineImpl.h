@@ -15,6 +15,7 @@
 #include "compute/geometry/MeshKernels.h"
 #include "compute/integrate/VelocityVerlet.h"
 #include "compute/neighbor/NeighborKernels.h"
+#include "compute/particles/FieldRows.h"
 #include "compute/particles/ParticleData.h"
 #include "compute/sim/Engine.h"
 #include "compute/sim/TimeStep.h"
@@ -29,7 +30,7 @@ class EngineImpl final : public Engine {
   using V = Vec3<R>;
 
   explicit EngineImpl(EngineSetup s)
-      : m_exec(s.threads), m_mem(m_exec.memory()), m_particles(m_mem), m_setup(std::move(s)) {
+      : m_exec(s.threads), m_mem(m_exec.memory()), m_particles(m_mem), m_rows(m_exec, m_mem, m_particles), m_setup(std::move(s)) {
     init();
   }
 
@@ -59,34 +60,29 @@ class EngineImpl final : public Engine {
     m_particles.resize(m_n);
     m_exec.forEach(m_n, kernels::CellKey{g, m_particles.template ptr<Field::Position>(), m_cellKey.as<std::uint32_t>()});
     m_exec.sortByKey(m_cellKey.as<std::uint32_t>(), m_n, g.numCells(), m_perm.as<Index>(), m_cellStart.as<Index>());
-    reorder(m_perm.as<Index>(), m_n);
+    m_rows.reorder(m_perm.as<Index>(), m_n);
   }
 
   // ---- distributed runs (Engine.h) ----
-  std::size_t rowBytes(std::uint32_t flags) const override {
-    std::size_t b = 0;
-    for (const auto& f : kFieldTableOf<R>)
-      if (f.flags & flags) b += m_particles.strideBytes(f);
-    return b;
-  }
+  std::size_t rowBytes(std::uint32_t flags) const override { return m_rows.rowBytes(flags); }
   void pack(const std::vector<Index>& rows, const std::vector<int>& segments, std::uint32_t flags,
             std::vector<std::byte>& out) const override {
-    uploadRows(m_rowsBuf, rows);
-    packRows(m_rowsBuf.as<Index>(), segments, flags, out);
+    m_rows.uploadRows(m_rowsBuf, rows);
+    m_rows.pack(m_rowsBuf.as<Index>(), segments, flags, out);
   }
   void setHaloRows(const std::vector<Index>& rows, const std::vector<int>& segments) override {
-    uploadRows(m_haloRowsBuf, rows);
+    m_rows.uploadRows(m_haloRowsBuf, rows);
     m_haloSegments = segments;
   }
   void packHalo(std::uint32_t flags, std::vector<std::byte>& out) const override {
-    packRows(m_haloRowsBuf.as<Index>(), m_haloSegments, flags, out);
+    m_rows.pack(m_haloRowsBuf.as<Index>(), m_haloSegments, flags, out);
   }
   void keepOwned(const std::vector<Index>& keep) override {
     m_n = m_owned;
     const Index count = Index(keep.size());
     if (m_rowsBuf.bytes() < std::max<std::size_t>(1, count) * sizeof(Index)) m_rowsBuf.resize(std::max<std::size_t>(1, count) * sizeof(Index));
     m_mem.copyFromHost(m_rowsBuf.data(), keep.data(), count * sizeof(Index));
-    reorder(m_rowsBuf.as<Index>(), count);
+    m_rows.reorder(m_rowsBuf.as<Index>(), count);
     m_owned = m_n = count;
     m_particles.resize(m_n);
     sizeLocalBuffers();
@@ -112,7 +108,7 @@ class EngineImpl final : public Engine {
   void refreshGhosts(const std::vector<PackedRows>& blocks) override {
     Index first = m_owned;
     for (const PackedRows& b : blocks) {
-      copyIn(b.data, first, b.count, kRefresh);
+      m_rows.copyIn(b.data, first, b.count, kRefresh);
       first += b.count;
     }
   }
@@ -242,29 +238,7 @@ class EngineImpl final : public Engine {
   }
 
   ParticleSnapshot snapshot(std::int64_t step, double time, const std::vector<std::string>& fields) const override {
-    ParticleSnapshot s;
-    s.step = step;
-    s.time = time;
-    s.n = m_owned;
-    // Output is double at both precisions (one file layout): float fields are widened on the host.
-    for (const auto& f : kFieldTableOf<R>) {
-      if (!(f.flags & kSnapshot)) continue;
-      if (!fields.empty() && std::find(fields.begin(), fields.end(), f.name) == fields.end()) continue;
-      SnapshotArray a{f.name, f.scalar, f.components, f.unit, {}};
-      a.data.resize(m_particles.fieldBytes(f, m_owned));
-      m_mem.copyToHost(a.data.data(), m_particles.buffer(f.id).data(), a.data.size());
-      if (f.scalar == ScalarType::kF32) {
-        const std::size_t values = a.data.size() / sizeof(float);
-        std::vector<std::byte> wide(values * sizeof(double));
-        const float* from = reinterpret_cast<const float*>(a.data.data());
-        double* to = reinterpret_cast<double*>(wide.data());
-        for (std::size_t k = 0; k < values; ++k) to[k] = from[k];
-        a.data = std::move(wide);
-        a.type = ScalarType::kF64;
-      }
-      s.arrays.push_back(std::move(a));
-    }
-    return s;
+    return m_rows.snapshot(step, time, m_owned, fields);
   }
 
   GeometrySnapshot geometry() const override {
@@ -334,58 +308,12 @@ class EngineImpl final : public Engine {
   ListLayout nbrLayout() const { return m_columnMajor ? ListLayout::columnMajor(m_owned) : ListLayout::rowMajor(m_nbrCap); }
   void allocWallCandidates() { m_wallCand.resize(std::max<std::size_t>(1, std::size_t(m_owned) * m_wallCap) * sizeof(Index)); }
 
-  // Every field of the table (all of its slots) reordered so that new row k = old row perm[k], k < count
-  // (perm on the device), through one scratch buffer: slot-major slot fields one column at a time.
-  void reorder(const Index* perm, Index count) {
-    const bool byColumn = m_particles.slotMajor();
-    std::size_t largest = 0;
-    for (const auto& f : kFieldTableOf<R>)
-      largest = std::max(largest, f.elementBytes * (byColumn ? 1 : m_particles.valuesPerParticle(f)) * std::size_t(count));
-    if (m_scratch.bytes() < largest) m_scratch.resize(largest);
-    for (const auto& f : kFieldTableOf<R>) {
-      Buffer& field = m_particles.buffer(f.id);
-      const bool columns = byColumn && f.multiplicity != Multiplicity::kOne;
-      const std::size_t blocks = columns ? m_particles.valuesPerParticle(f) : 1;
-      const std::size_t stride = columns ? f.elementBytes : m_particles.strideBytes(f);
-      for (std::size_t k = 0; k < blocks; ++k) {
-        unsigned char* data = field.template as<unsigned char>() + k * m_particles.columnBytes(f);
-        m_exec.forEach(count, kernels::GatherBytes{data, m_scratch.as<unsigned char>(), perm, stride});
-        m_mem.copyWithin(data, m_scratch.data(), stride * std::size_t(count));
-      }
-    }
-  }
-  // Calls f(first byte of row 0, stride) for each block of the fields carrying `flags`: one per field,
-  // or one per slot of a slot-major slot field. The packed layout of pack/unpack.
-  template <class F>
-  void forEachBlock(std::uint32_t flags, const F& f) const {
-    for (const auto& fi : kFieldTableOf<R>) {
-      if (!(fi.flags & flags)) continue;
-      const Buffer& field = m_particles.buffer(fi.id);
-      const bool columns = m_particles.slotMajor() && fi.multiplicity != Multiplicity::kOne;
-      const std::size_t blocks = columns ? m_particles.valuesPerParticle(fi) : 1;
-      const std::size_t stride = columns ? fi.elementBytes : m_particles.strideBytes(fi);
-      for (std::size_t k = 0; k < blocks; ++k)
-        f(const_cast<unsigned char*>(field.template as<unsigned char>()) + k * m_particles.columnBytes(fi), stride);
-    }
-  }
   // Appends `count` rows of the fields carrying `flags` (packed by pack()) after the first m_n rows.
   void unpack(const std::byte* data, Index count, std::uint32_t flags) {
     const Index first = m_n;
     m_n += count;
     m_particles.resize(m_n);
-    copyIn(data, first, count, flags);
-  }
-  // Overwrites rows [first, first + count) of the fields carrying `flags` with packed data.
-  void copyIn(const std::byte* data, Index first, Index count, std::uint32_t flags) {
-    if (!count) return;
-    const std::size_t bytes = rowBytes(flags) * count;
-    if (m_stage.bytes() < bytes) m_stage.resize(bytes);
-    m_mem.copyFromHost(m_stage.data(), data, bytes);
-    std::size_t at = 0;
-    forEachBlock(flags, [&](unsigned char* field, std::size_t stride) {
-      m_mem.copyWithin(field + stride * first, m_stage.as<unsigned char>() + at, stride * count);
-      at += stride * count;
-    });
+    m_rows.copyIn(data, first, count, flags);
   }
   // The pair kernel, then the wall kernel, over the particles of `set`: every owned one, or one part of
   // the list splitBoundary made (boundary rows first, then interior ones).
@@ -472,32 +400,6 @@ class EngineImpl final : public Engine {
     m_exec.forEach(m_owned, kernels::MarkBoundary{m_nbr.as<Index>(), m_nbrCount.as<std::uint32_t>(), nbrLayout(), m_nbrCap, m_owned, flag});
     m_numBoundary = Index(m_exec.exclusiveScan(flag, scan, m_owned));
     m_exec.forEach(m_owned, kernels::SplitByFlag{flag, scan, m_numBoundary, m_split.as<Index>()});
-  }
-  void uploadRows(Buffer& b, const std::vector<Index>& rows) const {
-    if (b.bytes() < rows.size() * sizeof(Index)) b.resize(rows.size() * sizeof(Index));
-    m_mem.copyFromHost(b.data(), rows.data(), rows.size() * sizeof(Index));
-  }
-  // Each segment field by field, each field a block of the segment's values (slot fields slot by slot when
-  // slot-major), gathered on the device from rows `rows` (on the device) into one staging buffer: one copy
-  // back to the host, whatever the number of segments.
-  void packRows(const Index* rows, const std::vector<int>& segments, std::uint32_t flags, std::vector<std::byte>& out) const {
-    Index count = 0;
-    for (int segment : segments) count += Index(segment);
-    out.resize(rowBytes(flags) * count);
-    if (!count) return;
-    if (m_stage.bytes() < out.size()) m_stage.resize(out.size());
-    std::size_t at = 0;
-    Index first = 0;
-    for (int segment : segments) {
-      const Index n = Index(segment);
-      if (!n) continue;
-      forEachBlock(flags, [&](const unsigned char* field, std::size_t stride) {
-        m_exec.forEach(n, kernels::GatherBytes{field, m_stage.as<unsigned char>() + at, rows + first, stride});
-        at += stride * n;
-      });
-      first += n;
-    }
-    m_mem.copyToHost(out.data(), m_stage.data(), out.size());
   }
   // Per-particle work buffers sized for the current counts (kept when big enough).
   void sizeLocalBuffers() {
@@ -614,6 +516,7 @@ class EngineImpl final : public Engine {
   Exec m_exec;
   MemorySpace& m_mem;
   ParticleData<R> m_particles;
+  FieldRows<Exec, ParticleData<R>> m_rows;  // reorder, pack, copy in, snapshot: driven by the field table
   EngineSetup m_setup;
   Index m_n = 0;      // local particles: the owned ones, then ghosts (distributed runs)
   Index m_owned = 0;
@@ -624,7 +527,7 @@ class EngineImpl final : public Engine {
   Index m_nbrCap = 16;
   bool m_columnMajor = Exec::kColumnMajorLists;
   Index m_wallCap = 4;
-  Buffer m_moved{m_mem, 0}, m_cellKey{m_mem, 0}, m_perm{m_mem, 0}, m_cellStart{m_mem, 0}, m_scratch{m_mem, 0};
+  Buffer m_moved{m_mem, 0}, m_cellKey{m_mem, 0}, m_perm{m_mem, 0}, m_cellStart{m_mem, 0};
   Buffer m_nbr{m_mem, 0}, m_nbrSlot{m_mem, 0}, m_nbrCount{m_mem, 0};
   Buffer m_planes{m_mem, 0}, m_triRef{m_mem, 0}, m_triVerts{m_mem, 0}, m_triRebuild{m_mem, 0};
   Buffer m_triMesh{m_mem, 0}, m_triMaterial{m_mem, 0}, m_meshMotion{m_mem, 0};
@@ -637,7 +540,7 @@ class EngineImpl final : public Engine {
   Buffer m_slabOf{m_mem, 0}, m_slabItems{m_mem, 0}, m_slabStart{m_mem, 0}, m_owned1{m_mem, 0};
   Index m_numSlabs = 0;  // 0: every particle evaluates all its pairs (ComputeForces)
   Index m_numBoundary = 0;
-  mutable Buffer m_stage{m_mem, 0}, m_rowsBuf{m_mem, 0};  // pack/unpack staging
+  mutable Buffer m_rowsBuf{m_mem, 0};  // pack's rows
   mutable Buffer m_haloRowsBuf{m_mem, 0};  // the halo's rows, on the device from one rebuild to the next
   std::vector<int> m_haloSegments;
 };

@@ -367,6 +367,7 @@ void validateParticles(const RunConfig& c, ErrorList& e) {
 }  // namespace
 
 ErrorList RunConfig::validate() const {
+  if (solver == Solver::kSph) return sph.validate(sim);
   ErrorList errors;
   validateMaterials(*this, errors);
   validatePairs(*this, errors);

@@ -9,6 +9,7 @@
 
 #include "common/Status.h"
 #include "compute/core/VectorMath.h"
+#include "compute/sph/SphConfig.h"
 
 namespace pflow::compute {
 
@@ -118,7 +119,12 @@ struct SimulationSettings {
   std::uint64_t seed = 1;            // for anything random (jitter)
 };
 
+// Which solver runs the scene (the scene's `solver`): granular DEM, or weakly compressible SPH for fluids.
+enum class Solver { kDem, kSph };
+
 struct RunConfig {
+  Solver solver = Solver::kDem;
+  sph::SphConfig sph;  // solver: sph (the fluid, the method and its particles); unused by DEM
   std::vector<MaterialConfig> materials;
   std::vector<MaterialPairConfig> pairs;
   ParticleInit particles;

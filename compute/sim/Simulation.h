@@ -7,6 +7,7 @@
 #include <string>
 
 #include "common/Status.h"
+#include "compute/core/ExecutorKind.h"
 #include "compute/sim/Domain.h"
 #include "compute/sim/Engine.h"
 #include "compute/sim/PhaseTimers.h"
@@ -14,9 +15,6 @@
 #include "compute/sim/TimeStep.h"
 
 namespace pflow::compute {
-
-// kAuto: the CUDA executor where a GPU is visible, else OpenMP. An explicit kCuda never falls back.
-enum class ExecutorKind { kCpu, kCuda, kAuto };
 
 struct SimulationOptions {
   ExecutorKind executor = ExecutorKind::kCpu;
@@ -33,9 +31,6 @@ struct SimulationOptions {
   // sides, as the GPU does (tests compare the two).
   bool pairsOnce = true;
 };
-
-// "cpu" | "cuda" | "auto" -> kind; an error naming the flag otherwise.
-Result<ExecutorKind> parseExecutorKind(const std::string& name, const std::string& flag = "--executor");
 
 class Simulation {
  public:

@@ -1,4 +1,6 @@
 #include "frontend/scene/Loader.h"
+
+#include "compute/sph/SphFields.h"
 #include <charconv>
 #include <filesystem>
 
@@ -229,7 +231,7 @@ void Loader::parseSimulation(const Fields& top) {
     missing(top, "simulation", "at least simulation.duration");
     return;
   }
-  const auto f = mapping(e->value, "simulation", e->loc, kSimulationKeys);
+  const auto f = mapping(e->value, "simulation", e->loc, m_sph ? Keys(kSphSimulationKeys) : Keys(kSimulationKeys));
   if (!f) return;
   compute::SimulationSettings& s = m_config.sim;
   get(*f, "gravity", s.gravity);
@@ -339,15 +341,21 @@ bool Loader::parseRegion(const Fields& parent, std::string_view key, Vec3d& lo, 
 void Loader::parseOutput(const Fields& top) {
   const Entry* e = top.find("output");
   if (!e) return;
-  const auto f = mapping(e->value, "output", e->loc, kOutputKeys);
+  const auto f = mapping(e->value, "output", e->loc, m_sph ? Keys(kSphOutputKeys) : Keys(kOutputKeys));
   if (!f) return;
   get(*f, "file", m_outputFile);
+  if (m_sph) get(*f, "probe_interval", m_config.sph.probeInterval);
   const Entry* fields = f->find("fields");
   if (!fields || !isList(fields->value, "output.fields", fields->loc, "field names")) return;
   // The snapshot fields of the particle field table; id and position are always written (ParaView needs them).
   std::vector<std::string> known;
-  for (const auto& info : compute::kFieldTable)
-    if (info.flags & compute::kSnapshot) known.emplace_back(info.name);
+  if (m_sph) {
+    for (const auto& info : compute::sph::kSphFieldTableOf<double>)
+      if (info.flags & compute::kSnapshot) known.emplace_back(info.name);
+  } else {
+    for (const auto& info : compute::kFieldTable)
+      if (info.flags & compute::kSnapshot) known.emplace_back(info.name);
+  }
   for (std::size_t k = 0; k < fields->value.size(); ++k) {
     const std::string path = at("output.fields", k);
     std::string name;
@@ -556,8 +564,30 @@ Result<LoadedScene> Loader::run(const std::string& yaml, const std::string& sour
     std::vector<YAML::Node> ancestors;
     checkStructure(root, "", ancestors);
     if (!m_errors.empty()) return m_errors.toStatus(sourceName);
-    const auto top = mapping(root, "", {1, 1}, kTopKeys);
+    // The solver decides which sections a scene has.
+    if (root.IsMap() && root["solver"]) {
+      const YAML::Node solver = root["solver"];
+      const std::string name = solver.IsScalar() ? solver.Scalar() : std::string();
+      if (name == "sph") m_sph = true;
+      else if (name != "dem")
+        badValue("solver", unknownName("solver", solver.IsScalar() ? name : describe(solver), kSolvers, "Choices"), locOf(solver, {1, 1}));
+    }
+    const auto top = mapping(root, "", {1, 1}, m_sph ? Keys(kSphTopKeys) : Keys(kTopKeys));
     if (!top) return m_errors.toStatus(sourceName);
+    if (m_sph) {
+      m_config.solver = compute::Solver::kSph;
+      parseSimulation(*top);
+      parseSphScene(*top);
+      parseOutput(*top);
+      appendValidation(m_config.validate());
+      if (!m_errors.empty()) return m_errors.toStatus(sourceName);
+      LoadedScene scene;
+      scene.config = std::move(m_config);
+      scene.sourcePath = sourceName;
+      scene.outputFile = std::move(m_outputFile);
+      scene.outputFields = std::move(m_outputFields);
+      return scene;
+    }
     parseMaterials(*top);
     parseSimulation(*top);  // before particles: generators use simulation.seed
     parsePairs(*top);

@@ -35,7 +35,23 @@ using compute::RunConfig;
 using Keys = std::span<const std::string_view>;
 
 
-constexpr std::string_view kTopKeys[] = {"materials", "pairs", "particles", "geometry", "simulation", "output"};
+constexpr std::string_view kTopKeys[] = {"materials", "pairs", "particles", "geometry", "simulation", "output", "solver"};
+constexpr std::string_view kSolvers[] = {"dem", "sph"};
+// solver: sph (frontend/scene/Fluid.cc; docs/scene-format.md, "Fluids").
+constexpr std::string_view kSphTopKeys[] = {"solver", "fluid", "tank", "obstacles", "sph", "probes", "simulation", "output"};
+constexpr std::string_view kFluidKeys[] = {"density", "sound_speed", "gamma", "kinematic_viscosity", "blocks"};
+constexpr std::string_view kFluidBlockKeys[] = {"name", "min", "max", "velocity"};
+constexpr std::string_view kTankKeys[] = {"name", "min", "max", "open_top"};
+constexpr std::string_view kObstacleKeys[] = {"name", "min", "max"};
+constexpr std::string_view kSphKeys[] = {"dimension", "spacing", "smoothing_ratio", "kernel", "artificial_viscosity",
+                                         "density_diffusion", "diffusion_correction", "cfl", "dt", "boundary",
+                                         "boundary_layers", "skin", "density_bounds"};
+constexpr std::string_view kSphKernels[] = {"wendland", "cubic_spline"};
+constexpr std::string_view kSphBoundaries[] = {"dynamic"};
+constexpr std::string_view kDiffusionCorrections[] = {"hydrostatic", "none"};
+constexpr std::string_view kProbeKeys[] = {"name", "point", "gauge"};
+constexpr std::string_view kSphSimulationKeys[] = {"gravity", "duration", "snapshot_interval", "precision", "threads"};
+constexpr std::string_view kSphOutputKeys[] = {"file", "fields", "probe_interval"};
 constexpr std::string_view kMaterialKeys[] = {"name", "youngs_modulus", "poisson_ratio", "density", "restitution", "friction", "rolling_friction"};
 constexpr std::string_view kPairKeys[] = {"materials", "restitution", "friction", "rolling_friction"};
 constexpr std::string_view kParticleSetKeys[] = {"name", "material", "method", "size", "count", "solid_fraction", "region",
@@ -185,6 +201,9 @@ class Loader {
   bool parseRegion(const Fields& f, std::string_view key, Vec3d& lo, Vec3d& hi, bool required);
   void parseMotion(const Fields& g, MeshMotion& motion);
   void parseOutput(const Fields& top);
+  // solver: sph (Fluid.cc): fluid, tank, obstacles, sph and probes; the particles generated on the lattice.
+  void parseSphScene(const Fields& top);
+  std::optional<compute::sph::SphRegion> parseSphBox(const Fields& f, const std::string& path);
 
   void addParticle(const Vec3d& x, double r, const Vec3d& v, const Vec3d& w, int material);
   void appendValidation(const ErrorList& found);
@@ -211,6 +230,7 @@ class Loader {
   std::vector<ParticleSet> m_sets;
   std::map<std::string, int, std::less<>> m_materialIndex;
   std::vector<std::string> m_materialNames;
+  bool m_sph = false;  // solver: sph
 };
 
 }  // namespace pflow::frontend::detail

@@ -1,0 +1,138 @@
+// `pflow run` and `pflow validate` for solver: sph scenes: the same options, output file and progress lines
+// as a DEM run (RunCommand.cc), driven by compute::sph::SphSimulation (variable time step: outputs and the
+// progress line go by simulated time).
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "backend/store/SnapshotFile.h"
+#include "cli/SphRunCommand.h"
+#include "common/Log.h"
+#include "compute/sph/SphSimulation.h"
+
+namespace pflow::cli {
+
+namespace fs = std::filesystem;
+using compute::sph::SphSimulation;
+
+Result<RunSummary> runSphScene(const RunOptions& o, const frontend::LoadedScene& scene, const std::string& outputPath) {
+  compute::RunConfig cfg = scene.config;
+  if (o.threads > 0) cfg.sim.threads = o.threads;
+  compute::sph::SphOptions so;
+  auto kind = compute::parseExecutorKind(o.executor);
+  if (!kind) return kind.status();
+  so.executor = kind.value();
+  so.device = o.device;
+  auto created = SphSimulation::create(cfg, so);
+  if (!created) return created.status();
+  SphSimulation& sim = *created.value();
+  const auto& d = sim.derived();
+  spdlog::info("SPH: {} particles ({} fluid, {} boundary), {}D, dp {:.4g} m, h {:.4g} m, {} kernel; executor: {}, {} precision",
+               sim.numParticles(), sim.fluidParticles(), sim.numParticles() - sim.fluidParticles(), cfg.sph.dimension,
+               cfg.sph.spacing, d.h, compute::sph::kernelName(cfg.sph.kernel), sim.executorDescription(), sim.precisionName());
+  spdlog::info("speed of sound {:.4g} m/s ({}); first step {:.4g} s (CFL {})", d.c0, d.soundSpeedReason, sim.stableDt(), cfg.sph.cfl);
+
+  RunSummary sum;
+  sum.outputPath = outputPath;
+  sum.executor = sim.executorDescription() + ", " + sim.precisionName();
+  sum.particles = sim.numParticles();
+  if (const fs::path parent = fs::path(sum.outputPath).parent_path(); !parent.empty()) {
+    std::error_code ec;
+    fs::create_directories(parent, ec);
+    if (ec) return ioError("cannot create the output folder '" + parent.string() + "': " + ec.message());
+  }
+  auto writer = backend::SnapshotWriter::create(sum.outputPath);
+  if (!writer) return writer.status();
+  sum.xdmfPath = writer.value()->xdmfPath();
+  if (Status s = writer.value()->writeGeometry({}); !s.isOk()) return s;
+  auto writeSnapshot = [&]() -> Status {
+    auto t = sim.timers().time(compute::Phase::kOutput);
+    ++sum.snapshots;
+    return writer.value()->writeSnapshot(sim.snapshot(scene.outputFields));
+  };
+  if (Status s = writeSnapshot(); !s.isOk()) return s;
+  if (o.initialOnly) {  // `pflow build`: the initial state (hydrostatic densities and pressures included)
+    if (Status s = writer.value()->close(); !s.isOk()) return s;
+    spdlog::info("initial state of {} particles written to {} (open {} in ParaView)", sum.particles, sum.outputPath, sum.xdmfPath);
+    return sum;
+  }
+  const double duration = cfg.sim.duration;
+  sim.scheduleOutput(cfg.sim.snapshotInterval, duration);
+  spdlog::info("running to t = {} s, a snapshot every {} s, output {}", duration,
+               cfg.sim.snapshotInterval > 0 ? cfg.sim.snapshotInterval : duration, sum.outputPath);
+  const auto wallStart = std::chrono::steady_clock::now();
+  auto lastReport = wallStart;
+  auto observer = [&](const SphSimulation& s) -> Status {
+    if (s.outputDue())
+      if (Status st = writeSnapshot(); !st.isOk()) return st;
+    if (o.maxSteps >= 0 && s.stepCount() >= o.maxSteps) return Status(StatusCode::kCancelled, "step limit");
+    const auto now = std::chrono::steady_clock::now();
+    if (o.progressSeconds > 0 && std::chrono::duration<double>(now - lastReport).count() >= o.progressSeconds) {
+      lastReport = now;
+      const double wall = std::chrono::duration<double>(now - wallStart).count();
+      const double rate = double(s.numParticles()) * double(s.stepCount()) / wall;
+      const double eta = s.time() > 0 ? wall / s.time() * (duration - s.time()) : 0;
+      spdlog::info("step {} t = {:.5g}/{} s, dt {:.3g} s, {:.3g} particle-steps/s, ETA {:.1f} s", s.stepCount(), s.time(), duration,
+                   s.dt(), rate, eta);
+    }
+    return Status::ok();
+  };
+  Status run = sim.runUntil(duration, observer);
+  if (run.code() == StatusCode::kCancelled && o.maxSteps >= 0) {
+    run = Status::ok();
+    if (!sim.outputDue())
+      if (Status st = writeSnapshot(); !st.isOk()) run = st;
+  }
+  sum.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
+  sum.steps = sim.stepCount();
+  sum.simulatedTime = sim.time();
+  sum.particleStepsPerSecond = sum.wallSeconds > 0 ? double(sum.particles) * double(sum.steps) / sum.wallSeconds : 0;
+  if (Status s = writer.value()->close(); !s.isOk() && run.isOk()) run = s;
+  spdlog::info("{}", sim.timers().report());
+  if (!run.isOk()) {
+    spdlog::error("{}", run.message());
+    spdlog::error("snapshots up to step {} are in {}", sim.stepCount(), sum.outputPath);
+    return run;
+  }
+  spdlog::info("done: {} steps in {:.1f} s, {:.3g} particle-steps/s; {} snapshots in {}; {} cell sorts", sum.steps, sum.wallSeconds,
+               sum.particleStepsPerSecond, sum.snapshots, sum.outputPath, sim.rebuilds());
+  return sum;
+}
+
+int validateSphScene(const std::string& scenePath, const frontend::LoadedScene& scene, bool json) {
+  const compute::RunConfig& c = scene.config;
+  const compute::sph::SphDerived d = compute::sph::derive(c.sph, c.sim);
+  auto setup = compute::sph::prepareSphSetup(c);
+  if (!setup) {
+    std::fprintf(stderr, "%s\n", setup.status().message().c_str());
+    return exitCodeFor(setup.status());
+  }
+  const std::size_t n = c.sph.size(), fluid = c.sph.fluidCount();
+  const compute::CellGrid& g = setup.value().grid;
+  // The first step: the acoustic limit (the fluid starts at rest or at its block velocities).
+  const double dt0 = compute::sph::stableDt(c.sph.cfl, d.h, d.c0, 0, 0, c.sph.kinematicViscosity);
+  if (json) {
+    nlohmann::json j{{"valid", true},         {"solver", "sph"},    {"particles", n},         {"fluid_particles", fluid},
+                     {"boundary_particles", n - fluid}, {"dimension", c.sph.dimension}, {"spacing", c.sph.spacing},
+                     {"smoothing_length", d.h}, {"sound_speed", d.c0}, {"sound_speed_reason", d.soundSpeedReason},
+                     {"boundary_layers", d.boundaryLayers}, {"dt", dt0},  {"duration", c.sim.duration},
+                     {"kernel", compute::sph::kernelName(c.sph.kernel)}};
+    std::printf("%s\n", j.dump().c_str());
+    return kExitOk;
+  }
+  std::printf("%s: valid (solver: sph)\n", scenePath.c_str());
+  std::printf("  particles   %zu: %zu fluid, %zu boundary (%d layers), %dD, spacing %.4g m\n", n, fluid, n - fluid,
+              d.boundaryLayers, c.sph.dimension, c.sph.spacing);
+  std::printf("  method      %s kernel, h = %.4g m (h/dp %.3g), Tait gamma %.3g, alpha %.3g, delta %.3g%s, nu %.3g m^2/s\n",
+              compute::sph::kernelName(c.sph.kernel), d.h, c.sph.smoothingRatio, c.sph.gamma, c.sph.artificialViscosity,
+              c.sph.densityDiffusion, c.sph.hydrostaticDiffusion ? " (hydrostatic correction)" : "", c.sph.kinematicViscosity);
+  std::printf("  sound speed %.4g m/s: %s\n", d.c0, d.soundSpeedReason.c_str());
+  std::printf("  time step   %.4g s at the start (CFL %.3g; adapted every step), %.4g s simulated\n", dt0, c.sph.cfl, c.sim.duration);
+  std::printf("  cells       %d x %d x %d of %.4g m\n", g.nx, g.ny, g.nz, g.cellSize);
+  for (const auto& p : c.sph.probes)
+    std::printf("  %-6s %-10s at (%.4g, %.4g, %.4g) m\n", p.gauge ? "gauge" : "probe", p.name.c_str(), p.point.x, p.point.y, p.point.z);
+  return kExitOk;
+}
+
+}  // namespace pflow::cli

@@ -1,0 +1,138 @@
+#include "compute/sph/SphConfig.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "compute/core/Format.h"
+#include "compute/sim/RunConfig.h"
+
+namespace pflow::compute::sph {
+
+using format::num;
+
+std::size_t SphConfig::fluidCount() const {
+  return std::size_t(std::count(kind.begin(), kind.end(), ParticleKind::kFluid));
+}
+
+const char* kernelName(KernelKind k) { return k == KernelKind::kWendlandC2 ? "wendland" : "cubic_spline"; }
+
+SphDerived derive(const SphConfig& c, const SimulationSettings& sim) {
+  SphDerived d;
+  d.h = c.smoothingRatio * c.spacing;
+  d.boundaryLayers = c.boundaryLayers > 0 ? c.boundaryLayers : std::max(1, int(std::ceil(2.0 * d.h / c.spacing - 1e-9)));
+  d.particleMass = c.density * std::pow(c.spacing, c.dimension);
+  // The deepest fluid along gravity: the extent of the fluid particles' projections, plus one spacing (each
+  // particle stands for a cell dp wide).
+  const double g = norm(sim.gravity);
+  double maxV = 0;
+  for (std::size_t i = 0; i < c.velocity.size(); ++i)
+    if (c.kind[i] == ParticleKind::kFluid) maxV = std::max(maxV, norm(c.velocity[i]));
+  if (g > 0) {
+    const Vec3d down = (1.0 / g) * sim.gravity;
+    double lo = 1e300, hi = -1e300;
+    for (std::size_t i = 0; i < c.position.size(); ++i) {
+      if (c.kind[i] != ParticleKind::kFluid) continue;
+      const double s = dot(c.position[i], down);
+      lo = std::min(lo, s);
+      hi = std::max(hi, s);
+    }
+    if (hi >= lo) d.fluidHeight = hi - lo + c.spacing;
+  }
+  // Ritter's dam-break front, 2 sqrt(g H), bounds the speed a column of height H reaches under gravity.
+  const double ritter = 2.0 * std::sqrt(g * d.fluidHeight);
+  d.expectedSpeed = std::max(ritter, maxV);
+  if (c.soundSpeed) {
+    d.c0 = *c.soundSpeed;
+    d.soundSpeedReason = "sph.sound_speed";
+  } else {
+    d.c0 = 10.0 * d.expectedSpeed;
+    d.soundSpeedReason = maxV > ritter ? "10 x the largest initial speed " + num(maxV) + " m/s"
+                                       : "10 x 2 sqrt(g H) = 10 x " + num(ritter) + " m/s (H = " + num(d.fluidHeight) +
+                                             " m, the deepest fluid)";
+  }
+  return d;
+}
+
+namespace {
+void positive(ErrorList& e, const std::string& path, double v) {
+  if (!std::isfinite(v) || !(v > 0)) e.add(path, num(v) + " must be a finite number > 0");
+}
+void within(ErrorList& e, const std::string& path, double v, double lo, double hi, const std::string& why = {}) {
+  if (!std::isfinite(v) || v < lo || v > hi)
+    e.add(path, num(v) + " is outside [" + num(lo) + ", " + num(hi) + "]" + (why.empty() ? "" : ": " + why));
+}
+bool inside(const SphRegion& r, const SphRegion& box, double tol) {
+  return r.lo.x >= box.lo.x - tol && r.lo.y >= box.lo.y - tol && r.lo.z >= box.lo.z - tol && r.hi.x <= box.hi.x + tol &&
+         r.hi.y <= box.hi.y + tol && r.hi.z <= box.hi.z + tol;
+}
+}  // namespace
+
+ErrorList SphConfig::validate(const SimulationSettings& sim) const {
+  ErrorList e;
+  if (dimension != 2 && dimension != 3) e.add("sph.dimension", std::to_string(dimension) + " is not 2 or 3");
+  positive(e, "sph.spacing", spacing);
+  positive(e, "fluid.density", density);
+  within(e, "sph.smoothing_ratio", smoothingRatio, 1.0, 3.0,
+         "h/dp below 1 leaves too few neighbours (the seed's 1.0 gives about 12 in 2D); above 3 the kernel spans "
+         "hundreds of particles for no gain in accuracy");
+  if (!(gamma > 1) || !std::isfinite(gamma)) e.add("fluid.gamma", num(gamma) + " must be > 1");
+  within(e, "sph.artificial_viscosity", artificialViscosity, 0.0, 1.0);
+  if (!std::isfinite(kinematicViscosity) || kinematicViscosity < 0)
+    e.add("fluid.kinematic_viscosity", num(kinematicViscosity) + " must be >= 0");
+  within(e, "sph.density_diffusion", densityDiffusion, 0.0, 1.0);
+  within(e, "sph.cfl", cfl, 1e-3, 0.5, "explicit WCSPH is stable to a Courant number of about 0.3-0.4");
+  if (dt) positive(e, "sph.dt", *dt);
+  within(e, "sph.skin", skin, 0.0, 2.0, "a fraction of h");
+  if (boundaryLayers < 0) e.add("sph.boundary_layers", std::to_string(boundaryLayers) + " must be >= 0 (0: automatic)");
+  if (!(minDensityRatio > 0 && minDensityRatio < 1)) e.add("sph.density_bounds", "the lower bound " + num(minDensityRatio) + " must be in (0, 1)");
+  if (!(maxDensityRatio > 1)) e.add("sph.density_bounds", "the upper bound " + num(maxDensityRatio) + " must be > 1");
+  positive(e, "simulation.duration", sim.duration);
+  if (!(sim.snapshotInterval >= 0)) e.add("simulation.snapshot_interval", num(sim.snapshotInterval) + " must be >= 0");
+  if (!isFinite(sim.gravity)) e.add("simulation.gravity", "is not finite");
+  if (!(probeInterval >= 0)) e.add("output.probe_interval", num(probeInterval) + " must be >= 0");
+  if (kind.size() != position.size() || (!velocity.empty() && velocity.size() != position.size()))
+    e.add("fluid", "internal: particle arrays of different lengths");
+  if (!e.empty()) return e;  // the checks below need a usable spacing and density
+
+  const SphDerived d = derive(*this, sim);
+  if (fluidCount() == 0) e.add("fluid.blocks", "no fluid particles: every block is empty at sph.spacing " + num(spacing) + " m");
+  for (std::size_t k = 0; k < fluidBlocks.size(); ++k) {
+    const SphRegion& b = fluidBlocks[k];
+    const Vec3d ext = b.hi - b.lo;
+    double smallest = std::min(ext.x, ext.z);
+    if (dimension == 3) smallest = std::min(smallest, ext.y);
+    if (smallest < 4 * d.h)
+      e.add(b.name, "its smallest extent " + num(smallest) + " m is under 4 smoothing lengths (h = " + num(d.h) +
+                        " m): the column is not resolved; use a smaller sph.spacing (now " + num(spacing) + " m)");
+    if (tank && !inside(b, *tank, 0.5 * spacing))
+      e.add(b.name, "reaches outside the tank " + tank->name + " (" + format::vec(tank->lo) + " .. " + format::vec(tank->hi) +
+                        " m): the tank must contain the fluid");
+    for (const SphRegion& o : obstacles) {
+      const bool overlap = b.lo.x < o.hi.x && o.lo.x < b.hi.x && b.lo.z < o.hi.z && o.lo.z < b.hi.z &&
+                           (dimension == 2 || (b.lo.y < o.hi.y && o.lo.y < b.hi.y));
+      if (overlap) e.add(b.name, "overlaps the obstacle " + o.name + ": fluid and solid would share space");
+    }
+  }
+  if (soundSpeed) {
+    if (!(*soundSpeed > 0) || !std::isfinite(*soundSpeed)) e.add("fluid.sound_speed", num(*soundSpeed) + " must be > 0");
+    else if (*soundSpeed < 10 * d.expectedSpeed)
+      e.add("fluid.sound_speed", num(*soundSpeed) + " m/s is below 10 x the expected maximum speed " + num(d.expectedSpeed) +
+                                     " m/s: density errors would exceed 1 % (they grow as (U/c0)^2); use at least " +
+                                     num(10 * d.expectedSpeed) + " or auto");
+  } else if (!(d.c0 > 0)) {
+    e.add("fluid.sound_speed", "cannot be derived: no gravity and no initial speed; give it in m/s");
+  }
+  if (dimension == 2 && !position.empty()) {
+    const double y0 = position[0].y;
+    for (const Vec3d& x : position)
+      if (std::fabs(x.y - y0) > 1e-12 * std::max(1.0, std::fabs(y0))) {
+        e.add("sph.dimension", "2D runs keep every particle in the plane y = " + num(y0) + " m; a particle is at y = " + num(x.y));
+        break;
+      }
+    if (sim.gravity.y != 0) e.add("simulation.gravity", "has a y component in a 2D run (the flow is in the x-z plane)");
+  }
+  if (size() >= std::size_t(1) << 32) e.add("sph.spacing", std::to_string(size()) + " particles: more than a run can index");
+  return e;
+}
+
+}  // namespace pflow::compute::sph

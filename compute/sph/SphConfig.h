@@ -1,0 +1,91 @@
+// The plain, validated description of one SPH run (solver: sph): the fluid, the numerical method and the
+// particles the frontend generated (fluid on a lattice, walls as layers of boundary particles). SI units.
+// docs/sph.md gives every parameter's meaning and default; docs/scene-format.md the scene keys.
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/Status.h"
+#include "compute/core/VectorMath.h"
+#include "compute/sph/SphPhysics.h"
+
+namespace pflow::compute {
+struct SimulationSettings;
+}
+
+namespace pflow::compute::sph {
+
+enum class ParticleKind : std::int32_t { kFluid = 0, kBoundary = 1 };
+enum class BoundaryKind { kDynamic };  // Crespo et al. (2007) dynamic boundary particles
+enum class Integrator { kSymplectic };  // position-Verlet predictor-corrector (docs/sph.md)
+
+// A named region the frontend filled (fluid block, tank, obstacle): for messages and checks.
+struct SphRegion {
+  std::string name;  // "fluid.blocks[0]" style path or the entry's name
+  Vec3d lo{0, 0, 0}, hi{0, 0, 0};
+};
+
+// A point where the pressure is sampled (a probe) or a vertical line along which the free-surface height is
+// measured (a gauge), every output.probe_interval seconds, into the HDF5 file (docs/sph.md, "Probes").
+struct SphProbe {
+  std::string name;
+  Vec3d point{0, 0, 0};
+  bool gauge = false;  // a height gauge at (x, y): point.z is ignored
+};
+
+struct SphConfig {
+  // The method.
+  int dimension = 2;           // 2: planar flow in the x-z plane (y is the plane's normal); 3
+  double spacing = 0;          // dp: lattice spacing of the particles [m]
+  double smoothingRatio = 1.5; // h / dp
+  KernelKind kernel = KernelKind::kWendlandC2;
+  double density = 0;          // rho0 [kg/m^3], required
+  std::optional<double> soundSpeed;  // c0 [m/s]; unset: 10 x the expected maximum speed (derived())
+  double gamma = 7;            // Tait exponent
+  double artificialViscosity = 0.01;  // Monaghan alpha
+  double kinematicViscosity = 0;      // laminar nu [m^2/s]; 0: off
+  double densityDiffusion = 0.1;      // delta of Molteni & Colagrossi (2009); 0: off
+  bool hydrostaticDiffusion = true;   // Fourtakas et al. (2019) correction of the density diffusion
+  double cfl = 0.2;
+  std::optional<double> dt;    // fixed step [s] (the convergence study); unset: CFL limits each step
+  BoundaryKind boundary = BoundaryKind::kDynamic;
+  int boundaryLayers = 0;      // 0: enough to cover the kernel support, ceil(2h/dp)
+  double skin = 0.25;          // neighbour skin as a fraction of h: cells are 2h + skin wide
+  // Density bounds (DualSPHysics's RhopOut): a fluid particle outside [min, max] x rho0 stops the run.
+  double minDensityRatio = 0.7, maxDensityRatio = 1.3;
+
+  // The particles (the frontend's generators fill them): fluid first, then boundary.
+  std::vector<Vec3d> position;
+  std::vector<Vec3d> velocity;  // empty: at rest
+  std::vector<ParticleKind> kind;
+  std::vector<SphRegion> fluidBlocks;  // what was filled with fluid
+  std::optional<SphRegion> tank;       // the container (inside of its walls)
+  std::vector<SphRegion> obstacles;
+  std::vector<SphProbe> probes;
+  double probeInterval = 0;  // [s]; 0: at the snapshots only
+
+  std::size_t size() const { return position.size(); }
+  std::size_t fluidCount() const;
+  // Every problem at once, each naming the scene key ("sph.spacing") and the bound it breaks. `sim`: the
+  // run's duration, gravity and snapshots.
+  ErrorList validate(const SimulationSettings& sim) const;
+};
+
+// What follows from the configuration: the quantities the engine runs with and where each came from.
+struct SphDerived {
+  double h = 0;              // smoothing length [m]
+  double c0 = 0;             // speed of sound [m/s]
+  double expectedSpeed = 0;  // the maximum speed the flow is expected to reach [m/s] (c0's basis)
+  double fluidHeight = 0;    // the deepest fluid column along gravity [m]
+  int boundaryLayers = 0;
+  double particleMass = 0;   // rho0 dp^d [kg]
+  std::string soundSpeedReason;
+};
+SphDerived derive(const SphConfig& c, const SimulationSettings& sim);
+
+// The kernel's name in scenes ("wendland", "cubic_spline").
+const char* kernelName(KernelKind k);
+
+}  // namespace pflow::compute::sph

@@ -1,0 +1,79 @@
+// The device side of an SPH run: the particle arrays (the SPH field table), the cell list and one method
+// per phase of the step. SphSimulation drives it; an executor (OpenMP or CUDA) runs it through the shared
+// machinery: FieldStore/FieldRows (reorder, snapshots), the cell hash and sort, the executors' primitives.
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/Status.h"
+#include "compute/neighbor/CellGrid.h"
+#include "compute/particles/ParticleSnapshot.h"
+#include "compute/sph/SphPhysics.h"
+
+namespace pflow::compute::sph {
+
+// Everything the engine needs, prepared on the host from a validated SphConfig (prepareSphSetup).
+struct SphSetup {
+  std::vector<Vec3d> position, velocity;
+  std::vector<double> density, mass;
+  std::vector<std::int32_t> kind;  // ParticleKind
+  std::vector<Gid> gid;            // empty: the index
+  KernelKind kernel = KernelKind::kWendlandC2;
+  int dimension = 2;
+  double h = 0, spacing = 0;
+  double rho0 = 1000, c0 = 0, gamma = 7;
+  double alpha = 0, nu = 0, delta = 0;
+  bool hydrostaticDiffusion = true;
+  Vec3d gravity{0, 0, -9.81};
+  double minDensity = 0, maxDensity = 0;  // [kg/m^3], fluid
+  bool checkBox = false;  // leak check (the tank's outer walls; open top)
+  Vec3d boxLo{0, 0, 0}, boxHi{0, 0, 0};
+  CellGrid grid;
+  double skin = 0;  // [m]
+  int threads = 0;
+};
+
+// One particle as the host sees it, for error messages (copied off the device on the error path only).
+struct SphProbeState {
+  Gid gid = kNoGid;
+  bool fluid = true;
+  Vec3d position{0, 0, 0}, velocity{0, 0, 0};
+  double density = 0, pressure = 0;
+};
+
+class SphEngine {
+ public:
+  virtual ~SphEngine() = default;
+  virtual std::string executorDescription() const = 0;
+  virtual const char* precisionName() const = 0;
+  virtual std::size_t size() const = 0;
+
+  // Phases, in step order (SphSimulation::stepPhases).
+  // The particles sorted by cell (every field reordered); positions now are the skin's reference.
+  virtual void sortByCell() = 0;
+  // Acceleration, density rate and viscous rate of every particle at the current state.
+  virtual void computeRates() = 0;
+  // The largest |a| of a fluid particle and the largest viscous rate (the time step's inputs).
+  virtual double maxAcceleration() const = 0;
+  virtual double maxViscousRate() const = 0;
+  // The two halves of the symplectic step; each returns the largest squared displacement since the sort.
+  virtual double predictor(double dt) = 0;
+  virtual Status corrector(double dt, double& moved2) = 0;
+  // Kinetic + gravitational energy of the fluid [J] (one device reduction).
+  virtual double fluidEnergy() const = 0;
+  // The furthest a fluid particle reaches along the unit vector `direction`: max of x.direction [m] (one
+  // device reduction; the surge front of a dam break is this along +x).
+  virtual double fluidReach(Vec3d direction) const = 0;
+
+  virtual ParticleSnapshot snapshot(std::int64_t step, double time, const std::vector<std::string>& fields) const = 0;
+  virtual SphProbeState probe(Index i) const = 0;
+  virtual std::size_t deviceBytes() const = 0;
+  virtual void fence() const = 0;
+};
+
+std::unique_ptr<SphEngine> makeCpuSphEngine(SphSetup setup, bool singlePrecision);
+// An error, never a fall-back, where this pflow was built without CUDA or the device is missing.
+Result<std::unique_ptr<SphEngine>> makeCudaSphEngine(SphSetup setup, int device, bool singlePrecision);
+
+}  // namespace pflow::compute::sph

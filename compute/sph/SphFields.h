@@ -1,0 +1,74 @@
+// THE list of the SPH solver's per-particle fields, in the same form as the DEM table
+// (compute/particles/ParticleFields.h): reorder, snapshots, migration and halo exchange iterate over it
+// through the shared FieldStore and FieldRows, so adding a field is one line here.
+//
+// Columns: enum name, output name, element type, SI unit, flags. `Real` and `Real3` are the run's
+// precision; positions are double at both.
+#pragma once
+#include <cstdint>
+
+#include "compute/particles/FieldInfo.h"
+
+namespace pflow::compute::sph {
+
+// clang-format off
+#define PFLOW_SPH_FIELDS(X)                                                                                    \
+  X(Position,     "position",     Vec3d,        "m",        kSnapshot | kMigrate | kGhost | kRefresh)          \
+  X(Velocity,     "velocity",     Real3,        "m/s",      kSnapshot | kMigrate | kGhost | kRefresh)          \
+  X(Density,      "density",      Real,         "kg/m^3",   kSnapshot | kMigrate | kGhost | kRefresh)          \
+  X(Pressure,     "pressure",     Real,         "Pa",       kSnapshot | kGhost | kRefresh)                     \
+  X(Mass,         "mass",         Real,         "kg",       kSnapshot | kMigrate | kGhost)                     \
+  X(Kind,         "kind",         std::int32_t, "",         kSnapshot | kMigrate | kGhost)                     \
+  X(Gid,          "id",           Gid,          "",         kSnapshot | kMigrate | kGhost)                     \
+  X(Acceleration, "acceleration", Real3,        "m/s^2",    kMigrate)                                          \
+  X(DensityRate,  "density_rate", Real,         "kg/m^3/s", kMigrate)                                          \
+  X(ViscousRate,  "viscous_rate", Real,         "1/s",      0)                                                 \
+  X(Position0,    "position0",    Vec3d,        "m",        0)                                                 \
+  X(Velocity0,    "velocity0",    Real3,        "m/s",      0)                                                 \
+  X(Density0,     "density0",     Real,         "kg/m^3",   0)
+// clang-format on
+// Acceleration and DensityRate migrate: the predictor of the next step starts from them. ViscousRate and the
+// state at the start of the step (Position0, Velocity0, Density0) live within one step only.
+
+enum class SphField : std::uint8_t {
+#define PFLOW_X(id, name, type, unit, flags) id,
+  PFLOW_SPH_FIELDS(PFLOW_X)
+#undef PFLOW_X
+      kCount
+};
+inline constexpr int kNumSphFields = static_cast<int>(SphField::kCount);
+
+template <SphField F, class R> struct SphFieldType;
+#define PFLOW_X(id, name, type_, unit, flags)          \
+  template <class R> struct SphFieldType<SphField::id, R> { \
+    using Real = R;                                    \
+    using Real3 = Vec3<R>;                             \
+    using type = type_;                                \
+  };
+PFLOW_SPH_FIELDS(PFLOW_X)
+#undef PFLOW_X
+
+using SphFieldInfo = FieldInfoOf<SphField>;
+
+template <class R>
+inline constexpr SphFieldInfo kSphFieldTableOf[kNumSphFields] = {
+#define PFLOW_X(id, name, type_, unit, flags)                                                              \
+  {SphField::id, name, sizeof(typename SphFieldType<SphField::id, R>::type),                                \
+   scalarTypeOf<typename SphFieldType<SphField::id, R>::type>(),                                            \
+   int(sizeof(typename SphFieldType<SphField::id, R>::type) /                                               \
+       scalarBytesOf(scalarTypeOf<typename SphFieldType<SphField::id, R>::type>())),                        \
+   Multiplicity::kOne, unit, flags},
+    PFLOW_SPH_FIELDS(PFLOW_X)
+#undef PFLOW_X
+};
+
+// The SPH field set, as FieldStore (compute/particles/FieldStore.h) sees it.
+struct SphFieldSet {
+  using Id = SphField;
+  static constexpr int kCount = kNumSphFields;
+  template <class R> static constexpr const SphFieldInfo* table() { return kSphFieldTableOf<R>; }
+  template <SphField F, class R> using Type = typename SphFieldType<F, R>::type;
+  static constexpr unsigned char emptySlotByte(SphField) { return 0; }  // no slot fields
+};
+
+}  // namespace pflow::compute::sph

@@ -1,0 +1,233 @@
+// The SPH engine's kernels: one particle per call, PFLOW_HOSTDEVICE, run by either executor. The pair loop
+// walks the 27 (2D: 9) cells around a particle, so there are no neighbour lists to store: the cells are
+// 2h + skin wide and re-sorted when a particle may have moved half the skin (docs/sph.md, "Neighbours").
+// Each kernel writes only the particle it owns: no atomics on the rates.
+#pragma once
+#include <cmath>
+#include <cstdint>
+
+#include "compute/core/Atomics.h"
+#include "compute/core/Conditions.h"
+#include "compute/neighbor/CellGrid.h"
+#include "compute/sph/SphPhysics.h"
+
+namespace pflow::compute::sph::kernels {
+
+inline constexpr std::int32_t kFluid = 0;
+
+// Rates of particle a at the current state: acceleration (fluid only: boundary particles do not move),
+// density rate and the largest viscous rate over its neighbours (for the time step). Fluid particles
+// interact with every neighbour; boundary particles only with fluid ones (their continuity equation:
+// boundary-boundary pairs have no relative velocity).
+template <class R>
+struct Interact {
+  static constexpr bool kVariableCost = true;  // work per particle varies (CpuExecutor::forEach)
+  CellGrid grid;
+  const Index* cellStart;  // numCells + 1
+  const Vec3d* pos;
+  const Vec3<R>* vel;
+  const R* rho;
+  const R* p;
+  const R* mass;
+  const std::int32_t* kind;
+  Kernel<R> kernel;
+  PairParams<R> params;
+  Vec3<R> gravity;
+  Vec3<R>* acc;
+  R* drho;
+  R* visc;
+  // Ghosts (distributed runs; null otherwise), as in compute/neighbor's BuildNeighbors.
+  const Index* ghostCellStart = nullptr;
+  const Index* ghostItems = nullptr;
+  Index ghostBase = 0;
+
+  PFLOW_HOSTDEVICE void operator()(Index a) const {
+    const Vec3d xa = pos[a];
+    const Vec3<R> va = vel[a];
+    const R rhoA = rho[a], pA = p[a];
+    const bool fluidA = kind[a] == kFluid;
+    const double cut2 = double(kernel.support()) * double(kernel.support());
+    Vec3<R> sumAcc{R(0), R(0), R(0)};
+    R sumDrho = R(0), maxVisc = R(0);
+    int cx, cy, cz;
+    grid.coords(xa, cx, cy, cz);
+    auto consider = [&](Index b) {
+      const bool fluidB = kind[b] == kFluid;
+      if (!fluidA && !fluidB) return;
+      const Vec3d d = xa - pos[b];
+      const double r2 = norm2(d);
+      if (r2 >= cut2 || b == a) return;
+      const R r = R(std::sqrt(r2));
+      const PairRates<R> out = pairRates(params, vcast<R>(d), va - vel[b], R(r2), kernel.f(r), rhoA, rho[b], pA, p[b], mass[b],
+                                         params.c0, params.c0, fluidA && fluidB);
+      sumAcc += out.acceleration;
+      sumDrho += out.densityRate;
+      maxVisc = out.viscousRate > maxVisc ? out.viscousRate : maxVisc;
+    };
+    for (int dz = -1; dz <= 1; ++dz) {
+      const int z = cz + dz;
+      if (z < 0 || z >= grid.nz) continue;
+      for (int dy = -1; dy <= 1; ++dy) {
+        const int y = cy + dy;
+        if (y < 0 || y >= grid.ny) continue;
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int x = cx + dx;
+          if (x < 0 || x >= grid.nx) continue;
+          const std::uint32_t c = grid.index(x, y, z);
+          for (Index b = cellStart[c]; b < cellStart[c + 1]; ++b) consider(b);
+          if (ghostCellStart)
+            for (Index k = ghostCellStart[c]; k < ghostCellStart[c + 1]; ++k) consider(ghostBase + ghostItems[k]);
+        }
+      }
+    }
+    acc[a] = fluidA ? sumAcc + gravity : Vec3<R>{R(0), R(0), R(0)};
+    drho[a] = sumDrho;
+    visc[a] = maxVisc;
+  }
+};
+
+// The fields both halves of the symplectic step update.
+template <class R>
+struct StepArgs {
+  Vec3d* pos;
+  Vec3<R>* vel;
+  R* rho;
+  R* p;
+  const Vec3<R>* acc;
+  const R* drho;
+  const std::int32_t* kind;
+  Vec3d* pos0;
+  Vec3<R>* vel0;
+  R* rho0;
+  const Vec3d* ref;  // positions at the last cell sort (the skin criterion)
+  Tait<R> eos;
+  double dt;
+  // Boundary particles never fall below rho0 (Crespo et al. 2007 / DualSPHysics: walls must not attract).
+  R boundaryFloor;
+  R minDensity, maxDensity;  // a fluid particle outside [min, max] stops the run (corrector)
+  // Leak check: a fluid particle below the walls' top (boxHi.z) and outside this box (the tank's outer walls)
+  // has passed through a wall or spilled over an open top; above the walls' top it may be anywhere.
+  bool checkBox = false;
+  Vec3d boxLo{0, 0, 0}, boxHi{0, 0, 0};
+  Conditions* cond = nullptr;
+};
+
+// Predictor: the state at the start of the step is kept, and x, v, rho advance half a step with the rates of
+// that state: v = v0 + dt/2 a, x = x0 + dt/2 v0, rho = rho0 + dt/2 drho; p from the equation of state.
+// Returns the squared displacement since the last cell sort.
+template <class R>
+struct Predictor {
+  StepArgs<R> a;
+  PFLOW_HOSTDEVICE double operator()(Index i) const {
+    const R h = R(0.5 * a.dt);
+    const Vec3d x0 = a.pos[i];
+    const R r0 = a.rho[i];
+    a.pos0[i] = x0;
+    a.rho0[i] = r0;
+    R r = r0 + h * a.drho[i];
+    if (a.kind[i] == kFluid) {
+      const Vec3<R> v0 = a.vel[i];
+      a.vel0[i] = v0;
+      a.vel[i] = v0 + h * a.acc[i];
+      a.pos[i] = x0 + (0.5 * a.dt) * vcast<double>(v0);
+    } else if (r < a.boundaryFloor) {
+      r = a.boundaryFloor;
+    }
+    a.rho[i] = r;
+    a.p[i] = a.eos.pressure(r);
+    return norm2(a.pos[i] - a.ref[i]);
+  }
+};
+
+// Corrector, with the rates at the half step: rho = rho0 (2 - eps)/(2 + eps), eps = -drho/rho dt;
+// v = v0 + dt a; x = x0 + dt (v + v0)/2. Non-finite values, densities out of bounds and leaks are flagged
+// with the lowest offending index. Returns the squared displacement since the last cell sort.
+template <class R>
+struct Corrector {
+  StepArgs<R> a;
+  PFLOW_HOSTDEVICE double operator()(Index i) const {
+    const R dt = R(a.dt);
+    const R eps = -a.drho[i] / a.rho[i] * dt;
+    R r = a.rho0[i] * (R(2) - eps) / (R(2) + eps);
+    const bool fluid = a.kind[i] == kFluid;
+    if (fluid) {
+      const Vec3<R> v0 = a.vel0[i];
+      const Vec3<R> v = v0 + dt * a.acc[i];
+      a.vel[i] = v;
+      const Vec3d x = a.pos0[i] + (0.5 * a.dt) * vcast<double>(v + v0);
+      a.pos[i] = x;
+      if (!isFinite(x) || !isFinite(v) || !std::isfinite(r)) {
+        atomicOrU32(&a.cond->flags, kNonFinite);
+        atomicMinU32(&a.cond->badParticle, i);
+      } else if (r < a.minDensity || r > a.maxDensity) {
+        atomicOrU32(&a.cond->flags, kDensityOutOfRange);
+        atomicMinU32(&a.cond->densityParticle, i);
+      }
+      if (a.checkBox && x.z < a.boxHi.z &&
+          (x.x < a.boxLo.x || x.y < a.boxLo.y || x.z < a.boxLo.z || x.x > a.boxHi.x || x.y > a.boxHi.y)) {
+        atomicOrU32(&a.cond->flags, kLeftDomain);
+        atomicMinU32(&a.cond->outsideParticle, i);
+      }
+    } else {
+      if (r < a.boundaryFloor) r = a.boundaryFloor;
+      if (!std::isfinite(r)) {
+        atomicOrU32(&a.cond->flags, kNonFinite);
+        atomicMinU32(&a.cond->badParticle, i);
+      }
+    }
+    a.rho[i] = r;
+    a.p[i] = a.eos.pressure(r);
+    return norm2(a.pos[i] - a.ref[i]);
+  }
+};
+
+// |a|^2 of fluid particles (the force limit of the time step).
+template <class R>
+struct AccelerationSquared {
+  const Vec3<R>* acc;
+  const std::int32_t* kind;
+  PFLOW_HOSTDEVICE double operator()(Index i) const { return kind[i] == kFluid ? double(norm2(acc[i])) : 0.0; }
+};
+
+template <class R>
+struct MaxOfField {
+  const R* v;
+  PFLOW_HOSTDEVICE double operator()(Index i) const { return double(v[i]); }
+};
+
+// Pressure from density (the start, and rows that arrive without it).
+template <class R>
+struct EquationOfState {
+  const R* rho;
+  R* p;
+  Tait<R> eos;
+  PFLOW_HOSTDEVICE void operator()(Index i) const { p[i] = eos.pressure(rho[i]); }
+};
+
+// How far a fluid particle reaches along `direction`, from `base` (>= 0 inside the grid; boundary: 0).
+struct FluidReach {
+  const Vec3d* pos;
+  const std::int32_t* kind;
+  Vec3d direction, base;
+  PFLOW_HOSTDEVICE double operator()(Index i) const {
+    if (kind[i] != kFluid) return 0.0;
+    const double d = dot(pos[i] - base, direction);
+    return d > 0.0 ? d : 0.0;
+  }
+};
+
+// Kinetic and gravitational energy of fluid particles (relative to the origin along g) [J].
+template <class R>
+struct FluidEnergy {
+  const Vec3d* pos;
+  const Vec3<R>* vel;
+  const R* mass;
+  const std::int32_t* kind;
+  Vec3d gravity;
+  PFLOW_HOSTDEVICE double operator()(Index i) const {
+    if (kind[i] != kFluid) return 0.0;
+    return double(mass[i]) * (0.5 * double(norm2(vel[i])) - dot(gravity, pos[i]));
+  }
+};
+
+}  // namespace pflow::compute::sph::kernels

@@ -1,0 +1,23 @@
+// SPH particles on a lattice of spacing dp: fluid blocks, a tank's walls as layers of boundary particles and
+// solid obstacles (docs/sph.md, "Initial particles"). Used by the scene loader (solver: sph) and by tests and
+// benchmarks that build scenes in code. Host code.
+#pragma once
+#include <string>
+
+#include "compute/sph/SphConfig.h"
+
+namespace pflow::compute::sph {
+
+// Fluid particles at lo + (k + 1/2) dp inside [lo, hi] (2D: in the plane y = lo.y), at velocity v; the block
+// is recorded in config.fluidBlocks under `name`. Returns the particles added.
+std::size_t addFluidBlock(SphConfig& config, const std::string& name, Vec3d lo, Vec3d hi, Vec3d velocity = {0, 0, 0});
+
+// The walls of a box tank whose inside is [lo, hi]: `layers` layers of boundary particles (0: derived,
+// ceil(2h/dp)) outside the floor and the side walls (2D: left and right), up to hi.z, and over the top
+// unless `openTop`. Recorded as config.tank.
+std::size_t addTank(SphConfig& config, const std::string& name, Vec3d lo, Vec3d hi, bool openTop = true, int layers = 0);
+
+// A solid box [lo, hi] filled with boundary particles (a wall as thick as the box). Recorded in config.obstacles.
+std::size_t addObstacle(SphConfig& config, const std::string& name, Vec3d lo, Vec3d hi);
+
+}  // namespace pflow::compute::sph

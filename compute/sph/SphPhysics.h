@@ -1,0 +1,153 @@
+// Weakly compressible SPH, the physics: smoothing kernels, the equation of state and the pairwise terms of
+// the momentum and continuity equations, as stateless PFLOW_HOSTDEVICE functions over plain parameter
+// structs. Every equation, its constants and its source are in docs/sph.md; the engine's kernels
+// (SphKernels.h) only loop over pairs and call these, on the CPU and on the GPU alike.
+#pragma once
+#include <cmath>
+#include <cstdint>
+
+#include "compute/core/VectorMath.h"
+
+namespace pflow::compute::sph {
+
+// Smoothing kernels with support 2h (q = r/h in [0, 2]).
+enum class KernelKind : std::int32_t { kWendlandC2 = 0, kCubicSpline = 1 };
+
+// A kernel of one kind in one dimension (2 or 3) at one smoothing length, with its constants folded.
+// w(r): W(r, h). f(r): (1/r) dW/dr, so that grad_a W_ab = f(r_ab) * (x_a - x_b).
+template <class R>
+struct Kernel {
+  KernelKind kind = KernelKind::kWendlandC2;
+  R h = R(1), invH = R(1);
+  R alpha = R(0);  // normalisation alpha_D
+
+  static Kernel make(KernelKind kind, int dimension, double h) {
+    constexpr double pi = 3.14159265358979323846;
+    Kernel k;
+    k.kind = kind;
+    k.h = R(h);
+    k.invH = R(1.0 / h);
+    if (kind == KernelKind::kWendlandC2)  // Wendland (1995): 7/(4 pi h^2) in 2D, 21/(16 pi h^3) in 3D
+      k.alpha = R(dimension == 2 ? 7.0 / (4.0 * pi * h * h) : 21.0 / (16.0 * pi * h * h * h));
+    else  // Monaghan & Lattanzio (1985): 10/(7 pi h^2) in 2D, 1/(pi h^3) in 3D
+      k.alpha = R(dimension == 2 ? 10.0 / (7.0 * pi * h * h) : 1.0 / (pi * h * h * h));
+    return k;
+  }
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE R support() const { return R(2) * h; }
+
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE R w(R r) const {
+    const R q = r * invH;
+    if (q >= R(2)) return R(0);
+    if (kind == KernelKind::kWendlandC2) {
+      const R a = R(1) - R(0.5) * q;
+      const R a2 = a * a;
+      return alpha * a2 * a2 * (R(2) * q + R(1));
+    }
+    if (q < R(1)) return alpha * (R(1) - R(1.5) * q * q + R(0.75) * q * q * q);
+    const R b = R(2) - q;
+    return alpha * R(0.25) * b * b * b;
+  }
+  // (1/r) dW/dr: finite at r = 0 (where the gradient itself is zero).
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE R f(R r) const {
+    const R q = r * invH;
+    if (q >= R(2)) return R(0);
+    const R c = alpha * invH * invH;
+    if (kind == KernelKind::kWendlandC2) {  // dW/dq = -5 q (1 - q/2)^3
+      const R a = R(1) - R(0.5) * q;
+      return R(-5) * c * a * a * a;
+    }
+    if (q < R(1)) return c * (R(-3) + R(2.25) * q);  // dW/dq = -3q + 9/4 q^2
+    const R b = R(2) - q;
+    return R(-0.75) * c * b * b / q;  // dW/dq = -3/4 (2 - q)^2
+  }
+};
+
+// Tait (Cole) equation of state p = B ((rho/rho0)^gamma - 1), B = c0^2 rho0 / gamma.
+template <class R>
+struct Tait {
+  R rho0 = R(1000), c0 = R(1), gamma = R(7), b = R(1000.0 / 7.0);
+  static Tait make(double rho0, double c0, double gamma) {
+    return {R(rho0), R(c0), R(gamma), R(c0 * c0 * rho0 / gamma)};
+  }
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE R pressure(R rho) const {
+    const R x = rho / rho0;
+    if (gamma == R(7)) {  // the usual exponent, without pow
+      const R x2 = x * x, x3 = x2 * x;
+      return b * (x3 * x3 * x - R(1));
+    }
+    return b * (std::pow(x, gamma) - R(1));
+  }
+  // The density at which the pressure is p (the inverse).
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE R density(R p) const { return rho0 * std::pow(R(1) + p / b, R(1) / gamma); }
+  // Local speed of sound c = sqrt(dp/drho) = c0 (rho/rho0)^((gamma - 1)/2).
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE R soundSpeed(R rho) const {
+    return c0 * std::pow(rho / rho0, R(0.5) * (gamma - R(1)));
+  }
+};
+
+// Parameters of the pair terms, the same for every pair of a run.
+template <class R>
+struct PairParams {
+  R alpha = R(0);    // Monaghan artificial viscosity coefficient (0: none)
+  R nu = R(0);       // laminar kinematic viscosity [m^2/s] (0: none), Morris et al. (1997) / Lo & Shao (2002) form
+  R delta = R(0);    // density diffusion coefficient (Molteni & Colagrossi 2009; 0: none)
+  R eta2 = R(0);     // 0.01 h^2: keeps the 1/r^2 terms finite
+  R h = R(1), c0 = R(1);
+  // Fourtakas et al. (2019) hydrostatic correction of the density diffusion: the diffusion acts on the
+  // departure from the hydrostatic density difference rho0 g.(x_b - x_a) / c0^2 (linearised Tait), which is
+  // otherwise smoothed away near the free surface and the walls. g along the run's gravity.
+  bool hydrostatic = true;
+  Vec3<R> gOverC2{R(0), R(0), R(0)};  // gravity / c0^2 [1/m]
+  R rho0 = R(1000);
+};
+
+// What particle b adds to a's rates.
+template <class R>
+struct PairRates {
+  Vec3<R> acceleration;  // dv_a/dt contribution [m/s^2]
+  R densityRate;         // drho_a/dt contribution [kg/m^3/s]
+  R viscousRate;         // |h v_ab.x_ab / (r^2 + eta^2)| [1/s], for the viscous time-step limit
+};
+
+// One pair's terms (docs/sph.md, equations 4-8). xab = x_a - x_b, vab = v_a - v_b, fab = (1/r) dW/dr at
+// r = |xab| (so grad_a W_ab = fab xab). `diffuse`: both are fluid (density diffusion acts between fluid
+// particles only; walls are driven by continuity alone).
+template <class R>
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE PairRates<R> pairRates(const PairParams<R>& p, Vec3<R> xab, Vec3<R> vab, R r2, R fab,
+                                                          R rhoA, R rhoB, R pA, R pB, R mB, R cA, R cB, bool diffuse) {
+  PairRates<R> out;
+  const Vec3<R> gradW = fab * xab;
+  const R vdotx = dot(vab, xab);
+  const R denom = r2 + p.eta2;
+  // Momentum: pressure (symmetric form, conserves linear momentum) and Monaghan's artificial viscosity.
+  R pi = R(0);
+  const R mu = p.h * vdotx / denom;
+  if (vdotx < R(0) && p.alpha > R(0)) pi = -p.alpha * R(0.5) * (cA + cB) * mu / (R(0.5) * (rhoA + rhoB));
+  R coef = -mB * (pA / (rhoA * rhoA) + pB / (rhoB * rhoB) + pi);
+  out.acceleration = coef * gradW;
+  // Laminar viscosity: m_b 4 nu (x_ab . grad W) / ((rho_a + rho_b)(r^2 + eta^2)) v_ab.
+  if (p.nu > R(0)) out.acceleration += (mB * R(4) * p.nu * fab * r2 / ((rhoA + rhoB) * denom)) * vab;
+  // Continuity: m_b v_ab . grad W.
+  out.densityRate = mB * fab * vdotx;
+  // Density diffusion: 2 delta h c0 sum (rho_b - rho_a - hydrostatic) (x_ba . grad W)/(r^2 + eta^2) m_b/rho_b.
+  if (diffuse && p.delta > R(0)) {
+    R drho = rhoB - rhoA;
+    if (p.hydrostatic) drho -= p.rho0 * dot(p.gOverC2, -xab);  // rho0 g.(x_b - x_a) / c0^2
+    out.densityRate += R(2) * p.delta * p.h * p.c0 * drho * (-fab * r2) / denom * mB / rhoB;
+  }
+  out.viscousRate = std::fabs(mu);
+  return out;
+}
+
+// The step a run can take now (docs/sph.md, equation 10): CFL times the smaller of the force limit
+// sqrt(h / max|a|), the acoustic-viscous limit h / (c0 + h max visc) and, with laminar viscosity, h^2/nu
+// (as 0.125 h^2 / nu divided by the CFL, which holds it at Morris's 0.125).
+inline double stableDt(double cfl, double h, double c0, double maxAccel, double maxViscous, double nu) {
+  double dt = h / (c0 + h * maxViscous);
+  if (maxAccel > 0) dt = std::fmin(dt, std::sqrt(h / maxAccel));
+  dt *= cfl;
+  if (nu > 0) dt = std::fmin(dt, 0.125 * h * h / nu);
+  return dt;
+}
+
+}  // namespace pflow::compute::sph

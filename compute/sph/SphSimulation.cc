@@ -1,0 +1,242 @@
+#include "compute/sph/SphSimulation.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "common/Log.h"
+#include "compute/core/Memory.h"
+
+namespace pflow::compute::sph {
+
+// ---------------------------------------------------------------------------------------------
+// The step loop. One symplectic (position-Verlet predictor-corrector) step, top to bottom, a timer per
+// phase; the rates of the state at the start of the step were computed at the end of the previous one.
+Status SphSimulation::stepPhases() {
+  const double dt = nextDt();  // the CFL limits of the rates at the start, or sph.dt; lands on outputs
+  double moved2 = 0;
+  { auto t = m_timers.time(Phase::kIntegrate1); moved2 = m_engine->predictor(dt); }         // x, v, rho to t + dt/2
+  if (2 * std::sqrt(moved2) > m_skin) { auto t = m_timers.time(Phase::kSort); m_engine->sortByCell(); ++m_rebuilds; }
+  { auto t = m_timers.time(Phase::kForces);     m_engine->computeRates(); }                 // rates at t + dt/2
+  Status s;
+  { auto t = m_timers.time(Phase::kIntegrate2); s = m_engine->corrector(dt, moved2); }     // x, v, rho to t + dt
+  if (!s.isOk()) return withStep(s);
+  if (2 * std::sqrt(moved2) > m_skin) { auto t = m_timers.time(Phase::kSort); m_engine->sortByCell(); ++m_rebuilds; }
+  { auto t = m_timers.time(Phase::kForces);     m_engine->computeRates(); }                 // rates at t + dt
+  ++m_step;
+  m_time += dt;
+  m_dt = dt;
+  return Status::ok();
+}
+// ---------------------------------------------------------------------------------------------
+
+// The step: CFL x min(force limit, acoustic-viscous limit[, viscous limit]) of the current rates (docs/sph.md,
+// equation 10), or the fixed sph.dt; shortened to land on the next output time (two equal steps when one
+// would leave a sliver).
+double SphSimulation::nextDt() {
+  double maxAccel, maxVisc;
+  { auto t = m_timers.time(Phase::kIntegrate1); maxAccel = m_engine->maxAcceleration(); maxVisc = m_engine->maxViscousRate(); }
+  m_stable = sph::stableDt(m_method.cfl, m_derived.h, m_derived.c0, maxAccel, maxVisc, m_method.kinematicViscosity);
+  double dt = m_stable;
+  if (m_method.dt) {
+    dt = *m_method.dt;
+    if (dt > m_stable && !m_warnedFixedDt) {
+      spdlog::warn("sph.dt {:.4g} s exceeds the CFL limit {:.4g} s at t = {:.4g} s: the run may blow up", dt, m_stable, m_time);
+      m_warnedFixedDt = true;
+    }
+  }
+  double target = m_end;
+  if (m_nextOutput >= 0 && (target < 0 || m_nextOutput < target)) target = m_nextOutput;
+  if (target > m_time) {
+    const double left = target - m_time;
+    if (dt >= left * (1 - 1e-12)) dt = left;
+    else if (!m_method.dt && 2 * dt > left) dt = 0.5 * left;
+  }
+  return dt;
+}
+
+Status SphSimulation::step() {
+  Status s;
+  try {
+    s = stepPhases();
+  } catch (const OutOfDeviceMemory& e) {
+    s = withStep(Status(StatusCode::kResourceExhausted, e.what()));
+  } catch (const std::exception& e) {
+    s = withStep(Status(StatusCode::kInternal, e.what()));
+  }
+  if (!s.isOk()) return s;
+  m_outputDue = false;
+  const double eps = 1e-9 * std::max(m_dt, 1e-300);
+  if (m_nextOutput >= 0 && m_time >= m_nextOutput - eps) {
+    m_outputDue = true;
+    while (m_nextOutput <= m_time + eps) m_nextOutput += m_outputInterval;
+  }
+  if (m_end >= 0 && std::fabs(m_time - m_end) <= eps) m_outputDue = true;
+  return s;
+}
+
+void SphSimulation::scheduleOutput(double interval, double end) {
+  m_outputInterval = interval;
+  m_nextOutput = interval > 0 ? m_time + interval : -1;
+  m_end = end;
+  m_outputDue = false;
+}
+
+Status SphSimulation::runSteps(std::int64_t steps) {
+  for (std::int64_t k = 0; k < steps; ++k)
+    if (Status s = step(); !s.isOk()) return s;
+  return Status::ok();
+}
+
+Status SphSimulation::runUntil(double time, const std::function<Status(const SphSimulation&)>& observer) {
+  if (m_end < 0 || m_end > time) m_end = time;
+  while (m_time < time * (1 - 1e-12) - 1e-300) {
+    if (Status s = step(); !s.isOk()) return s;
+    if (observer)
+      if (Status s = observer(*this); !s.isOk()) return s;
+  }
+  return Status::ok();
+}
+
+Status SphSimulation::withStep(Status s) const {
+  if (s.isOk()) return s;
+  char buf[160];
+  std::snprintf(buf, sizeof buf, " at step %lld (t = %.6g s, dt %.3g s; the CFL limit was %.3g s)", (long long)(m_step + 1),
+                m_time + m_dt, m_dt, m_stable);
+  return Status(s.code(), s.message() + buf);
+}
+
+Result<std::unique_ptr<SphSimulation>> SphSimulation::create(const RunConfig& config, const SphOptions& options) {
+  if (config.solver != Solver::kSph) return invalidArgument("SphSimulation: the scene's solver is not sph");
+  if (ErrorList errors = config.validate(); !errors.empty()) return errors.toStatus("invalid SPH configuration");
+  auto setup = prepareSphSetup(config);
+  if (!setup) return setup.status();
+  std::unique_ptr<SphSimulation> sim(new SphSimulation());
+  sim->m_derived = derive(config.sph, config.sim);
+  sim->m_method = config.sph;
+  sim->m_method.position.clear();
+  sim->m_method.velocity.clear();
+  sim->m_method.kind.clear();
+  sim->m_grid = setup.value().grid;
+  sim->m_skin = setup.value().skin;
+  sim->m_fluid = config.sph.fluidCount();
+  const bool single = config.sim.precision == Precision::kFloat;
+  ExecutorKind kind = options.executor;
+  if (kind == ExecutorKind::kAuto) kind = cudaDeviceCount() > 0 ? ExecutorKind::kCuda : ExecutorKind::kCpu;
+  try {
+    if (kind == ExecutorKind::kCuda) {
+      auto engine = makeCudaSphEngine(std::move(setup).value(), options.device, single);
+      if (!engine) return engine.status();
+      sim->m_engine = std::move(engine).value();
+      sim->m_timers.setFence([e = sim->m_engine.get()] { e->fence(); });
+    } else {
+      sim->m_engine = makeCpuSphEngine(std::move(setup).value(), single);
+    }
+    sim->m_engine->sortByCell();
+    sim->m_engine->computeRates();
+  } catch (const OutOfDeviceMemory& e) {
+    return Status(StatusCode::kResourceExhausted, e.what());
+  } catch (const std::bad_alloc&) {
+    return Status(StatusCode::kResourceExhausted, "host memory exhausted");
+  }
+  return sim;
+}
+
+Result<SphSetup> prepareSphSetup(const RunConfig& config) {
+  const SphConfig& c = config.sph;
+  const SphDerived d = derive(c, config.sim);
+  SphSetup s;
+  const std::size_t n = c.size();
+  s.position = c.position;
+  s.velocity = c.velocity;
+  if (s.velocity.empty()) s.velocity.assign(n, Vec3d{0, 0, 0});
+  s.kind.resize(n);
+  for (std::size_t i = 0; i < n; ++i) s.kind[i] = std::int32_t(c.kind[i]);
+  s.kernel = c.kernel;
+  s.dimension = c.dimension;
+  s.h = d.h;
+  s.spacing = c.spacing;
+  s.rho0 = c.density;
+  s.c0 = d.c0;
+  s.gamma = c.gamma;
+  s.alpha = c.artificialViscosity;
+  s.nu = c.kinematicViscosity;
+  s.delta = c.densityDiffusion;
+  s.hydrostaticDiffusion = c.hydrostaticDiffusion;
+  s.gravity = config.sim.gravity;
+  s.minDensity = c.minDensityRatio * c.density;
+  s.maxDensity = c.maxDensityRatio * c.density;
+  s.threads = config.sim.threads;
+  s.mass.assign(n, d.particleMass);
+
+  // Hydrostatic initial density: a particle under a fluid block carries the pressure rho0 g depth of the
+  // block's free surface above it (walls too, so the floor holds the column from the first step).
+  const Tait<double> eos = Tait<double>::make(c.density, d.c0, c.gamma);
+  const double g = norm(config.sim.gravity);
+  s.density.assign(n, c.density);
+  if (g > 0) {
+    const Vec3d up = (-1.0 / g) * config.sim.gravity;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec3d x = c.position[i];
+      double depth = 0;
+      for (const SphRegion& b : c.fluidBlocks) {
+        // Inside the block's extent across gravity (any height below its top).
+        const Vec3d lo = b.lo - Vec3d{0.5 * c.spacing, 0.5 * c.spacing, 0.5 * c.spacing};
+        const Vec3d hi = b.hi + Vec3d{0.5 * c.spacing, 0.5 * c.spacing, 0.5 * c.spacing};
+        const double top = std::max({dot(b.lo, up), dot(b.hi, up)});
+        const Vec3d across = x - dot(x, up) * up;
+        bool under = true;
+        for (int k = 0; k < 3; ++k) {
+          const double a = (&across.x)[k], upk = (&up.x)[k];
+          if (std::fabs(upk) > 0.5) continue;  // the vertical axis
+          if (a < (&lo.x)[k] || a > (&hi.x)[k]) under = false;
+        }
+        if (under) depth = std::max(depth, top - dot(x, up));
+      }
+      const double p = c.density * g * depth;
+      s.density[i] = std::max(c.density, eos.density(p));
+    }
+  }
+
+  // The leak check: fluid outside the tank's outer walls below their top (a closed tank: its lid's outside).
+  if (c.tank) {
+    const double wall = (d.boundaryLayers + 1) * c.spacing;
+    s.checkBox = true;
+    s.boxLo = c.tank->lo - Vec3d{wall, wall, wall};
+    s.boxHi = c.tank->hi + Vec3d{wall, wall, wall};
+    if (c.dimension == 2) {
+      s.boxLo.y = -1e300;
+      s.boxHi.y = 1e300;
+    }
+  }
+
+  // The grid: cells 2h + skin wide over the particles' box plus one cell, one layer across a 2D run's plane.
+  s.skin = c.skin * d.h;
+  const double cell = 2 * d.h + s.skin;
+  Vec3d lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  for (const Vec3d& x : c.position) {
+    lo = {std::min(lo.x, x.x), std::min(lo.y, x.y), std::min(lo.z, x.z)};
+    hi = {std::max(hi.x, x.x), std::max(hi.y, x.y), std::max(hi.z, x.z)};
+  }
+  if (n == 0) lo = hi = Vec3d{0, 0, 0};
+  lo = lo - Vec3d{cell, cell, cell};
+  hi = hi + Vec3d{cell, cell, cell};
+  const Vec3d ext = hi - lo;
+  s.grid.lo = lo;
+  s.grid.cellSize = cell;
+  s.grid.invCellSize = 1.0 / cell;
+  s.grid.nx = std::max(1, int(std::ceil(ext.x / cell)));
+  s.grid.ny = std::max(1, int(std::ceil(ext.y / cell)));
+  s.grid.nz = std::max(1, int(std::ceil(ext.z / cell)));
+  if (c.dimension == 2) {
+    s.grid.lo.y = (n ? c.position[0].y : 0.0) - 0.5 * cell;
+    s.grid.ny = 1;
+  }
+  const double cells = double(s.grid.nx) * s.grid.ny * s.grid.nz;
+  if (cells > 4.0 * double(n) + 1e6)
+    return invalidArgument("sph: the particles span " + std::to_string(s.grid.nx) + " x " + std::to_string(s.grid.ny) + " x " +
+                           std::to_string(s.grid.nz) + " cells of " + std::to_string(cell) +
+                           " m, far more than particles: a particle is far from the others");
+  return s;
+}
+
+}  // namespace pflow::compute::sph

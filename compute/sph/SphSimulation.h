@@ -1,0 +1,82 @@
+// An SPH run: validated configuration in, steps out. Owns the host side (time, the variable time step,
+// outputs, timers) and drives an SphEngine through the phases of the symplectic step (SphSimulation.cc).
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/Status.h"
+#include "compute/core/ExecutorKind.h"
+#include "compute/sim/PhaseTimers.h"
+#include "compute/sim/RunConfig.h"
+#include "compute/sph/SphConfig.h"
+#include "compute/sph/SphEngine.h"
+
+namespace pflow::compute::sph {
+
+struct SphOptions {
+  ExecutorKind executor = ExecutorKind::kCpu;
+  int device = 0;
+};
+
+class SphSimulation {
+ public:
+  // Validates the configuration (every error at once), sets up the engine, sorts and computes the rates at t = 0.
+  static Result<std::unique_ptr<SphSimulation>> create(const RunConfig& config, const SphOptions& options = {});
+
+  // One symplectic step of the CFL step (or sph.dt), shortened to land on the next output time.
+  Status step();
+  // Steps until `time`; after each step calls `observer`, which may stop the run by returning an error.
+  Status runUntil(double time, const std::function<Status(const SphSimulation&)>& observer = {});
+  Status runSteps(std::int64_t steps);
+
+  // Outputs every `interval` seconds (0: none) and at `end`: steps are shortened to land on those times
+  // exactly, and outputDue() is true after each.
+  void scheduleOutput(double interval, double end);
+  bool outputDue() const { return m_outputDue; }
+
+  std::int64_t stepCount() const { return m_step; }
+  double time() const { return m_time; }
+  double dt() const { return m_dt; }          // the last step's
+  double stableDt() const { return m_stable; } // the CFL limit at the current state
+  std::size_t numParticles() const { return m_engine->size(); }
+  std::size_t fluidParticles() const { return m_fluid; }
+  std::int64_t rebuilds() const { return m_rebuilds; }
+  const SphDerived& derived() const { return m_derived; }
+  const CellGrid& grid() const { return m_grid; }
+  double fluidEnergy() const { return m_engine->fluidEnergy(); }
+  double fluidReach(Vec3d direction) const { return m_engine->fluidReach(direction); }
+  ParticleSnapshot snapshot(const std::vector<std::string>& fields = {}) const { return m_engine->snapshot(m_step, m_time, fields); }
+  const PhaseTimers& timers() const { return m_timers; }
+  PhaseTimers& timers() { return m_timers; }
+  std::string executorDescription() const { return m_engine->executorDescription(); }
+  const char* precisionName() const { return m_engine->precisionName(); }
+  std::size_t deviceBytes() const { return m_engine->deviceBytes(); }
+  SphEngine& engine() { return *m_engine; }
+
+ private:
+  SphSimulation() = default;
+  Status stepPhases();  // the step loop itself (SphSimulation.cc, top of the file)
+  double nextDt();
+  Status withStep(Status s) const;
+
+  std::unique_ptr<SphEngine> m_engine;
+  SphDerived m_derived;
+  SphConfig m_method;  // the configuration, without its particles
+  CellGrid m_grid;
+  double m_skin = 0;
+  PhaseTimers m_timers;
+  std::int64_t m_step = 0, m_rebuilds = 0;
+  double m_time = 0, m_dt = 0, m_stable = 0;
+  std::size_t m_fluid = 0;
+  double m_outputInterval = 0, m_nextOutput = -1, m_end = -1;
+  bool m_outputDue = false;
+  bool m_warnedFixedDt = false;
+};
+
+// Host preparation, exposed for tests and benchmarks: masses, the hydrostatic initial density, the grid.
+Result<SphSetup> prepareSphSetup(const RunConfig& config);
+
+}  // namespace pflow::compute::sph

@@ -1,0 +1,102 @@
+// solver: sph scenes: the examples load with the documented particle counts; bad input gets one precise error
+// per problem, all at once, naming the key (docs/scene-format.md, "Fluids").
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "frontend/SceneLoader.h"
+
+namespace pflow::frontend {
+namespace {
+
+// The 2D dam break with `sph` and `fluid` overridable, as text.
+std::string damBreak(const std::string& sph = "{dimension: 2, spacing: 0.01}", const std::string& fluid = "density: 1000",
+                     const std::string& tank = "{min: [0, 0, 0], max: [1.0, 0, 0.6]}", const std::string& block = "{min: [0, 0, 0], max: [0.2, 0, 0.4]}") {
+  return "solver: sph\n"
+         "fluid:\n  " + fluid + "\n  blocks:\n    - " + block + "\n"
+         "tank: " + tank + "\n"
+         "sph: " + sph + "\n"
+         "simulation: {duration: 1.0, snapshot_interval: 0.05}\n";
+}
+
+Result<LoadedScene> load(const std::string& yaml) { return loadSceneFromString(yaml, "case.yaml"); }
+
+TEST(SphScene, ExampleLoadsAtTheSeedsResolution) {
+  auto r = loadScene("examples/dam_break_2d.yaml");
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  const compute::RunConfig& c = r.value().config;
+  EXPECT_EQ(c.solver, compute::Solver::kSph);
+  EXPECT_EQ(c.sph.fluidCount(), 20u * 40u);
+  EXPECT_EQ(c.sph.dimension, 2);
+  ASSERT_TRUE(c.sph.tank.has_value());
+  // Three layers of walls (2h/dp = 3) under and beside the tank's inside, none over its open top.
+  EXPECT_EQ(c.sph.size() - c.sph.fluidCount(), std::size_t(3 * (100 + 6) + 2 * 3 * 120));
+  for (const Vec3d& x : c.sph.position) EXPECT_EQ(x.y, 0.0);
+}
+
+TEST(SphScene, RefinedResolutionIsOneKey) {
+  auto r = load(damBreak("{dimension: 2, spacing: 0.002}"));
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r.value().config.sph.fluidCount(), 100u * 200u);
+}
+
+TEST(SphScene, MissingDensityIsNamed) {
+  auto r = load(damBreak("{dimension: 2, spacing: 0.01}", "sound_speed: auto"));
+  ASSERT_FALSE(r.isOk());
+  EXPECT_NE(r.status().message().find("fluid.density: required key 'density' is missing"), std::string::npos) << r.status().message();
+}
+
+TEST(SphScene, SmoothingRatioOutOfRange) {
+  auto r = load(damBreak("{dimension: 2, spacing: 0.01, smoothing_ratio: 0.6}"));
+  ASSERT_FALSE(r.isOk());
+  EXPECT_NE(r.status().message().find("sph.smoothing_ratio: 0.6 is outside [1, 3]"), std::string::npos) << r.status().message();
+}
+
+TEST(SphScene, ColumnNotResolved) {
+  auto r = load(damBreak("{dimension: 2, spacing: 0.04}"));
+  ASSERT_FALSE(r.isOk());
+  EXPECT_NE(r.status().message().find("fluid.blocks[0]: its smallest extent 0.2 m is under 4 smoothing lengths"), std::string::npos)
+      << r.status().message();
+}
+
+TEST(SphScene, TankMustContainTheFluid) {
+  auto r = load(damBreak("{dimension: 2, spacing: 0.01}", "density: 1000", "{min: [0.1, 0, 0], max: [1.0, 0, 0.6]}"));
+  ASSERT_FALSE(r.isOk());
+  EXPECT_NE(r.status().message().find("fluid.blocks[0]: reaches outside the tank"), std::string::npos) << r.status().message();
+}
+
+TEST(SphScene, SoundSpeedBelowTenTimesTheFlow) {
+  auto r = load(damBreak("{dimension: 2, spacing: 0.01}", "density: 1000\n  sound_speed: 10"));
+  ASSERT_FALSE(r.isOk());
+  EXPECT_NE(r.status().message().find("fluid.sound_speed: 10 m/s is below 10 x the expected maximum speed 3.96"), std::string::npos)
+      << r.status().message();
+}
+
+// Every problem at once, each with its key and line: a kernel that does not exist, a negative density, an
+// unknown key (with a suggestion) and a block that is not flat in a 2D run.
+TEST(SphScene, EveryErrorAtOnce) {
+  auto r = load(damBreak("{dimension: 2, spacing: 0.01, kernel: gaussian, cfll: 0.2}", "density: -5", "{min: [0, 0, 0], max: [1.0, 0, 0.6]}",
+                         "{min: [0, 0, 0], max: [0.2, 0.1, 0.4]}"));
+  ASSERT_FALSE(r.isOk());
+  const std::string m = r.status().message();
+  EXPECT_NE(m.find("sph.kernel"), std::string::npos) << m;
+  EXPECT_NE(m.find("wendland, cubic_spline"), std::string::npos) << m;
+  EXPECT_NE(m.find("sph.cfll"), std::string::npos) << m;
+  EXPECT_NE(m.find("'cfl'"), std::string::npos) << m;
+  EXPECT_NE(m.find("fluid.blocks[0].max"), std::string::npos) << m;
+  EXPECT_NE(m.find("line 3, column 12: fluid.density: -5"), std::string::npos) << m;
+  // DEM sections are not SPH's: a materials list is an unknown key here.
+  auto dem = load(damBreak() + "materials: []\n");
+  ASSERT_FALSE(dem.isOk());
+  EXPECT_NE(dem.status().message().find("materials"), std::string::npos);
+}
+
+TEST(SphScene, UnknownSolverIsNamed) {
+  auto r = load("solver: fem\nsimulation: {duration: 1}\n");
+  ASSERT_FALSE(r.isOk());
+  EXPECT_NE(r.status().message().find("solver"), std::string::npos);
+  EXPECT_NE(r.status().message().find("dem, sph"), std::string::npos) << r.status().message();
+}
+
+}  // namespace
+}  // namespace pflow::frontend
