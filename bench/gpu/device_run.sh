@@ -2,7 +2,7 @@
 # One call on the lent GPU machine (see bench/README.md): unpack the bundle built here, run the GPU
 # tests, measure the copy bandwidth and the settled-bed throughput, print a short table last.
 # Usage (from the repository root on the device machine):
-#   bash bench/gpu/device_run.sh [tests] [sanitize] [bench] [scaling] [largest] [cpu] [cpuab] [layouts] [mpi] [model] [accuracy] [sph]
+#   bash bench/gpu/device_run.sh [tests] [sanitize] [bench] [scaling] [largest] [cpu] [cpuab] [layouts] [mpi] [model] [accuracy] [sph] [sph3d]
 # Logs and JSON go to $OUT (or ./out).
 set -uo pipefail
 OUT=${OUT:-out}
@@ -188,12 +188,37 @@ if has sph; then
     timeout "${SPH_STUDY_TIMEOUT:-600}" "$B/pflow-accuracy" --solver sph --executor cuda --precision $prec ${SPH_STUDY_ARGS:-} \
       --out "$OUT/sph_$prec" > "$OUT/sph_study_$prec.log" 2>&1
     summary+=("sph study $prec rc=$? $((SECONDS - start))s")
+    for f in convergence dam_break_2d; do cp "$OUT/sph_$prec/$f.csv" "$OUT/sph_${prec}_$f.csv" 2>/dev/null; done
+    rm -rf "$OUT/sph_$prec"
   done
   summary+=("$(cat "$OUT/sph_study_double.log" | head -40)")
   sed 's/spacing: 0.01 /spacing: 0.002 /' examples/dam_break_2d.yaml > "$OUT/dam_break_2d_refined.yaml"
   timeout 300 "$B/pflow" run "$OUT/dam_break_2d_refined.yaml" --executor cuda -o "$OUT/dam_break_refined.h5" > "$OUT/sph_run.log" 2>&1
   summary+=("pflow run refined 2D rc=$? $(grep -E 'PERFORMANCE|done:' "$OUT/sph_run.log" | tr '\n' ' ')")
   rm -f "$OUT"/dam_break_refined.h5
+fi
+# SPH in 3D: SPHERIC test 2 (examples/dam_break_3d.yaml) run to 1 s with its probes at 0.02 m, and
+# pflow-sph-bench's throughput at SPH_SPACINGS (0.0064 m: about 5 million particles).
+if has sph3d; then
+  "$B/pflow-gpu-bandwidth" > "$OUT/bandwidth.json" 2>&1
+  bw=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["memcpy_gb_per_s"])' "$OUT/bandwidth.json" 2>/dev/null || echo 0)
+  for prec in ${SPH_PRECISIONS:-float double}; do
+    timeout 300 "$B/pflow-sph-bench" --executor cuda --precision $prec --spacing "${SPH_SPACINGS:-0.02,0.01,0.0064}" \
+      --warmup "${SPH_WARMUP:-10}" --steps "${SPH_STEPS:-50}" --copy-bandwidth "$bw" --device "$dev" --commit "$commit" \
+      >> "$OUT/sph_bench.jsonl" 2>> "$OUT/sph_bench.log"
+    summary+=("pflow-sph-bench $prec rc=$?")
+  done
+  summary+=("$(python3 -c '
+import json, sys
+for line in open(sys.argv[1]):
+    j = json.loads(line)
+    print(j["precision"], "n=%d" % j["n"], "%.2f ms/step" % j["ms_per_step"], "%.3g p-s/s" % j["particle_steps_per_s"],
+          "%.0f B/p" % j["device_bytes_per_particle"], "bw %.2f" % j.get("fraction_of_copy_bandwidth", 0), j["phases_s"])
+' "$OUT/sph_bench.jsonl" 2>&1)")
+  start=$SECONDS
+  timeout "${SPH3D_TIMEOUT:-300}" "$B/pflow" run examples/dam_break_3d.yaml --executor cuda -o "$OUT/dam_break_3d.h5" > "$OUT/sph3d_run.log" 2>&1
+  summary+=("pflow run dam_break_3d rc=$? $((SECONDS - start))s $(grep -E 'done:|PERFORMANCE' "$OUT/sph3d_run.log" | tr '\n' ' ')")
+  rm -f "$OUT/dam_break_3d.h5" "$OUT/dam_break_3d.xmf"
 fi
 if [[ -s $OUT/bench.jsonl ]]; then
   summary+=("$(python3 - "$OUT/bench.jsonl" <<'PY'

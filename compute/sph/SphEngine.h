@@ -65,6 +65,9 @@ class SphEngine {
   // The furthest a fluid particle reaches along the unit vector `direction`: max of x.direction [m] (one
   // device reduction; the surge front of a dam break is this along +x).
   virtual double fluidReach(Vec3d direction) const = 0;
+  // The fluid's kernel sums at `points` (SampleAt in SphKernels.h): its share of the kernel there and the
+  // Shepard-interpolated pressure [Pa]. Points in a 2D run lie in its plane.
+  virtual void sample(const std::vector<Vec3d>& points, std::vector<double>& fraction, std::vector<double>& pressure) const = 0;
 
   virtual ParticleSnapshot snapshot(std::int64_t step, double time, const std::vector<std::string>& fields) const = 0;
   virtual SphProbeState probe(Index i) const = 0;

@@ -88,6 +88,23 @@ class SphEngineImpl final : public SphEngine {
     return m_exec.maxOf(m_n, kernels::FluidReach{cptr<SphField::Position>(), cptr<SphField::Kind>(), direction, base}) + dot(base, direction);
   }
 
+  void sample(const std::vector<Vec3d>& points, std::vector<double>& fraction, std::vector<double>& pressure) const override {
+    const std::size_t n = points.size();
+    fraction.assign(n, 0.0);
+    pressure.assign(n, 0.0);
+    if (!n) return;
+    if (m_samples.bytes() < n * (sizeof(Vec3d) + 2 * sizeof(double))) m_samples.resize(n * (sizeof(Vec3d) + 2 * sizeof(double)));
+    auto* pts = m_samples.as<Vec3d>();
+    auto* frac = reinterpret_cast<double*>(pts + n);
+    double* pres = frac + n;
+    m_mem.copyFromHost(pts, points.data(), n * sizeof(Vec3d));
+    m_exec.forEach(Index(n), kernels::SampleAt<R>{m_setup.grid, m_cellStart.as<Index>(), cptr<SphField::Position>(),
+                                                  cptr<SphField::Density>(), cptr<SphField::Pressure>(), cptr<SphField::Mass>(),
+                                                  cptr<SphField::Kind>(), m_kernel, pts, frac, pres});
+    m_mem.copyToHost(fraction.data(), frac, n * sizeof(double));
+    m_mem.copyToHost(pressure.data(), pres, n * sizeof(double));
+  }
+
   ParticleSnapshot snapshot(std::int64_t step, double time, const std::vector<std::string>& fields) const override {
     return m_rows.snapshot(step, time, m_n, fields);
   }
@@ -200,6 +217,7 @@ class SphEngineImpl final : public SphEngine {
   PairParams<R> m_pair;
   Buffer m_cellKey{m_mem, 0}, m_perm{m_mem, 0}, m_cellStart{m_mem, 0}, m_ref{m_mem, 0};
   Buffer m_cond{m_mem, sizeof(Conditions)};
+  mutable Buffer m_samples{m_mem, 0};  // sample(): points, then fractions and pressures
 };
 
 }  // namespace pflow::compute::sph

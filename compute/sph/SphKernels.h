@@ -204,6 +204,48 @@ struct EquationOfState {
   PFLOW_HOSTDEVICE void operator()(Index i) const { p[i] = eos.pressure(rho[i]); }
 };
 
+// Kernel sums of the fluid at arbitrary points (probes and gauges): fraction[k] = sum_b V_b W(x_k - x_b) (the
+// fluid's share of the kernel there: 1 inside the fluid, about 1/2 on a wall or the free surface, 0 in air) and
+// pressure[k] = sum_b V_b p_b W / fraction (Shepard), over the fluid particles b (V_b = m_b/rho_b).
+template <class R>
+struct SampleAt {
+  CellGrid grid;
+  const Index* cellStart;
+  const Vec3d* pos;
+  const R* rho;
+  const R* p;
+  const R* mass;
+  const std::int32_t* kind;
+  Kernel<R> kernel;
+  const Vec3d* points;
+  double* fraction;
+  double* pressure;
+  PFLOW_HOSTDEVICE void operator()(Index k) const {
+    const Vec3d x = points[k];
+    const double cut2 = double(kernel.support()) * double(kernel.support());
+    double sw = 0, swp = 0;
+    int cx, cy, cz;
+    grid.coords(x, cx, cy, cz);
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int ix = cx + dx, iy = cy + dy, iz = cz + dz;
+          if (ix < 0 || iy < 0 || iz < 0 || ix >= grid.nx || iy >= grid.ny || iz >= grid.nz) continue;
+          const std::uint32_t c = grid.index(ix, iy, iz);
+          for (Index b = cellStart[c]; b < cellStart[c + 1]; ++b) {
+            if (kind[b] != kFluid) continue;
+            const double r2 = norm2(x - pos[b]);
+            if (r2 >= cut2) continue;
+            const double w = double(kernel.w(R(std::sqrt(r2)))) * double(mass[b]) / double(rho[b]);
+            sw += w;
+            swp += w * double(p[b]);
+          }
+        }
+    fraction[k] = sw;
+    pressure[k] = sw > 0 ? swp / sw : 0.0;
+  }
+};
+
 // How far a fluid particle reaches along `direction`, from `base` (>= 0 inside the grid; boundary: 0).
 struct FluidReach {
   const Vec3d* pos;

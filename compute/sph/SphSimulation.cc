@@ -97,6 +97,46 @@ Status SphSimulation::runUntil(double time, const std::function<Status(const Sph
   return Status::ok();
 }
 
+std::vector<double> SphSimulation::probeValues() const {
+  const auto& probes = m_method.probes;
+  std::vector<Vec3d> points;
+  std::vector<std::size_t> first(probes.size() + 1, 0);
+  const double floor = m_method.tank ? m_method.tank->lo.z : m_grid.lo.z;
+  const double top = m_grid.lo.z + m_grid.cellSize * m_grid.nz, dz = 0.5 * m_method.spacing;
+  const double plane = m_grid.lo.y + 0.5 * m_grid.cellSize;  // 2D: the particles' plane
+  for (std::size_t k = 0; k < probes.size(); ++k) {
+    first[k] = points.size();
+    Vec3d x = probes[k].point;
+    if (m_method.dimension == 2) x.y = plane;
+    if (!probes[k].gauge) points.push_back(x);
+    else
+      for (double z = floor; z <= top; z += dz) points.push_back({x.x, x.y, z});
+  }
+  first[probes.size()] = points.size();
+  std::vector<double> fraction, pressure, values(probes.size(), 0.0);
+  m_engine->sample(points, fraction, pressure);
+  for (std::size_t k = 0; k < probes.size(); ++k) {
+    if (!probes[k].gauge) {
+      values[k] = fraction[first[k]] > 0.05 ? pressure[first[k]] : 0.0;
+      continue;
+    }
+    // From the floor up: the first sample where the fluid's share falls below 1/2 after being above it, so a
+    // splash or a sheet higher up does not count (a dry gauge reads 0).
+    bool wet = false;
+    for (std::size_t i = first[k]; i < first[k + 1]; ++i) {
+      if (fraction[i] >= 0.5) {
+        wet = true;
+        continue;
+      }
+      if (!wet) continue;
+      const double below = fraction[i - 1];
+      values[k] = points[i - 1].z + (below - 0.5) / (below - fraction[i]) * dz - floor;
+      break;
+    }
+  }
+  return values;
+}
+
 Status SphSimulation::withStep(Status s) const {
   if (s.isOk()) return s;
   char buf[160];

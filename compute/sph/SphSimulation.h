@@ -48,6 +48,11 @@ class SphSimulation {
   const CellGrid& grid() const { return m_grid; }
   double fluidEnergy() const { return m_engine->fluidEnergy(); }
   double fluidReach(Vec3d direction) const { return m_engine->fluidReach(direction); }
+  // The scene's probes now, in their order: a pressure probe's Shepard-interpolated pressure [Pa] (0 where no
+  // fluid reaches it), a gauge's free-surface height above the tank's floor [m] (going up the vertical through it,
+  // where the fluid's kernel share first falls to 1/2; 0 when dry). docs/sph.md, "Probes and gauges".
+  std::vector<double> probeValues() const;
+  const std::vector<SphProbe>& probes() const { return m_method.probes; }
   ParticleSnapshot snapshot(const std::vector<std::string>& fields = {}) const { return m_engine->snapshot(m_step, m_time, fields); }
   const PhaseTimers& timers() const { return m_timers; }
   PhaseTimers& timers() { return m_timers; }

@@ -22,6 +22,7 @@ compute::sph::SphOptions cpu() { return {}; }
 TEST(SphHydrostatic, TankAtRestKeepsThePressureProfileAndStaysStill) {
   const double dp = 0.01, depth = 0.2;
   RunConfig c = test::hydrostaticTank(dp, 0.2, depth, 2.0);
+  c.sph.probes = {{"P", {0.1, 0, 0.05}, false}, {"H", {0.1, 0, 0}, true}};
   auto created = SphSimulation::create(c, cpu());
   ASSERT_TRUE(created.isOk()) << created.status().message();
   SphSimulation& sim = *created.value();
@@ -57,6 +58,12 @@ TEST(SphHydrostatic, TankAtRestKeepsThePressureProfileAndStaysStill) {
     EXPECT_NEAR(sum / count, expected, 0.02 * scale) << "layer at z = " << zsum / count;
   }
   EXPECT_GE(layers, 10);
+  // The probe 0.15 m under the initial surface reads the hydrostatic pressure under the settled one within 2 %
+  // of rho g H; the gauge reads the settled surface's height within half a spacing.
+  const std::vector<double> probed = sim.probeValues();
+  ASSERT_EQ(probed.size(), 2u);
+  EXPECT_NEAR(probed[0], rho * g * (surface - 0.05), 0.02 * scale);
+  EXPECT_NEAR(probed[1], surface, 0.5 * dp);
 }
 
 // Mass is carried by particles of fixed mass that are never created or removed: the fluid's mass at the end

@@ -1,0 +1,115 @@
+// pflow-sph-bench: SPH throughput (docs/sph.md, "Performance"): a scene file (default SPHERIC test 2,
+// examples/dam_break_3d.yaml) at the spacings asked for, on either executor and precision. Each size: the
+// scene built, `--warmup` steps, then `--steps` timed steps; one JSON line per size with N, ms per step,
+// particle-steps/s, the phase times, device bytes per particle and the compulsory bytes per particle-step
+// against --copy-bandwidth (pflow-gpu-bandwidth's figure). bench/RESULTS.md records the rows.
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <regex>
+#include <sstream>
+
+#include "bench/BenchUtil.h"
+#include "common/Log.h"
+#include "compute/sph/SphSimulation.h"
+#include "frontend/SceneLoader.h"
+
+using namespace pflow;
+
+int main(int argc, char** argv) {
+  CLI::App app{"pflow-sph-bench: SPH particle-steps per second on a scene at several resolutions"};
+  std::string scene = "examples/dam_break_3d.yaml", executor = "cuda", precision = "float", device, commit;
+  std::vector<double> spacings = {0.02};
+  int warmup = 20, steps = 100, threads = 0;
+  double bandwidth = 0;
+  app.add_option("--scene", scene, "an SPH scene file")->capture_default_str();
+  app.add_option("--spacing", spacings, "particle spacings dp [m], one run each (the scene's sph.spacing replaced)")->delimiter(',');
+  app.add_option("--executor", executor, "cpu | cuda")->check(CLI::IsMember({"cpu", "cuda"}))->capture_default_str();
+  app.add_option("--precision", precision, "float | double")->check(CLI::IsMember({"float", "double"}))->capture_default_str();
+  app.add_option("--warmup", warmup, "steps before timing")->capture_default_str();
+  app.add_option("--steps", steps, "timed steps")->capture_default_str();
+  app.add_option("--threads", threads, "OpenMP threads (0: all)");
+  app.add_option("--copy-bandwidth", bandwidth, "measured device copy bandwidth [GB/s] (pflow-gpu-bandwidth)");
+  app.add_option("--device", device, "device name for the record");
+  app.add_option("--commit", commit, "commit for the record");
+  CLI11_PARSE(app, argc, argv);
+  spdlog::set_level(spdlog::level::warn);
+  std::ifstream in(scene);
+  if (!in) {
+    std::fprintf(stderr, "cannot read %s\n", scene.c_str());
+    return 1;
+  }
+  std::stringstream text;
+  text << in.rdbuf();
+  for (double dp : spacings) {
+    char value[64];
+    std::snprintf(value, sizeof value, "spacing: %.9g", dp);
+    const std::string yaml = std::regex_replace(text.str(), std::regex("spacing: [0-9.eE+-]+"), value);
+    frontend::LoadOptions lo;
+    lo.baseDir = ".";
+    auto loaded = frontend::loadSceneFromString(yaml, scene, lo);
+    if (!loaded) {
+      std::fprintf(stderr, "%s\n", loaded.status().message().c_str());
+      return 1;
+    }
+    compute::RunConfig cfg = loaded.value().config;
+    cfg.sim.precision = precision == "float" ? compute::Precision::kFloat : compute::Precision::kDouble;
+    cfg.sim.threads = threads;
+    compute::sph::SphOptions so{executor == "cuda" ? compute::ExecutorKind::kCuda : compute::ExecutorKind::kCpu, 0};
+    auto created = compute::sph::SphSimulation::create(cfg, so);
+    if (!created) {
+      std::fprintf(stderr, "%s\n", created.status().message().c_str());
+      return 1;
+    }
+    auto& sim = *created.value();
+    if (Status s = sim.runSteps(warmup); !s.isOk()) {
+      std::fprintf(stderr, "%s\n", s.message().c_str());
+      return 3;
+    }
+    sim.engine().fence();
+    sim.timers().reset();
+    const auto start = std::chrono::steady_clock::now();
+    if (Status s = sim.runSteps(steps); !s.isOk()) {
+      std::fprintf(stderr, "%s\n", s.message().c_str());
+      return 3;
+    }
+    sim.engine().fence();
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double n = double(sim.numParticles());
+    // Compulsory traffic of one step: two rate passes (each reads position, velocity, density, pressure, mass,
+    // kind and writes acceleration, density rate, viscous rate) and the two halves (each reads and writes the
+    // state and its copy at the start): bytes of the field table at the run's precision.
+    const double r = precision == "float" ? 4 : 8;
+    const double pass = 8 * 3 + 3 * r + r + r + r + 4 + (3 * r + r + r);
+    const double halves = 2 * (2 * (24 + 3 * r + r) + 3 * r + r + r + 4);
+    const double bytesPerStep = 2 * pass + halves;
+    nlohmann::json j{{"solver", "sph"},
+                     {"case", scene},
+                     {"executor", executor},
+                     {"precision", precision},
+                     {"spacing", dp},
+                     {"n", sim.numParticles()},
+                     {"fluid", sim.fluidParticles()},
+                     {"steps", steps},
+                     {"ms_per_step", 1e3 * wall / steps},
+                     {"particle_steps_per_s", n * steps / wall},
+                     {"sim_time", sim.time()},
+                     {"dt", sim.dt()},
+                     {"cell_sorts", sim.rebuilds()},
+                     {"device_bytes_per_particle", double(sim.deviceBytes()) / n},
+                     {"compulsory_bytes_per_particle_step", bytesPerStep},
+                     {"device", device},
+                     {"commit", commit.empty() ? std::string("unknown") : commit},
+                     {"date", bench::today()}};
+    if (bandwidth > 0) j["fraction_of_copy_bandwidth"] = bytesPerStep * n * steps / wall / (bandwidth * 1e9);
+    nlohmann::json phases;
+    for (int p = 0; p < int(compute::Phase::kCount); ++p)
+      if (sim.timers().seconds(compute::Phase(p)) > 0) phases[compute::kPhaseNames[p]] = sim.timers().seconds(compute::Phase(p));
+    j["phases_s"] = phases;
+    std::printf("%s\n", j.dump().c_str());
+    std::fflush(stdout);
+  }
+  return 0;
+}
