@@ -2,7 +2,9 @@
 // examples/dam_break_3d.yaml) at the spacings asked for, on either executor and precision. Each size: the
 // scene built, `--warmup` steps, then `--steps` timed steps; one JSON line per size with N, ms per step,
 // particle-steps/s, the phase times, device bytes per particle and the compulsory bytes per particle-step
-// against --copy-bandwidth (pflow-gpu-bandwidth's figure). bench/RESULTS.md records the rows.
+// against --copy-bandwidth (pflow-gpu-bandwidth's figure). Under mpirun the scene is split across the ranks
+// (compute/mpi's MpiDomain, particle-count balance), with the halo overlapped with the interior rates or in
+// sequence (--overlap on|off: seed 003's boundary/centre overlap); rank 0 prints. bench/RESULTS.md records the rows.
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
@@ -13,17 +15,26 @@
 
 #include "bench/BenchUtil.h"
 #include "common/Log.h"
+#include "compute/mpi/MpiDomain.h"
 #include "compute/sph/SphSimulation.h"
 #include "frontend/SceneLoader.h"
 
 using namespace pflow;
 
 int main(int argc, char** argv) {
+  MPI_Init(&argc, &argv);
+  int rank = 0, ranks = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  struct Finalize {
+    ~Finalize() { MPI_Finalize(); }
+  } finalize;
   CLI::App app{"pflow-sph-bench: SPH particle-steps per second on a scene at several resolutions"};
   std::string scene = "examples/dam_break_3d.yaml", executor = "cuda", precision = "float", device, commit;
   std::vector<double> spacings = {0.02};
   int warmup = 20, steps = 100, threads = 0;
   double bandwidth = 0;
+  std::string overlap = "on";
   app.add_option("--scene", scene, "an SPH scene file")->capture_default_str();
   app.add_option("--spacing", spacings, "particle spacings dp [m], one run each (the scene's sph.spacing replaced)")->delimiter(',');
   app.add_option("--executor", executor, "cpu | cuda")->check(CLI::IsMember({"cpu", "cuda"}))->capture_default_str();
@@ -34,6 +45,8 @@ int main(int argc, char** argv) {
   app.add_option("--copy-bandwidth", bandwidth, "measured device copy bandwidth [GB/s] (pflow-gpu-bandwidth)");
   app.add_option("--device", device, "device name for the record");
   app.add_option("--commit", commit, "commit for the record");
+  app.add_option("--overlap", overlap, "distributed runs: the halo overlapped with the interior rates (on) or not")
+      ->check(CLI::IsMember({"on", "off"}))->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::warn);
   std::ifstream in(scene);
@@ -57,18 +70,27 @@ int main(int argc, char** argv) {
     compute::RunConfig cfg = loaded.value().config;
     cfg.sim.precision = precision == "float" ? compute::Precision::kFloat : compute::Precision::kDouble;
     cfg.sim.threads = threads;
-    compute::sph::SphOptions so{executor == "cuda" ? compute::ExecutorKind::kCuda : compute::ExecutorKind::kCpu, 0};
+    compute::sph::SphOptions so;
+    so.executor = executor == "cuda" ? compute::ExecutorKind::kCuda : compute::ExecutorKind::kCpu;
+    if (ranks > 1) {
+      compute::MpiDomainOptions split;
+      split.cost = compute::MpiDomainOptions::Cost::kCount;
+      so.domain = std::make_shared<compute::MpiDomain>(MPI_COMM_WORLD, split);
+    }
+    so.overlapHalo = overlap == "on";
     auto created = compute::sph::SphSimulation::create(cfg, so);
     if (!created) {
       std::fprintf(stderr, "%s\n", created.status().message().c_str());
       return 1;
     }
     auto& sim = *created.value();
+    MPI_Barrier(MPI_COMM_WORLD);
     if (Status s = sim.runSteps(warmup); !s.isOk()) {
       std::fprintf(stderr, "%s\n", s.message().c_str());
       return 3;
     }
     sim.engine().fence();
+    MPI_Barrier(MPI_COMM_WORLD);
     sim.timers().reset();
     const auto start = std::chrono::steady_clock::now();
     if (Status s = sim.runSteps(steps); !s.isOk()) {
@@ -76,8 +98,9 @@ int main(int argc, char** argv) {
       return 3;
     }
     sim.engine().fence();
+    MPI_Barrier(MPI_COMM_WORLD);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const double n = double(sim.numParticles());
+    const double n = double(sim.totalParticles());
     // Compulsory traffic of one step: two rate passes (each reads position, velocity, density, pressure, mass,
     // kind and writes acceleration, density rate, viscous rate) and the two halves (each reads and writes the
     // state and its copy at the start): bytes of the field table at the run's precision.
@@ -90,7 +113,10 @@ int main(int argc, char** argv) {
                      {"executor", executor},
                      {"precision", precision},
                      {"spacing", dp},
-                     {"n", sim.numParticles()},
+                     {"n", sim.totalParticles()},
+                     {"ranks", ranks},
+                     {"threads", threads},
+                     {"overlap", overlap},
                      {"fluid", sim.fluidParticles()},
                      {"steps", steps},
                      {"ms_per_step", 1e3 * wall / steps},
@@ -107,9 +133,11 @@ int main(int argc, char** argv) {
     nlohmann::json phases;
     for (int p = 0; p < int(compute::Phase::kCount); ++p)
       if (sim.timers().seconds(compute::Phase(p)) > 0) phases[compute::kPhaseNames[p]] = sim.timers().seconds(compute::Phase(p));
-    j["phases_s"] = phases;
-    std::printf("%s\n", j.dump().c_str());
-    std::fflush(stdout);
+    j["phases_s"] = phases;  // rank 0's
+    if (rank == 0) {
+      std::printf("%s\n", j.dump().c_str());
+      std::fflush(stdout);
+    }
   }
   return 0;
 }

@@ -58,6 +58,15 @@ std::string humanSeconds(double s) {
 
 }  // namespace
 
+Result<std::unique_ptr<backend::SnapshotWriter>> openOutput(const std::string& path) {
+  if (const fs::path parent = fs::path(path).parent_path(); !parent.empty()) {
+    std::error_code ec;
+    fs::create_directories(parent, ec);
+    if (ec) return ioError("cannot create the output folder '" + parent.string() + "': " + ec.message());
+  }
+  return backend::SnapshotWriter::create(path);
+}
+
 Result<RunSummary> runScene(const RunOptions& o) {
   auto scene = frontend::loadScene(o.scenePath);
   if (!scene) return scene.status();
@@ -95,12 +104,7 @@ Result<RunSummary> runScene(const RunOptions& o) {
   sum.outputPath = o.outputPath.empty() ? defaultOutput(scene.value(), o.scenePath) : o.outputPath;
   sum.executor = sim.executorDescription() + ", " + sim.engine().precisionName();
   sum.particles = sim.numParticles();
-  if (const fs::path parent = fs::path(sum.outputPath).parent_path(); !parent.empty()) {
-    std::error_code ec;
-    fs::create_directories(parent, ec);
-    if (ec) return ioError("cannot create the output folder '" + parent.string() + "': " + ec.message());
-  }
-  auto writer = backend::SnapshotWriter::create(sum.outputPath);
+  auto writer = openOutput(sum.outputPath);
   if (!writer) return writer.status();
   sum.xdmfPath = writer.value()->xdmfPath();
   if (Status s = writer.value()->writeGeometry(sim.geometry()); !s.isOk()) return s;

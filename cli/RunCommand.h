@@ -3,7 +3,13 @@
 #include <cstdint>
 #include <string>
 
+#include <memory>
+
 #include "common/Status.h"
+
+namespace pflow::backend {
+class SnapshotWriter;
+}
 
 namespace pflow::cli {
 
@@ -38,6 +44,8 @@ struct RunSummary {
 enum ExitCode { kExitOk = 0, kExitInvalid = 1, kExitIo = 2, kExitSimulation = 3, kExitUnavailable = 4, kExitRefused = 5, kExitCancelled = 6 };
 
 Result<RunSummary> runScene(const RunOptions& options);
+// The output file's folder created and its snapshot writer opened (every solver's driver).
+Result<std::unique_ptr<backend::SnapshotWriter>> openOutput(const std::string& path);
 int exitCodeFor(const Status& s);
 
 // Prints the scene's errors (all of them) or a summary; returns 0 when valid.

@@ -39,12 +39,7 @@ Result<RunSummary> runSphScene(const RunOptions& o, const frontend::LoadedScene&
   sum.outputPath = outputPath;
   sum.executor = sim.executorDescription() + ", " + sim.precisionName();
   sum.particles = sim.numParticles();
-  if (const fs::path parent = fs::path(sum.outputPath).parent_path(); !parent.empty()) {
-    std::error_code ec;
-    fs::create_directories(parent, ec);
-    if (ec) return ioError("cannot create the output folder '" + parent.string() + "': " + ec.message());
-  }
-  auto writer = backend::SnapshotWriter::create(sum.outputPath);
+  auto writer = openOutput(sum.outputPath);
   if (!writer) return writer.status();
   sum.xdmfPath = writer.value()->xdmfPath();
   if (Status s = writer.value()->writeGeometry({}); !s.isOk()) return s;

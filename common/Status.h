@@ -100,3 +100,10 @@ class ErrorList {
 };
 
 }  // namespace pflow
+
+// Returns the status of `expr` from the enclosing function when it is not OK.
+#define PFLOW_TRY(expr)               \
+  do {                                \
+    ::pflow::Status _st = (expr);     \
+    if (!_st.isOk()) return _st;      \
+  } while (0)

@@ -48,7 +48,9 @@ Run runOne(const SphStudyOptions& o, const std::string& sweep, double dp, double
   c.sim.precision = o.precision;
   c.sim.threads = o.threads;
   if (dt > 0) c.sph.dt = dt;
-  auto created = SphSimulation::create(c, {o.executor, 0});
+  compute::sph::SphOptions so;
+  so.executor = o.executor;
+  auto created = SphSimulation::create(c, so);
   if (!created) {
     r.status = "error";
     r.detail = created.status().message();

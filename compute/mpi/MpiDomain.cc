@@ -13,14 +13,6 @@
 namespace pflow::compute {
 
 namespace {
-// Cells of `grid` that share a face, edge or corner with cell (cx, cy, cz), itself included.
-template <class F>
-void forNeighbourCells(const CellGrid& g, int cx, int cy, int cz, const F& f) {
-  for (int z = std::max(0, cz - 1); z <= std::min(g.nz - 1, cz + 1); ++z)
-    for (int y = std::max(0, cy - 1); y <= std::min(g.ny - 1, cy + 1); ++y)
-      for (int x = std::max(0, cx - 1); x <= std::min(g.nx - 1, cx + 1); ++x) f(g.index(x, y, z));
-}
-
 Vec3d cellCentre(const CellGrid& g, std::uint32_t c) {
   const std::uint32_t x = c % std::uint32_t(g.nx), y = (c / std::uint32_t(g.nx)) % std::uint32_t(g.ny),
                       z = c / (std::uint32_t(g.nx) * std::uint32_t(g.ny));
@@ -81,23 +73,33 @@ Status MpiDomain::decompose(const std::vector<Vec3d>& pos, const std::vector<dou
   return Status::ok();
 }
 
-Status MpiDomain::partition(EngineSetup& s) {
+Status MpiDomain::partitionPoints(const CellGrid& grid, const std::vector<Vec3d>& position, std::vector<std::size_t>& mine) {
   // Every rank holds the whole scene here, so the first decomposition needs no reduction of positions:
   // each rank weighs only the particles r, r + size, ... and the sum over ranks counts each once.
-  m_grid = s.grid;
-  s.canonicalOrder = m_options.canonicalOrder;  // forces independent of the rows' order: one process's bits
-  const std::size_t n = s.position.size();
+  m_grid = grid;
+  const std::size_t n = position.size();
   std::vector<Vec3d> pos;
   std::vector<double> w;
   for (std::size_t i = std::size_t(m_rank); i < n; i += std::size_t(m_size)) {
-    pos.push_back(s.position[i]);
+    pos.push_back(position[i]);
     w.push_back(1.0);
   }
   if (Status st = decompose(pos, w); !st.isOk()) return st;
-  // Keep this rank's particles, with their scene index as global id.
-  std::vector<std::size_t> mine;
+  mine.clear();
   for (std::size_t i = 0; i < n; ++i)
-    if (m_cellOwner[m_grid.cellOf(s.position[i])] == m_rank) mine.push_back(i);
+    if (m_cellOwner[m_grid.cellOf(position[i])] == m_rank) mine.push_back(i);
+  m_ownedPerRank.assign(static_cast<std::size_t>(m_size), 0);
+  long long owned = (long long)mine.size();
+  MPI_Allgather(&owned, 1, MPI_LONG_LONG, m_ownedPerRank.data(), 1, MPI_LONG_LONG, m_comm);
+  spdlog::debug("rank {}: {} of {} particles ({} decomposition)", m_rank, mine.size(), n, m_decomp->name());
+  return Status::ok();
+}
+
+Status MpiDomain::partition(EngineSetup& s) {
+  s.canonicalOrder = m_options.canonicalOrder;  // forces independent of the rows' order: one process's bits
+  std::vector<std::size_t> mine;
+  if (Status st = partitionPoints(s.grid, s.position, mine); !st.isOk()) return st;
+  // Keep this rank's particles, with their scene index as global id.
   auto keep = [&](auto& v) {
     if (v.empty()) return;
     std::remove_reference_t<decltype(v)> kept;
@@ -112,10 +114,6 @@ Status MpiDomain::partition(EngineSetup& s) {
   keep(s.mass);
   keep(s.material);
   s.gid.assign(mine.begin(), mine.end());
-  m_ownedPerRank.assign(static_cast<std::size_t>(m_size), 0);
-  long long owned = (long long)mine.size();
-  MPI_Allgather(&owned, 1, MPI_LONG_LONG, m_ownedPerRank.data(), 1, MPI_LONG_LONG, m_comm);
-  spdlog::debug("rank {}: {} of {} particles ({} decomposition)", m_rank, mine.size(), n, m_decomp->name());
   return Status::ok();
 }
 
@@ -129,6 +127,15 @@ bool MpiDomain::anyRebuild(bool local) {
 
 double MpiDomain::sum(double local) {
   MPI_Allreduce(MPI_IN_PLACE, &local, 1, MPI_DOUBLE, MPI_SUM, m_comm);
+  return local;
+}
+
+void MpiDomain::sum(std::vector<double>& values) {
+  if (!values.empty()) MPI_Allreduce(MPI_IN_PLACE, values.data(), int(values.size()), MPI_DOUBLE, MPI_SUM, m_comm);
+}
+
+double MpiDomain::max(double local) {
+  MPI_Allreduce(MPI_IN_PLACE, &local, 1, MPI_DOUBLE, MPI_MAX, m_comm);
   return local;
 }
 
@@ -149,7 +156,7 @@ Status MpiDomain::agree(Status local) {
 
 // ---- particle exchange -------------------------------------------------------------------------
 
-std::vector<Vec3d> MpiDomain::positions(Engine& engine) const {
+std::vector<Vec3d> MpiDomain::positions(DistributedRows& engine) const {
   const ParticleSnapshot s = engine.snapshot(0, 0, {"position"});
   const SnapshotArray* a = s.find("position");
   return std::vector<Vec3d>(a->as<Vec3d>(), a->as<Vec3d>() + s.n);
@@ -210,7 +217,7 @@ std::vector<PackedRows> MpiDomain::complete() {
   return std::move(m_blocks);
 }
 
-Status MpiDomain::migrate(Engine& engine, double cost) {
+Status MpiDomain::migrate(DistributedRows& engine, double cost) {
   engine.dropGhosts();
   if (m_size == 1) return Status::ok();  // one rank owns every cell
   // Rows travel in the engine's layout: every rank with the same slot counts.
@@ -266,7 +273,7 @@ Status MpiDomain::migrate(Engine& engine, double cost) {
   return Status::ok();
 }
 
-Status MpiDomain::exchangeGhosts(Engine& engine) {
+Status MpiDomain::exchangeGhosts(DistributedRows& engine) {
   if (m_size == 1) return Status::ok();
   // Each owned particle goes to every other rank that owns one of the 27 cells around its own. The set
   // depends on the cell only: worked out once per decomposition, when a cell is first met (most cells are
@@ -300,7 +307,7 @@ void MpiDomain::haloRanksOf(std::uint32_t c, const std::int32_t*& dest, int& cou
     m_haloAt[c] = std::int32_t(m_haloRanks.size());
     std::int32_t n = 0;
     m_haloRanks.push_back(0);  // the count, then the ranks
-    forNeighbourCells(m_grid, cx, cy, cz, [&](std::uint32_t nc) {
+    m_grid.forNeighbourCells(cx, cy, cz, [&](std::uint32_t nc) {
       const std::int32_t o = m_cellOwner[nc];
       const auto first = m_haloRanks.end() - n;
       if (o != m_rank && std::find(first, m_haloRanks.end(), o) == m_haloRanks.end()) m_haloRanks.push_back(o), ++n;
@@ -314,7 +321,7 @@ void MpiDomain::haloRanksOf(std::uint32_t c, const std::int32_t*& dest, int& cou
 
 // The halo's rows and counts are fixed between rebuilds: no count matrix, just the messages. m_out and
 // m_in stay untouched while they are in flight (nothing else exchanges until finishRefresh).
-Status MpiDomain::startRefresh(Engine& engine) {
+Status MpiDomain::startRefresh(DistributedRows& engine) {
   if (m_size == 1) return Status::ok();
   engine.packHalo(kRefresh, m_out);
   post(m_out, m_haloSend, engine.rowBytes(kRefresh), m_haloRecv, true);
@@ -326,7 +333,7 @@ Status MpiDomain::awaitRefresh() {
   return Status::ok();
 }
 
-Status MpiDomain::finishRefresh(Engine& engine) {
+Status MpiDomain::finishRefresh(DistributedRows& engine) {
   if (m_size == 1) return Status::ok();
   engine.refreshGhosts(m_arrived);
   m_arrived.clear();

@@ -44,15 +44,18 @@ class MpiDomain final : public Domain {
   int rank() const override { return m_rank; }
   int ranks() const override { return m_size; }
   Status partition(EngineSetup& setup) override;
+  Status partitionPoints(const CellGrid& grid, const std::vector<Vec3d>& positions, std::vector<std::size_t>& mine) override;
   bool anyRebuild(bool local) override;
-  Status migrate(Engine& engine, double cost) override;
-  Status exchangeGhosts(Engine& engine) override;
-  Status startRefresh(Engine& engine) override;
+  Status migrate(DistributedRows& engine, double cost) override;
+  Status exchangeGhosts(DistributedRows& engine) override;
+  Status startRefresh(DistributedRows& engine) override;
   Status awaitRefresh() override;
-  Status finishRefresh(Engine& engine) override;
+  Status finishRefresh(DistributedRows& engine) override;
   Status agree(Status local) override;
   ParticleSnapshot gather(ParticleSnapshot local) override;
   double sum(double local) override;
+  double max(double local) override;
+  void sum(std::vector<double>& values) override;
 
   // Diagnostics and tests.
   const char* strategyName() const { return m_decomp ? m_decomp->name() : "none"; }
@@ -79,7 +82,7 @@ class MpiDomain final : public Domain {
   std::vector<PackedRows> complete();
   // Rows to[d] for each rank d, concatenated, with the count per rank.
   static void flatten(const std::vector<std::vector<Index>>& to, std::vector<Index>& rows, std::vector<int>& counts);
-  std::vector<Vec3d> positions(Engine& engine) const;
+  std::vector<Vec3d> positions(DistributedRows& engine) const;
   // The other ranks owning a cell among the 27 around cell c (count, then a pointer to them), cached.
   void haloRanksOf(std::uint32_t c, const std::int32_t*& dest, int& count);
 

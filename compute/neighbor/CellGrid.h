@@ -34,6 +34,20 @@ struct CellGrid {
     coords(p, cx, cy, cz);
     return index(cx, cy, cz);
   }
+  // f(c) for the cells that share a face, edge or corner with the cell holding `p`, itself included, in index
+  // order (z, then y, then x): at most 27, 9 in a grid one cell thick.
+  template <class F>
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void forNeighbourCells(Vec3d p, const F& f) const {
+    int cx, cy, cz;
+    coords(p, cx, cy, cz);
+    forNeighbourCells(cx, cy, cz, f);
+  }
+  template <class F>
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void forNeighbourCells(int cx, int cy, int cz, const F& f) const {
+    for (int z = cz > 0 ? cz - 1 : 0; z <= (cz + 1 < nz ? cz + 1 : nz - 1); ++z)
+      for (int y = cy > 0 ? cy - 1 : 0; y <= (cy + 1 < ny ? cy + 1 : ny - 1); ++y)
+        for (int x = cx > 0 ? cx - 1 : 0; x <= (cx + 1 < nx ? cx + 1 : nx - 1); ++x) f(index(x, y, z));
+  }
 };
 
 }  // namespace pflow::compute

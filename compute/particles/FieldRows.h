@@ -10,7 +10,9 @@
 #include <vector>
 
 #include "compute/core/Memory.h"
+#include "compute/neighbor/CellGrid.h"
 #include "compute/neighbor/NeighborKernels.h"
+#include "compute/particles/DistributedRows.h"
 #include "compute/particles/FieldStore.h"
 #include "compute/particles/ParticleSnapshot.h"
 
@@ -146,6 +148,125 @@ class FieldRows {
   Store& m_store;
   Buffer m_scratch{m_mem, 0};
   mutable Buffer m_stage{m_mem, 0};  // pack/copyIn staging
+};
+
+// The local rows of a distributed run's engine: the owned particles [0, owned), then the ghosts [owned, n),
+// with the ghosts' own cell list, and the DistributedRows operations on them (migration's keep and append, the
+// halo's rows, ghosts set and refreshed). Both solvers' engines hold one and forward DistributedRows to it.
+template <class Exec, class Store>
+class LocalRows : public FieldRows<Exec, Store> {
+ public:
+  using Base = FieldRows<Exec, Store>;
+  LocalRows(const Exec& exec, MemorySpace& mem, Store& store) : Base(exec, mem, store), m_exec(exec), m_mem(mem), m_store(store) {}
+
+  Index n = 0;      // local rows: owned, then ghosts
+  Index owned = 0;
+
+  // Appends `count` rows of the fields carrying `flags` (packed by pack) after the first n rows.
+  void unpack(const std::byte* data, Index count, std::uint32_t flags) {
+    const Index first = n;
+    n += count;
+    m_store.resize(n);
+    Base::copyIn(data, first, count, flags);
+  }
+  void pack(const std::vector<Index>& rows, const std::vector<int>& segments, std::uint32_t flags, std::vector<std::byte>& out) const {
+    Base::uploadRows(m_rowsBuf, rows);
+    Base::pack(m_rowsBuf.template as<Index>(), segments, flags, out);
+  }
+  void setHaloRows(const std::vector<Index>& rows, const std::vector<int>& segments) {
+    Base::uploadRows(m_haloRowsBuf, rows);
+    m_haloSegments = segments;
+  }
+  void packHalo(std::uint32_t flags, std::vector<std::byte>& out) const {
+    Base::pack(m_haloRowsBuf.template as<Index>(), m_haloSegments, flags, out);
+  }
+  void keepOwned(const std::vector<Index>& keep) {
+    n = owned;
+    const Index count = Index(keep.size());
+    if (m_rowsBuf.bytes() < std::max<std::size_t>(1, count) * sizeof(Index)) m_rowsBuf.resize(std::max<std::size_t>(1, count) * sizeof(Index));
+    m_mem.copyFromHost(m_rowsBuf.data(), keep.data(), count * sizeof(Index));
+    Base::reorder(m_rowsBuf.template as<Index>(), count);
+    owned = n = count;
+    m_store.resize(n);
+  }
+  void appendOwned(const std::vector<PackedRows>& blocks) {
+    n = owned;
+    for (const PackedRows& b : blocks) unpack(b.data, b.count, kMigrate);
+    owned = n;
+  }
+  // The ghosts replaced by `blocks` (kGhost), binned into `grid`'s cells: their data stays in arrival order
+  // (refreshes arrive in that order); ghostCellStart/ghostItems list them by cell. `positions()` gives the
+  // position field, asked once the rows are in (unpacking may move every field).
+  template <class Positions>
+  void setGhosts(const std::vector<PackedRows>& blocks, const CellGrid& grid, const Positions& positions) {
+    n = owned;
+    for (const PackedRows& b : blocks) unpack(b.data, b.count, kGhost);
+    const Index count = n - owned;
+    auto atLeast = [](Buffer& b, std::size_t bytes) {
+      if (b.bytes() < bytes) b.resize(bytes);
+    };
+    atLeast(m_ghostCellStart, (std::size_t(grid.numCells()) + 1) * sizeof(Index));
+    atLeast(m_ghostItems, std::max<std::size_t>(1, count) * sizeof(Index));
+    atLeast(m_ghostKey, std::max<std::size_t>(1, count) * sizeof(std::uint32_t));
+    m_exec.forEach(count, kernels::CellKey{grid, positions() + owned, m_ghostKey.template as<std::uint32_t>()});
+    m_exec.sortByKey(m_ghostKey.template as<std::uint32_t>(), count, grid.numCells(), m_ghostItems.template as<Index>(),
+                     m_ghostCellStart.template as<Index>());
+  }
+  // Each cell's ghosts in the order `order(cellStart, items)` gives them (a kernel launch over the cells).
+  template <class F>
+  void orderGhostCells(std::uint32_t numCells, const F& order) {
+    m_exec.forEach(numCells, order(m_ghostCellStart.template as<Index>(), m_ghostItems.template as<Index>()));
+  }
+  void refreshGhosts(const std::vector<PackedRows>& blocks) {
+    Index first = owned;
+    for (const PackedRows& b : blocks) {
+      Base::copyIn(b.data, first, b.count, kRefresh);
+      first += b.count;
+    }
+  }
+  void dropGhosts() {
+    n = owned;
+    m_store.resize(n);
+  }
+  const Index* ghostCellStart() const { return m_ghostCellStart.template as<Index>(); }
+  const Index* ghostItems() const { return m_ghostItems.template as<Index>(); }
+
+ private:
+  const Exec& m_exec;
+  MemorySpace& m_mem;
+  Store& m_store;
+  mutable Buffer m_rowsBuf{m_mem, 0};      // pack's rows
+  mutable Buffer m_haloRowsBuf{m_mem, 0};  // the halo's rows, on the device from one rebuild to the next
+  std::vector<int> m_haloSegments;
+  Buffer m_ghostCellStart{m_mem, 0}, m_ghostItems{m_mem, 0}, m_ghostKey{m_mem, 0};
+};
+
+// An engine interface (Interface derives DistributedRows) whose row operations are its LocalRows's: the engine
+// gives access to them (rows()) and says what follows a change of its local rows (localRowsChanged(): its own
+// per-particle buffers resized). setGhosts and dropGhosts stay the engine's (each solver adds to them).
+template <class Interface, class Rows>
+class ForwardDistributedRows : public Interface {
+ public:
+  std::size_t rowBytes(std::uint32_t flags) const override { return rows().rowBytes(flags); }
+  void pack(const std::vector<Index>& r, const std::vector<int>& segments, std::uint32_t flags, std::vector<std::byte>& out) const override {
+    rows().pack(r, segments, flags, out);
+  }
+  void setHaloRows(const std::vector<Index>& r, const std::vector<int>& segments) override { rows().setHaloRows(r, segments); }
+  void packHalo(std::uint32_t flags, std::vector<std::byte>& out) const override { rows().packHalo(flags, out); }
+  void keepOwned(const std::vector<Index>& keep) override {
+    rows().keepOwned(keep);
+    localRowsChanged();
+  }
+  void appendOwned(const std::vector<PackedRows>& blocks) override {
+    rows().appendOwned(blocks);
+    localRowsChanged();
+  }
+  void refreshGhosts(const std::vector<PackedRows>& blocks) override { rows().refreshGhosts(blocks); }
+
+ protected:
+  virtual Rows& rows() = 0;
+  virtual const Rows& rows() const = 0;
+  virtual void localRowsChanged() = 0;
 };
 
 }  // namespace pflow::compute

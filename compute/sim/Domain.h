@@ -4,13 +4,15 @@
 // itself never sees MPI.
 #pragma once
 #include <cstdint>
+#include <vector>
 
 #include "common/Status.h"
 #include "compute/particles/ParticleSnapshot.h"
 
 namespace pflow::compute {
 
-class Engine;
+class DistributedRows;
+struct CellGrid;
 struct EngineSetup;
 
 class Domain {
@@ -21,27 +23,38 @@ class Domain {
   // Every rank prepares the whole scene; this keeps this rank's share and gives each particle its
   // global id (its index in the scene).
   virtual Status partition(EngineSetup&) { return Status::ok(); }
+  // The same for any solver: which of the scene's particles (at `positions`, binned by `grid`) this rank keeps;
+  // `mine` gets their indices in the scene, ascending (their global ids). One process: all of them.
+  virtual Status partitionPoints(const CellGrid& grid, const std::vector<Vec3d>& positions, std::vector<std::size_t>& mine) {
+    (void)grid;
+    mine.resize(positions.size());
+    for (std::size_t i = 0; i < mine.size(); ++i) mine[i] = i;
+    return Status::ok();
+  }
   // True on every rank when any rank needs a neighbour rebuild (ranks rebuild together).
   virtual bool anyRebuild(bool local) { return local; }
   // Rebuild, before the sort: ghosts dropped, particles sent to the ranks that own their cells now (the
   // ranks rebalanced first when their cost differs by more than the tolerance). `cost`: seconds this rank
   // spent in contacts and forces since the last rebuild.
-  virtual Status migrate(Engine&, double /*cost*/) { return Status::ok(); }
+  virtual Status migrate(DistributedRows&, double /*cost*/) { return Status::ok(); }
   // Rebuild, after the sort: the ghosts (particles of other ranks within reach of this rank's cells).
-  virtual Status exchangeGhosts(Engine&) { return Status::ok(); }
+  virtual Status exchangeGhosts(DistributedRows&) { return Status::ok(); }
   // Between rebuilds, after the first half step: the ghosts' positions and velocities, in three parts so
   // that the interior particles' forces are computed while the messages travel: startRefresh packs and
   // sends this rank's rows and posts the receives, awaitRefresh waits for the messages, finishRefresh
   // writes the ghosts.
-  virtual Status startRefresh(Engine&) { return Status::ok(); }
+  virtual Status startRefresh(DistributedRows&) { return Status::ok(); }
   virtual Status awaitRefresh() { return Status::ok(); }
-  virtual Status finishRefresh(Engine&) { return Status::ok(); }
+  virtual Status finishRefresh(DistributedRows&) { return Status::ok(); }
   // The step's outcome, the same on every rank: OK, or the error of the lowest failing rank.
   virtual Status agree(Status local) { return local; }
   // All ranks' particles in one snapshot ordered by id, on rank 0 (an empty one elsewhere). Collective.
   virtual ParticleSnapshot gather(ParticleSnapshot local) { return local; }
-  // Sum over ranks (collective).
+  // Sum and maximum over ranks (collective).
   virtual double sum(double local) { return local; }
+  virtual double max(double local) { return local; }
+  // Element-wise sum over ranks, in place (collective).
+  virtual void sum(std::vector<double>& /*values*/) {}
 };
 
 }  // namespace pflow::compute

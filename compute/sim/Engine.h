@@ -13,6 +13,7 @@
 #include "compute/contact/ContactParams.h"
 #include "compute/contact/ForceKernel.h"
 #include "compute/neighbor/CellGrid.h"
+#include "compute/particles/DistributedRows.h"
 #include "compute/particles/ParticleSnapshot.h"
 #include "compute/sim/ModelFlags.h"
 
@@ -67,12 +68,6 @@ struct EngineSetup {
   enum class Layout { kExecutor, kGpu, kCpu } layout = Layout::kExecutor;
 };
 
-// `count` rows packed by Engine::pack, as received from one rank.
-struct PackedRows {
-  const std::byte* data;
-  Index count;
-};
-
 struct ContactStats {
   std::size_t particleContacts = 0;  // pairs in contact (each counted once)
   std::size_t wallContacts = 0;
@@ -119,13 +114,11 @@ inline std::string dtSuggestion(double dt, const ParticleProbe& p) {
   return buf;
 }
 
-class Engine {
+// The DEM engine. Its local rows (owned, then ghosts) and their exchange are DistributedRows's.
+class Engine : public DistributedRows {
  public:
-  virtual ~Engine() = default;
   virtual std::string executorDescription() const = 0;
   virtual const char* precisionName() const = 0;  // "float" or "double" (simulation.precision)
-  virtual std::size_t size() const = 0;    // particles this engine owns (integrates, outputs)
-  virtual std::size_t ghosts() const = 0;  // copies of other ranks' particles within reach (distributed runs)
 
   // Phases, in step order. The first two return the largest squared displacement since the last
   // rebuild (particles and mesh vertices), for the skin criterion.
@@ -146,10 +139,8 @@ class Engine {
   virtual std::size_t boundaryParticles() const = 0;
   virtual Status integrateSecondHalf(double dt) = 0;
 
-  // Explicit host copies for output and diagnostics.
-  // The snapshot fields named in `fields` (every kSnapshot field when empty; unknown names are ignored):
-  // only those are copied off the device.
-  virtual ParticleSnapshot snapshot(std::int64_t step, double time, const std::vector<std::string>& fields) const = 0;
+  // Explicit host copies for output and diagnostics (snapshot(): DistributedRows; the fields named, every
+  // kSnapshot field when empty, unknown names ignored: only those are copied off the device).
   virtual GeometrySnapshot geometry() const = 0;
   virtual ContactStats contactStats() const = 0;
   // Device reductions over the owned particles, one pass and 8 bytes to the host each: kinetic (translational
@@ -163,42 +154,18 @@ class Engine {
   // The owned particle with the largest kinetic energy (host copies: error path only); gid kNoGid when none.
   virtual ParticleProbe fastestParticle() const = 0;
   virtual std::size_t deviceBytes() const = 0;
-  virtual int historySlots() const = 0;
-  virtual int wallHistorySlots() const = 0;
+
   // Every neighbour candidate pair (i, j) as global ids, sorted (diagnostics and executor comparisons).
   virtual std::vector<std::pair<Gid, Gid>> candidatePairs() const = 0;
-  // ---- Distributed runs (compute/mpi). Local rows are the owned particles [0, size()), then the ghosts
-  // [size(), size() + ghosts()): read-only copies of other ranks' particles, candidates of owned ones.
-  // A rebuild there is: dropGhosts, keepOwned + appendOwned (migration), sortByCell, setGhosts,
-  // buildContacts; between rebuilds refreshGhosts after integrateFirstHalf. Packed rows are field by
-  // field (each a block of `count` values; slot-major slot fields slot by slot), in this engine's layout:
-  // every rank of a run runs the same executor and precision with the same slot counts (ensureSlots).
-  virtual std::size_t rowBytes(std::uint32_t fieldFlags) const = 0;
-  // The fields carrying `fieldFlags` (kMigrate, kGhost, kRefresh) of local rows `rows`, packed on the device
-  // as consecutive blocks of segments[0], segments[1], ... rows (one block per destination rank).
-  virtual void pack(const std::vector<Index>& rows, const std::vector<int>& segments, std::uint32_t fieldFlags,
-                    std::vector<std::byte>& out) const = 0;
-  // The halo's rows, fixed from one rebuild to the next: kept on the device by setHaloRows (at the rebuild),
-  // packed by packHalo (kGhost then, kRefresh every step) without uploading them again.
-  virtual void setHaloRows(const std::vector<Index>& rows, const std::vector<int>& segments) = 0;
-  virtual void packHalo(std::uint32_t fieldFlags, std::vector<std::byte>& out) const = 0;
-  // The owned particles become rows `keep` (ascending or not), in that order; ghosts are dropped.
-  virtual void keepOwned(const std::vector<Index>& keep) = 0;
-  // Appends owned particles: blocks packed with kMigrate (every field that travels); ghosts are dropped.
-  virtual void appendOwned(const std::vector<PackedRows>& blocks) = 0;
-  // Replaces the ghosts by blocks packed with kGhost, in order, and bins them into cells.
-  virtual void setGhosts(const std::vector<PackedRows>& blocks) = 0;
-  // Overwrites the ghosts' kRefresh fields (position, velocities): blocks as in setGhosts, same rows.
-  virtual void refreshGhosts(const std::vector<PackedRows>& blocks) = 0;
-  virtual void dropGhosts() = 0;
+  // ---- Distributed runs (compute/mpi): DistributedRows. The DEM rebuild there is dropGhosts, keepOwned +
+  // appendOwned (migration), sortByCell, setGhosts, buildContacts; between rebuilds refreshGhosts after
+  // integrateFirstHalf.
   // ---- Checkpoints (simulation.on_instability: reduce_dt). save: every kMigrate field of the owned rows,
   // packed (pack's layout at the current slot counts). restore: the engine holds exactly those rows again,
   // with those slot counts (slots that grew since shrink back); the caller then rebuilds and recomputes the
   // forces (they are not saved).
   virtual void save(std::vector<std::byte>& out) const = 0;
   virtual void restore(const std::vector<std::byte>& rows, Index count, int contactSlots, int wallSlots) = 0;
-  // Grows the history slots to at least these counts (ranks agree on them before exchanging rows).
-  virtual void ensureSlots(int contactSlots, int wallSlots) = 0;
 
   // Waits for the device's queued work (phase timers call it so each phase is timed whole).
   virtual void fence() const = 0;

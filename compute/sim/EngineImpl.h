@@ -24,9 +24,10 @@ namespace pflow::compute {
 
 
 template <class Exec, class R>
-class EngineImpl final : public Engine {
+class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, ParticleData<R>>> {
  public:
   using Engine::computeForces;
+  using ForceSet = Engine::ForceSet;
   using V = Vec3<R>;
 
   explicit EngineImpl(EngineSetup s)
@@ -63,69 +64,24 @@ class EngineImpl final : public Engine {
     m_rows.reorder(m_perm.as<Index>(), m_n);
   }
 
-  // ---- distributed runs (Engine.h) ----
-  std::size_t rowBytes(std::uint32_t flags) const override { return m_rows.rowBytes(flags); }
-  void pack(const std::vector<Index>& rows, const std::vector<int>& segments, std::uint32_t flags,
-            std::vector<std::byte>& out) const override {
-    m_rows.uploadRows(m_rowsBuf, rows);
-    m_rows.pack(m_rowsBuf.as<Index>(), segments, flags, out);
-  }
-  void setHaloRows(const std::vector<Index>& rows, const std::vector<int>& segments) override {
-    m_rows.uploadRows(m_haloRowsBuf, rows);
-    m_haloSegments = segments;
-  }
-  void packHalo(std::uint32_t flags, std::vector<std::byte>& out) const override {
-    m_rows.pack(m_haloRowsBuf.as<Index>(), m_haloSegments, flags, out);
-  }
-  void keepOwned(const std::vector<Index>& keep) override {
-    m_n = m_owned;
-    const Index count = Index(keep.size());
-    if (m_rowsBuf.bytes() < std::max<std::size_t>(1, count) * sizeof(Index)) m_rowsBuf.resize(std::max<std::size_t>(1, count) * sizeof(Index));
-    m_mem.copyFromHost(m_rowsBuf.data(), keep.data(), count * sizeof(Index));
-    m_rows.reorder(m_rowsBuf.as<Index>(), count);
-    m_owned = m_n = count;
-    m_particles.resize(m_n);
-    sizeLocalBuffers();
-  }
-  void appendOwned(const std::vector<PackedRows>& blocks) override {
-    m_n = m_owned;
-    for (const PackedRows& b : blocks) unpack(b.data, b.count, kMigrate);
-    m_owned = m_n;
-    sizeLocalBuffers();
-  }
+  // ---- distributed runs (DistributedRows): LocalRows's operations (ForwardDistributedRows), and these ----
   void setGhosts(const std::vector<PackedRows>& blocks) override {
-    m_n = m_owned;
-    for (const PackedRows& b : blocks) unpack(b.data, b.count, kGhost);
+    m_rows.setGhosts(blocks, m_setup.grid, [this] { return m_particles.template ptr<Field::Position>(); });
     sizeLocalBuffers();
-    // The ghosts' cell list (their data stays in arrival order: refreshes arrive in that order).
-    const Index count = m_n - m_owned;
-    const CellGrid& g = m_setup.grid;
-    m_ghostCellStart.resize(std::max(m_ghostCellStart.bytes(), (std::size_t(g.numCells()) + 1) * sizeof(Index)));
-    m_ghostItems.resize(std::max(m_ghostItems.bytes(), std::max<std::size_t>(1, count) * sizeof(Index)));
-    m_exec.forEach(count, kernels::CellKey{g, m_particles.template ptr<Field::Position>() + m_owned, m_cellKey.as<std::uint32_t>()});
-    m_exec.sortByKey(m_cellKey.as<std::uint32_t>(), count, g.numCells(), m_ghostItems.as<Index>(), m_ghostCellStart.as<Index>());
-  }
-  void refreshGhosts(const std::vector<PackedRows>& blocks) override {
-    Index first = m_owned;
-    for (const PackedRows& b : blocks) {
-      m_rows.copyIn(b.data, first, b.count, kRefresh);
-      first += b.count;
-    }
   }
   void dropGhosts() override {
     m_numBoundary = 0;
-    m_n = m_owned;
-    m_particles.resize(m_n);
+    m_rows.dropGhosts();
   }
   void save(std::vector<std::byte>& out) const override {
     std::vector<Index> rows(m_owned);
     for (Index i = 0; i < m_owned; ++i) rows[i] = i;
-    pack(rows, {int(m_owned)}, kMigrate, out);
+    m_rows.pack(rows, {int(m_owned)}, kMigrate, out);
   }
   void restore(const std::vector<std::byte>& rows, Index count, int contactSlots, int wallSlots) override {
     m_particles.allocate(std::max<Index>(count, 1), contactSlots, wallSlots, m_particles.slotMajor());
     m_n = m_owned = 0;
-    unpack(rows.data(), count, kMigrate);
+    m_rows.unpack(rows.data(), count, kMigrate);
     m_owned = m_n;
     m_particles.resize(m_n);
     sizeLocalBuffers();
@@ -158,8 +114,8 @@ class EngineImpl final : public Engine {
                                                   m_nbrCount.as<std::uint32_t>(), m_cond.as<Conditions>()};
       build.canonicalOrder = m_setup.canonicalOrder;
       if (m_n > m_owned) {
-        build.ghostCellStart = m_ghostCellStart.as<Index>();
-        build.ghostItems = m_ghostItems.as<Index>();
+        build.ghostCellStart = m_rows.ghostCellStart();
+        build.ghostItems = m_rows.ghostItems();
         build.ghostBase = m_owned;
       }
       m_exec.forEach(m_owned, build);
@@ -297,6 +253,10 @@ class EngineImpl final : public Engine {
   }
 
  private:
+  using Rows = LocalRows<Exec, ParticleData<R>>;
+  Rows& rows() override { return m_rows; }
+  const Rows& rows() const override { return m_rows; }
+  void localRowsChanged() override { sizeLocalBuffers(); }
   void init();
   void allocNeighbors() {
     m_nbr.resize(std::max<std::size_t>(1, std::size_t(m_owned) * m_nbrCap) * sizeof(Index));
@@ -308,13 +268,6 @@ class EngineImpl final : public Engine {
   ListLayout nbrLayout() const { return m_columnMajor ? ListLayout::columnMajor(m_owned) : ListLayout::rowMajor(m_nbrCap); }
   void allocWallCandidates() { m_wallCand.resize(std::max<std::size_t>(1, std::size_t(m_owned) * m_wallCap) * sizeof(Index)); }
 
-  // Appends `count` rows of the fields carrying `flags` (packed by pack()) after the first m_n rows.
-  void unpack(const std::byte* data, Index count, std::uint32_t flags) {
-    const Index first = m_n;
-    m_n += count;
-    m_particles.resize(m_n);
-    m_rows.copyIn(data, first, count, flags);
-  }
   // The pair kernel, then the wall kernel, over the particles of `set`: every owned one, or one part of
   // the list splitBoundary made (boundary rows first, then interior ones).
   void launchForces(double dt, double time, ForceSet set, bool storeOnly) {
@@ -516,10 +469,10 @@ class EngineImpl final : public Engine {
   Exec m_exec;
   MemorySpace& m_mem;
   ParticleData<R> m_particles;
-  FieldRows<Exec, ParticleData<R>> m_rows;  // reorder, pack, copy in, snapshot: driven by the field table
+  LocalRows<Exec, ParticleData<R>> m_rows;  // reorder, pack, copy in, snapshot, ghosts: driven by the field table
   EngineSetup m_setup;
-  Index m_n = 0;      // local particles: the owned ones, then ghosts (distributed runs)
-  Index m_owned = 0;
+  Index& m_n = m_rows.n;          // local particles: the owned ones, then ghosts (distributed runs)
+  Index& m_owned = m_rows.owned;
   Index m_numTri = 0;
   bool m_anyMeshMoves = false;
   bool m_anyWalls = false;  // planes or triangles: the wall-force kernel runs
@@ -534,15 +487,11 @@ class EngineImpl final : public Engine {
   Buffer m_binStart{m_mem, 0}, m_binItems{m_mem, 0}, m_binCount{m_mem, 0};
   Buffer m_wallCand{m_mem, 0}, m_wallCandCount{m_mem, 0}, m_planeMask{m_mem, 0};
   Buffer m_params{m_mem, 0}, m_cond{m_mem, sizeof(Conditions)};
-  Buffer m_ghostCellStart{m_mem, 0}, m_ghostItems{m_mem, 0};
   Buffer m_split{m_mem, 0}, m_splitFlag{m_mem, 0};  // boundary rows, then interior ones (splitBoundary)
   // buildSlabs (pairs evaluated once): slab per particle, particles by slab, slab starts, owned candidates per row
   Buffer m_slabOf{m_mem, 0}, m_slabItems{m_mem, 0}, m_slabStart{m_mem, 0}, m_owned1{m_mem, 0};
   Index m_numSlabs = 0;  // 0: every particle evaluates all its pairs (ComputeForces)
   Index m_numBoundary = 0;
-  mutable Buffer m_rowsBuf{m_mem, 0};  // pack's rows
-  mutable Buffer m_haloRowsBuf{m_mem, 0};  // the halo's rows, on the device from one rebuild to the next
-  std::vector<int> m_haloSegments;
 };
 
 template <class Exec, class R>

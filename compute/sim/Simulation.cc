@@ -19,12 +19,7 @@ Status fromException();  // the exception in flight as a Status (below)
     ::pflow::Status _st = (expr);           \
     if (!_st.isOk()) return withStep(_st);  \
   } while (0)
-// Inside a step's parts: the step is named once, where the step's status is agreed.
-#define PFLOW_TRY(expr)                \
-  do {                                 \
-    ::pflow::Status _st = (expr);      \
-    if (!_st.isOk()) return _st;       \
-  } while (0)
+// Inside a step's parts (PFLOW_TRY, common/Status.h): the step is named once, where the step's status is agreed.
 
 // ---------------------------------------------------------------------------------------------
 // The step loop. One velocity-Verlet step, top to bottom, a timer per phase.

@@ -8,6 +8,7 @@
 
 #include "common/Status.h"
 #include "compute/neighbor/CellGrid.h"
+#include "compute/particles/DistributedRows.h"
 #include "compute/particles/ParticleSnapshot.h"
 #include "compute/sph/SphPhysics.h"
 
@@ -32,6 +33,9 @@ struct SphSetup {
   CellGrid grid;
   double skin = 0;  // [m]
   int threads = 0;
+  // Neighbours summed in global-id order (SortCellByGid): forces independent of the rows' order, so a
+  // distributed run equals one process with this set, bit for bit. Distributed runs always set it.
+  bool canonicalOrder = false;
 };
 
 // One particle as the host sees it, for error messages (copied off the device on the error path only).
@@ -42,18 +46,25 @@ struct SphProbeState {
   double density = 0, pressure = 0;
 };
 
-class SphEngine {
+// The SPH engine. Its local rows (owned, then ghosts of other ranks) and their exchange are
+// DistributedRows's: a distributed run's rebuild is dropGhosts, keepOwned + appendOwned, sortByCell, setGhosts;
+// between rebuilds refreshGhosts before each evaluation of the rates.
+class SphEngine : public DistributedRows {
  public:
-  virtual ~SphEngine() = default;
   virtual std::string executorDescription() const = 0;
   virtual const char* precisionName() const = 0;
-  virtual std::size_t size() const = 0;
 
   // Phases, in step order (SphSimulation::stepPhases).
-  // The particles sorted by cell (every field reordered); positions now are the skin's reference.
+  // The owned particles sorted by cell (every field reordered); positions now are the skin's reference.
   virtual void sortByCell() = 0;
-  // Acceleration, density rate and viscous rate of every particle at the current state.
-  virtual void computeRates() = 0;
+  // Acceleration, density rate and viscous rate of every owned particle at the current state (ghosts are
+  // neighbours).
+  // Between rebuilds of a distributed run the rates go in two passes so the halo can travel during the first:
+  // kInterior (particles with no ghost in their 27 cells; only queued) then kBoundary (the rest, once the
+  // ghosts are refreshed). Without ghosts every particle is interior.
+  enum class RateSet { kAll, kInterior, kBoundary };
+  virtual void computeRates(RateSet set) = 0;
+  void computeRates() { computeRates(RateSet::kAll); }
   // The largest |a| of a fluid particle and the largest viscous rate (the time step's inputs).
   virtual double maxAcceleration() const = 0;
   virtual double maxViscousRate() const = 0;
@@ -65,11 +76,11 @@ class SphEngine {
   // The furthest a fluid particle reaches along the unit vector `direction`: max of x.direction [m] (one
   // device reduction; the surge front of a dam break is this along +x).
   virtual double fluidReach(Vec3d direction) const = 0;
-  // The fluid's kernel sums at `points` (SampleAt in SphKernels.h): its share of the kernel there and the
-  // Shepard-interpolated pressure [Pa]. Points in a 2D run lie in its plane.
+  // The owned fluid's kernel sums at `points` (SampleAt in SphKernels.h): its share of the kernel there and the
+  // share-weighted pressure sum [Pa] (the Shepard pressure is their ratio once summed over ranks). Points in a 2D
+  // run lie in its plane.
   virtual void sample(const std::vector<Vec3d>& points, std::vector<double>& fraction, std::vector<double>& pressure) const = 0;
 
-  virtual ParticleSnapshot snapshot(std::int64_t step, double time, const std::vector<std::string>& fields) const = 0;
   virtual SphProbeState probe(Index i) const = 0;
   virtual std::size_t deviceBytes() const = 0;
   virtual void fence() const = 0;

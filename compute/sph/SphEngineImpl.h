@@ -18,9 +18,10 @@
 namespace pflow::compute::sph {
 
 template <class Exec, class R>
-class SphEngineImpl final : public SphEngine {
+class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<Exec, FieldStore<SphFieldSet, R>>> {
  public:
   using Store = FieldStore<SphFieldSet, R>;
+  using RateSet = SphEngine::RateSet;
   using V = Vec3<R>;
 
   explicit SphEngineImpl(SphSetup s)
@@ -30,36 +31,76 @@ class SphEngineImpl final : public SphEngine {
 
   std::string executorDescription() const override { return m_exec.description(); }
   const char* precisionName() const override { return sizeof(R) == 4 ? "float" : "double"; }
-  std::size_t size() const override { return m_n; }
+  std::size_t size() const override { return m_owned; }
+  std::size_t ghosts() const override { return m_n - m_owned; }
   std::size_t deviceBytes() const override { return m_mem.bytesInUse(); }
   void fence() const override { m_exec.synchronize(); }
 
   void sortByCell() override {
+    // Ghosts are dropped before a rebuild (DistributedRows): only owned particles are sorted.
     const CellGrid& g = m_setup.grid;
+    dropGhosts();
+    sizeLocalBuffers();
     m_exec.forEach(m_n, compute::kernels::CellKey{g, ptr<SphField::Position>(), m_cellKey.as<std::uint32_t>()});
     m_exec.sortByKey(m_cellKey.as<std::uint32_t>(), m_n, g.numCells(), m_perm.as<Index>(), m_cellStart.as<Index>());
+    if (m_setup.canonicalOrder)  // within each cell by global id (the ids of the rows before the reorder)
+      m_exec.forEach(g.numCells(), kernels::SortCellByGid{m_cellStart.as<Index>(), m_perm.as<Index>(), cptr<SphField::Gid>(), 0});
     m_rows.reorder(m_perm.as<Index>(), m_n);
+    // The skin's reference and each particle's home cell: sized here only (the ghosts that follow must not
+    // reallocate it).
+    if (m_ref.bytes() < std::size_t(m_n) * sizeof(Vec3d)) m_ref.resize(std::size_t(m_n) * sizeof(Vec3d) * 5 / 4 + sizeof(Vec3d));
     m_mem.copyWithin(m_ref.data(), ptr<SphField::Position>(), std::size_t(m_n) * sizeof(Vec3d));
   }
 
-  void computeRates() override {
-    kernels::Interact<R> k{m_setup.grid, m_cellStart.as<Index>(), ptr<SphField::Position>(), ptr<SphField::Velocity>(),
+  // ---- distributed runs (DistributedRows): LocalRows's operations (ForwardDistributedRows), and these ----
+  ParticleSnapshot snapshot(std::int64_t step, double time, const std::vector<std::string>& fields) const override {
+    return m_rows.snapshot(step, time, m_owned, fields);
+  }
+  void setGhosts(const std::vector<PackedRows>& blocks) override {
+    m_rows.setGhosts(blocks, m_setup.grid, [this] { return cptr<SphField::Position>(); });
+    if (m_setup.canonicalOrder)
+      m_rows.orderGhostCells(m_setup.grid.numCells(), [&](const Index* cellStart, Index* items) {
+        return kernels::SortCellByGid{cellStart, items, cptr<SphField::Gid>(), m_owned};
+      });
+    sizeLocalBuffers();
+    splitBoundary();
+  }
+  void dropGhosts() override {
+    m_numBoundary = 0;
+    m_rows.dropGhosts();
+  }
+
+  void computeRates(RateSet set) override {
+    kernels::Interact<R> k{m_setup.grid, m_cellStart.as<Index>(), m_ref.as<Vec3d>(), ptr<SphField::Position>(), ptr<SphField::Velocity>(),
                            ptr<SphField::Density>(), ptr<SphField::Pressure>(), ptr<SphField::Mass>(), ptr<SphField::Kind>(),
                            m_kernel, m_pair, vcast<R>(m_setup.gravity), ptr<SphField::Acceleration>(),
                            ptr<SphField::DensityRate>(), ptr<SphField::ViscousRate>()};
-    m_exec.forEach(m_n, k);
+    if (m_n > m_owned) {
+      k.ghostCellStart = m_rows.ghostCellStart();
+      k.ghostItems = m_rows.ghostItems();
+      k.ghostBase = m_owned;
+      if (m_setup.canonicalOrder) k.gid = cptr<SphField::Gid>();
+    }
+    if (set == RateSet::kAll || (m_numBoundary == 0 && set == RateSet::kInterior)) {
+      m_exec.forEach(m_owned, k);
+      return;
+    }
+    // The list splitBoundary made: boundary rows first, then interior ones.
+    const Index* list = m_split.as<Index>() + (set == RateSet::kBoundary ? 0 : m_numBoundary);
+    const Index count = set == RateSet::kBoundary ? m_numBoundary : m_owned - m_numBoundary;
+    m_exec.forEach(count, compute::kernels::OverList<kernels::Interact<R>>{k, list});
   }
 
   double maxAcceleration() const override {
-    return std::sqrt(m_exec.maxOf(m_n, kernels::AccelerationSquared<R>{cptr<SphField::Acceleration>(), cptr<SphField::Kind>()}));
+    return std::sqrt(m_exec.maxOf(m_owned, kernels::AccelerationSquared<R>{cptr<SphField::Acceleration>(), cptr<SphField::Kind>()}));
   }
-  double maxViscousRate() const override { return m_exec.maxOf(m_n, kernels::MaxOfField<R>{cptr<SphField::ViscousRate>()}); }
+  double maxViscousRate() const override { return m_exec.maxOf(m_owned, kernels::MaxOfField<R>{cptr<SphField::ViscousRate>()}); }
 
-  double predictor(double dt) override { return m_exec.maxOf(m_n, kernels::Predictor<R>{stepArgs(dt)}); }
+  double predictor(double dt) override { return m_exec.maxOf(m_owned, kernels::Predictor<R>{stepArgs(dt)}); }
 
   Status corrector(double dt, double& moved2) override {
     m_exec.forEach(1, compute::kernels::ResetConditions{m_cond.as<Conditions>()});
-    moved2 = m_exec.maxOf(m_n, kernels::Corrector<R>{stepArgs(dt)});
+    moved2 = m_exec.maxOf(m_owned, kernels::Corrector<R>{stepArgs(dt)});
     Conditions c;
     m_mem.copyToHost(&c, m_cond.data(), sizeof c);
     if (c.flags & kNonFinite) return failure("non-finite", c.badParticle, "has a non-finite position, velocity or density");
@@ -75,7 +116,7 @@ class SphEngineImpl final : public SphEngine {
   }
 
   double fluidEnergy() const override {
-    return m_exec.sumOf(m_n, kernels::FluidEnergy<R>{cptr<SphField::Position>(), cptr<SphField::Velocity>(), cptr<SphField::Mass>(),
+    return m_exec.sumOf(m_owned, kernels::FluidEnergy<R>{cptr<SphField::Position>(), cptr<SphField::Velocity>(), cptr<SphField::Mass>(),
                                                      cptr<SphField::Kind>(), m_setup.gravity});
   }
 
@@ -84,8 +125,8 @@ class SphEngineImpl final : public SphEngine {
     const CellGrid& g = m_setup.grid;
     const Vec3d hi = g.lo + g.cellSize * Vec3d{double(g.nx), double(g.ny), double(g.nz)};
     const Vec3d base{direction.x >= 0 ? g.lo.x : hi.x, direction.y >= 0 ? g.lo.y : hi.y, direction.z >= 0 ? g.lo.z : hi.z};
-    if (m_n == 0) return 0;
-    return m_exec.maxOf(m_n, kernels::FluidReach{cptr<SphField::Position>(), cptr<SphField::Kind>(), direction, base}) + dot(base, direction);
+    if (m_owned == 0) return 0;
+    return m_exec.maxOf(m_owned, kernels::FluidReach{cptr<SphField::Position>(), cptr<SphField::Kind>(), direction, base}) + dot(base, direction);
   }
 
   void sample(const std::vector<Vec3d>& points, std::vector<double>& fraction, std::vector<double>& pressure) const override {
@@ -105,13 +146,9 @@ class SphEngineImpl final : public SphEngine {
     m_mem.copyToHost(pressure.data(), pres, n * sizeof(double));
   }
 
-  ParticleSnapshot snapshot(std::int64_t step, double time, const std::vector<std::string>& fields) const override {
-    return m_rows.snapshot(step, time, m_n, fields);
-  }
-
   SphProbeState probe(Index i) const override {
     SphProbeState s;
-    if (i >= m_n) return s;
+    if (i >= m_owned) return s;
     V v;
     R rho, p;
     std::int32_t kind;
@@ -129,12 +166,41 @@ class SphEngineImpl final : public SphEngine {
   }
 
  private:
+  using Rows = LocalRows<Exec, Store>;
+  Rows& rows() override { return m_rows; }
+  const Rows& rows() const override { return m_rows; }
+  void localRowsChanged() override { sizeLocalBuffers(); }
   template <SphField F> typename Store::template Type<F>* ptr() { return m_fields.template ptr<F>(); }
   template <SphField F> const typename Store::template Type<F>* cptr() const { return m_fields.template ptr<F>(); }
 
+  // After the ghosts arrive: which owned particles have a ghost in their 27 cells (their rates wait for the halo),
+  // as one list with those first (m_split, m_numBoundary).
+  void splitBoundary() {
+    m_numBoundary = 0;
+    if (m_n == m_owned || m_owned == 0) return;
+    const std::size_t n = m_owned;
+    if (m_split.bytes() < n * sizeof(Index)) m_split.resize(n * sizeof(Index) + n * sizeof(Index) / 4);
+    if (m_splitFlag.bytes() < 2 * n * sizeof(std::uint32_t)) m_splitFlag.resize(2 * n * sizeof(std::uint32_t) + n * sizeof(std::uint32_t) / 2);
+    std::uint32_t* flag = m_splitFlag.as<std::uint32_t>();
+    std::uint32_t* scan = flag + n;
+    m_exec.forEach(m_owned, kernels::MarkNearGhosts{m_setup.grid, ptr<SphField::Position>(), m_rows.ghostCellStart(), flag});
+    m_numBoundary = Index(m_exec.exclusiveScan(flag, scan, m_owned));
+    m_exec.forEach(m_owned, compute::kernels::SplitByFlag{flag, scan, m_numBoundary, m_split.as<Index>()});
+  }
+
+  // Per-particle work buffers sized for the local rows (kept when big enough).
+  void sizeLocalBuffers() {
+    auto atLeast = [](Buffer& b, std::size_t bytes) {
+      if (b.bytes() < bytes) b.resize(bytes + bytes / 4);
+    };
+    const std::size_t n = std::max<Index>(1, m_n);
+    atLeast(m_cellKey, n * sizeof(std::uint32_t));
+    atLeast(m_perm, n * sizeof(Index));
+  }
+
   void init() {
     const SphSetup& s = m_setup;
-    m_n = Index(s.position.size());
+    m_n = m_owned = Index(s.position.size());
     m_fields.allocate(m_n, 0, 0, false);
     auto put = [&]<SphField F, class T>(std::integral_constant<SphField, F>, const std::vector<T>& src) {
       using Dst = typename Store::template Type<F>;
@@ -176,10 +242,7 @@ class SphEngineImpl final : public SphEngine {
     m_pair.rho0 = R(s.rho0);
     m_exec.forEach(m_n, kernels::EquationOfState<R>{ptr<SphField::Density>(), ptr<SphField::Pressure>(), m_eos});
 
-    const std::size_t n = std::max<std::size_t>(1, m_n);
-    m_cellKey.resize(n * sizeof(std::uint32_t));
-    m_perm.resize(n * sizeof(Index));
-    m_ref.resize(n * sizeof(Vec3d));
+    sizeLocalBuffers();
     m_cellStart.resize((std::size_t(s.grid.numCells()) + 1) * sizeof(Index));
   }
 
@@ -209,15 +272,18 @@ class SphEngineImpl final : public SphEngine {
   Exec m_exec;
   MemorySpace& m_mem;
   Store m_fields;
-  FieldRows<Exec, Store> m_rows;  // reorder and snapshots: driven by the SPH field table
+  LocalRows<Exec, Store> m_rows;  // reorder, snapshots, migration, ghosts: driven by the SPH field table
   SphSetup m_setup;
-  Index m_n = 0;
+  Index& m_n = m_rows.n;  // local rows: the owned particles, then ghosts (distributed runs)
+  Index& m_owned = m_rows.owned;
   Kernel<R> m_kernel;
   Tait<R> m_eos;
   PairParams<R> m_pair;
   Buffer m_cellKey{m_mem, 0}, m_perm{m_mem, 0}, m_cellStart{m_mem, 0}, m_ref{m_mem, 0};
   Buffer m_cond{m_mem, sizeof(Conditions)};
   mutable Buffer m_samples{m_mem, 0};  // sample(): points, then fractions and pressures
+  Buffer m_split{m_mem, 0}, m_splitFlag{m_mem, 0};  // boundary rows, then interior ones (splitBoundary)
+  Index m_numBoundary = 0;
 };
 
 }  // namespace pflow::compute::sph

@@ -16,19 +16,20 @@ namespace pflow::compute::sph {
   X(Position,     "position",     Vec3d,        "m",        kSnapshot | kMigrate | kGhost | kRefresh)          \
   X(Velocity,     "velocity",     Real3,        "m/s",      kSnapshot | kMigrate | kGhost | kRefresh)          \
   X(Density,      "density",      Real,         "kg/m^3",   kSnapshot | kMigrate | kGhost | kRefresh)          \
-  X(Pressure,     "pressure",     Real,         "Pa",       kSnapshot | kGhost | kRefresh)                     \
+  X(Pressure,     "pressure",     Real,         "Pa",       kSnapshot | kMigrate | kGhost | kRefresh)          \
   X(Mass,         "mass",         Real,         "kg",       kSnapshot | kMigrate | kGhost)                     \
   X(Kind,         "kind",         std::int32_t, "",         kSnapshot | kMigrate | kGhost)                     \
   X(Gid,          "id",           Gid,          "",         kSnapshot | kMigrate | kGhost)                     \
   X(Acceleration, "acceleration", Real3,        "m/s^2",    kMigrate)                                          \
   X(DensityRate,  "density_rate", Real,         "kg/m^3/s", kMigrate)                                          \
   X(ViscousRate,  "viscous_rate", Real,         "1/s",      0)                                                 \
-  X(Position0,    "position0",    Vec3d,        "m",        0)                                                 \
-  X(Velocity0,    "velocity0",    Real3,        "m/s",      0)                                                 \
-  X(Density0,     "density0",     Real,         "kg/m^3",   0)
+  X(Position0,    "position0",    Vec3d,        "m",        kMigrate)                                          \
+  X(Velocity0,    "velocity0",    Real3,        "m/s",      kMigrate)                                          \
+  X(Density0,     "density0",     Real,         "kg/m^3",   kMigrate)
 // clang-format on
-// Acceleration and DensityRate migrate: the predictor of the next step starts from them. ViscousRate and the
-// state at the start of the step (Position0, Velocity0, Density0) live within one step only.
+// Acceleration and DensityRate migrate: the predictor of the next step starts from them. The state at the start
+// of the step (Position0, Velocity0, Density0) migrates too: a rebuild may fall between the predictor and the
+// corrector, which reads it. ViscousRate lives within one evaluation.
 
 enum class SphField : std::uint8_t {
 #define PFLOW_X(id, name, type, unit, flags) id,

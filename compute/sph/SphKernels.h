@@ -24,6 +24,7 @@ struct Interact {
   static constexpr bool kVariableCost = true;  // work per particle varies (CpuExecutor::forEach)
   CellGrid grid;
   const Index* cellStart;  // numCells + 1
+  const Vec3d* home;       // positions at the last sort: the cell a particle is listed in
   const Vec3d* pos;
   const Vec3<R>* vel;
   const R* rho;
@@ -40,6 +41,10 @@ struct Interact {
   const Index* ghostCellStart = nullptr;
   const Index* ghostItems = nullptr;
   Index ghostBase = 0;
+  // Canonical order: each cell's rows and its ghosts are in global-id order (SortCellByGid), and the two are
+  // merged by id, so a particle's sums are taken in the same order whatever the ranks: a distributed run
+  // equals one process bit for bit.
+  const Gid* gid = nullptr;
 
   PFLOW_HOSTDEVICE void operator()(Index a) const {
     const Vec3d xa = pos[a];
@@ -49,8 +54,8 @@ struct Interact {
     const double cut2 = double(kernel.support()) * double(kernel.support());
     Vec3<R> sumAcc{R(0), R(0), R(0)};
     R sumDrho = R(0), maxVisc = R(0);
-    int cx, cy, cz;
-    grid.coords(xa, cx, cy, cz);
+    // The cells around the one the particle is listed in (where it was at the sort): every neighbour within 2h
+    // now is listed in one of them, since no particle has moved half the skin since (cells are 2h + skin).
     auto consider = [&](Index b) {
       const bool fluidB = kind[b] == kFluid;
       if (!fluidA && !fluidB) return;
@@ -64,25 +69,55 @@ struct Interact {
       sumDrho += out.densityRate;
       maxVisc = out.viscousRate > maxVisc ? out.viscousRate : maxVisc;
     };
-    for (int dz = -1; dz <= 1; ++dz) {
-      const int z = cz + dz;
-      if (z < 0 || z >= grid.nz) continue;
-      for (int dy = -1; dy <= 1; ++dy) {
-        const int y = cy + dy;
-        if (y < 0 || y >= grid.ny) continue;
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int x = cx + dx;
-          if (x < 0 || x >= grid.nx) continue;
-          const std::uint32_t c = grid.index(x, y, z);
-          for (Index b = cellStart[c]; b < cellStart[c + 1]; ++b) consider(b);
-          if (ghostCellStart)
-            for (Index k = ghostCellStart[c]; k < ghostCellStart[c + 1]; ++k) consider(ghostBase + ghostItems[k]);
+    grid.forNeighbourCells(home[a], [&](std::uint32_t c) {
+      if (ghostCellStart && gid) {  // merged by id
+        Index b = cellStart[c], k = ghostCellStart[c];
+        const Index bEnd = cellStart[c + 1], kEnd = ghostCellStart[c + 1];
+        while (b < bEnd || k < kEnd) {
+          if (k >= kEnd || (b < bEnd && gid[b] < gid[ghostBase + ghostItems[k]])) consider(b++);
+          else consider(ghostBase + ghostItems[k++]);
         }
+        return;
       }
-    }
+      for (Index b = cellStart[c]; b < cellStart[c + 1]; ++b) consider(b);
+      if (ghostCellStart)
+        for (Index k = ghostCellStart[c]; k < ghostCellStart[c + 1]; ++k) consider(ghostBase + ghostItems[k]);
+    });
     acc[a] = fluidA ? sumAcc + gravity : Vec3<R>{R(0), R(0), R(0)};
     drho[a] = sumDrho;
     visc[a] = maxVisc;
+  }
+};
+
+// Canonical order: the entries [cellStart[c], cellStart[c + 1]) of `items` (rows, or ghosts relative to `base`)
+// reordered by the global id of the row they name (insertion sort: cells hold tens of particles).
+struct SortCellByGid {
+  const Index* cellStart;
+  Index* items;
+  const Gid* gid;
+  Index base;
+  PFLOW_HOSTDEVICE void operator()(Index c) const {
+    for (Index e = cellStart[c] + 1; e < cellStart[c + 1]; ++e) {
+      const Index item = items[e];
+      const Gid g = gid[base + item];
+      Index k = e;
+      for (; k > cellStart[c] && gid[base + items[k - 1]] > g; --k) items[k] = items[k - 1];
+      items[k] = item;
+    }
+  }
+};
+
+// Distributed runs: flag[i] = 1 when a ghost lies in one of the 27 cells around owned particle i (its rates
+// need the refreshed halo), 0 when they can be computed while the halo travels.
+struct MarkNearGhosts {
+  CellGrid grid;
+  const Vec3d* pos;
+  const Index* ghostCellStart;
+  std::uint32_t* flag;
+  PFLOW_HOSTDEVICE void operator()(Index i) const {
+    std::uint32_t near = 0;
+    grid.forNeighbourCells(pos[i], [&](std::uint32_t c) { near |= ghostCellStart[c] < ghostCellStart[c + 1] ? 1u : 0u; });
+    flag[i] = near;
   }
 };
 
@@ -206,7 +241,8 @@ struct EquationOfState {
 
 // Kernel sums of the fluid at arbitrary points (probes and gauges): fraction[k] = sum_b V_b W(x_k - x_b) (the
 // fluid's share of the kernel there: 1 inside the fluid, about 1/2 on a wall or the free surface, 0 in air) and
-// pressure[k] = sum_b V_b p_b W / fraction (Shepard), over the fluid particles b (V_b = m_b/rho_b).
+// pressure[k] = sum_b V_b p_b W, over this engine's owned fluid particles b (V_b = m_b/rho_b): sums, so that
+// ranks add theirs; the Shepard pressure is pressure / fraction.
 template <class R>
 struct SampleAt {
   CellGrid grid;
@@ -224,25 +260,18 @@ struct SampleAt {
     const Vec3d x = points[k];
     const double cut2 = double(kernel.support()) * double(kernel.support());
     double sw = 0, swp = 0;
-    int cx, cy, cz;
-    grid.coords(x, cx, cy, cz);
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int ix = cx + dx, iy = cy + dy, iz = cz + dz;
-          if (ix < 0 || iy < 0 || iz < 0 || ix >= grid.nx || iy >= grid.ny || iz >= grid.nz) continue;
-          const std::uint32_t c = grid.index(ix, iy, iz);
-          for (Index b = cellStart[c]; b < cellStart[c + 1]; ++b) {
-            if (kind[b] != kFluid) continue;
-            const double r2 = norm2(x - pos[b]);
-            if (r2 >= cut2) continue;
-            const double w = double(kernel.w(R(std::sqrt(r2)))) * double(mass[b]) / double(rho[b]);
-            sw += w;
-            swp += w * double(p[b]);
-          }
-        }
+    grid.forNeighbourCells(x, [&](std::uint32_t c) {
+      for (Index b = cellStart[c]; b < cellStart[c + 1]; ++b) {
+        if (kind[b] != kFluid) continue;
+        const double r2 = norm2(x - pos[b]);
+        if (r2 >= cut2) continue;
+        const double w = double(kernel.w(R(std::sqrt(r2)))) * double(mass[b]) / double(rho[b]);
+        sw += w;
+        swp += w * double(p[b]);
+      }
+    });
     fraction[k] = sw;
-    pressure[k] = sw > 0 ? swp / sw : 0.0;
+    pressure[k] = swp;
   }
 };
 

@@ -9,22 +9,59 @@
 namespace pflow::compute::sph {
 
 // ---------------------------------------------------------------------------------------------
-// The step loop. One symplectic (position-Verlet predictor-corrector) step, top to bottom, a timer per
-// phase; the rates of the state at the start of the step were computed at the end of the previous one.
+// The step loop. One symplectic (position-Verlet predictor-corrector) step, top to bottom, a timer per phase;
+// the rates of the state at the start of the step were computed at the end of the previous one. Errors come
+// back through PFLOW_TRY; step() adds the step and time once.
 Status SphSimulation::stepPhases() {
-  const double dt = nextDt();  // the CFL limits of the rates at the start, or sph.dt; lands on outputs
+  const double dt = nextDt();  // the CFL limits of the rates at the start (all ranks), or sph.dt; lands on outputs
+  m_dt = dt;                   // the step being taken (errors name it)
   double moved2 = 0;
-  { auto t = m_timers.time(Phase::kIntegrate1); moved2 = m_engine->predictor(dt); }         // x, v, rho to t + dt/2
-  if (2 * std::sqrt(moved2) > m_skin) { auto t = m_timers.time(Phase::kSort); m_engine->sortByCell(); ++m_rebuilds; }
-  { auto t = m_timers.time(Phase::kForces);     m_engine->computeRates(); }                 // rates at t + dt/2
+  { auto t = m_timers.time(Phase::kIntegrate1); moved2 = m_engine->predictor(dt); }     // x, v, rho to t + dt/2
+  PFLOW_TRY(rates(moved2));                                                         // rates at t + dt/2
   Status s;
-  { auto t = m_timers.time(Phase::kIntegrate2); s = m_engine->corrector(dt, moved2); }     // x, v, rho to t + dt
-  if (!s.isOk()) return withStep(s);
-  if (2 * std::sqrt(moved2) > m_skin) { auto t = m_timers.time(Phase::kSort); m_engine->sortByCell(); ++m_rebuilds; }
-  { auto t = m_timers.time(Phase::kForces);     m_engine->computeRates(); }                 // rates at t + dt
+  { auto t = m_timers.time(Phase::kIntegrate2); s = m_engine->corrector(dt, moved2); } // x, v, rho to t + dt
+  PFLOW_TRY(m_domain->agree(s));
+  PFLOW_TRY(rates(moved2));                                                         // rates at t + dt
   ++m_step;
   m_time += dt;
-  m_dt = dt;
+  return Status::ok();
+}
+
+// The rates of the state now: a rebuild when some particle on some rank may have moved half the skin since the
+// last sort, else (ranks) the ghosts' refresh; with the halo overlap the interior particles' rates are computed
+// while it travels (seed 003), the boundary particles' once it has arrived.
+Status SphSimulation::rates(double moved2) {
+  using Set = SphEngine::RateSet;
+  if (m_domain->anyRebuild(2 * std::sqrt(moved2) > m_skin)) {
+    PFLOW_TRY(rebuild());
+  } else if (m_domain->ranks() > 1 && m_overlapHalo) {
+    { auto t = m_timers.time(Phase::kHalo);           PFLOW_TRY(m_domain->startRefresh(*m_engine)); }
+    { auto t = m_timers.timeUnfenced(Phase::kForces); m_engine->computeRates(Set::kInterior); }
+    { auto t = m_timers.timeUnfenced(Phase::kHalo);   PFLOW_TRY(m_domain->awaitRefresh()); }
+    { auto t = m_timers.time(Phase::kForces); }  // the interior pass completes
+    { auto t = m_timers.time(Phase::kHalo);           PFLOW_TRY(m_domain->finishRefresh(*m_engine)); }
+    auto t = m_timers.time(Phase::kForces);
+    m_engine->computeRates(Set::kBoundary);
+    return Status::ok();
+  } else if (m_domain->ranks() > 1) {
+    auto t = m_timers.time(Phase::kHalo);
+    PFLOW_TRY(m_domain->startRefresh(*m_engine));
+    PFLOW_TRY(m_domain->awaitRefresh());
+    PFLOW_TRY(m_domain->finishRefresh(*m_engine));
+  }
+  auto t = m_timers.time(Phase::kForces);
+  m_engine->computeRates(Set::kAll);
+  return Status::ok();
+}
+
+// Particles to the ranks that own their cells (ghosts dropped, balance kept), the cell sort, the ghosts.
+Status SphSimulation::rebuild() {
+  const double cost = m_timers.seconds(Phase::kForces);
+  { auto t = m_timers.time(Phase::kMigrate); PFLOW_TRY(m_domain->migrate(*m_engine, cost - m_costMark)); }
+  { auto t = m_timers.time(Phase::kSort);    m_engine->sortByCell(); }
+  { auto t = m_timers.time(Phase::kHalo);    PFLOW_TRY(m_domain->exchangeGhosts(*m_engine)); }
+  m_costMark = m_timers.seconds(Phase::kForces);
+  ++m_rebuilds;
   return Status::ok();
 }
 // ---------------------------------------------------------------------------------------------
@@ -34,7 +71,11 @@ Status SphSimulation::stepPhases() {
 // would leave a sliver).
 double SphSimulation::nextDt() {
   double maxAccel, maxVisc;
-  { auto t = m_timers.time(Phase::kIntegrate1); maxAccel = m_engine->maxAcceleration(); maxVisc = m_engine->maxViscousRate(); }
+  {
+    auto t = m_timers.time(Phase::kIntegrate1);
+    maxAccel = m_domain->max(m_engine->maxAcceleration());
+    maxVisc = m_domain->max(m_engine->maxViscousRate());
+  }
   m_stable = sph::stableDt(m_method.cfl, m_derived.h, m_derived.c0, maxAccel, maxVisc, m_method.kinematicViscosity);
   double dt = m_stable;
   if (m_method.dt) {
@@ -57,7 +98,7 @@ double SphSimulation::nextDt() {
 Status SphSimulation::step() {
   Status s;
   try {
-    s = stepPhases();
+    s = withStep(stepPhases());
   } catch (const OutOfDeviceMemory& e) {
     s = withStep(Status(StatusCode::kResourceExhausted, e.what()));
   } catch (const std::exception& e) {
@@ -115,9 +156,11 @@ std::vector<double> SphSimulation::probeValues() const {
   first[probes.size()] = points.size();
   std::vector<double> fraction, pressure, values(probes.size(), 0.0);
   m_engine->sample(points, fraction, pressure);
+  m_domain->sum(fraction);  // every rank's fluid near the points
+  m_domain->sum(pressure);
   for (std::size_t k = 0; k < probes.size(); ++k) {
     if (!probes[k].gauge) {
-      values[k] = fraction[first[k]] > 0.05 ? pressure[first[k]] : 0.0;
+      values[k] = fraction[first[k]] > 0.05 ? pressure[first[k]] / fraction[first[k]] : 0.0;
       continue;
     }
     // From the floor up: the first sample where the fluid's share falls below 1/2 after being above it, so a
@@ -151,6 +194,28 @@ Result<std::unique_ptr<SphSimulation>> SphSimulation::create(const RunConfig& co
   auto setup = prepareSphSetup(config);
   if (!setup) return setup.status();
   std::unique_ptr<SphSimulation> sim(new SphSimulation());
+  sim->m_domain = options.domain ? options.domain : std::make_shared<Domain>();
+  sim->m_overlapHalo = options.overlapHalo;
+  {
+    // This rank's share of the scene's particles, their scene index as global id.
+    SphSetup& st = setup.value();
+    std::vector<std::size_t> mine;
+    if (Status s = sim->m_domain->partitionPoints(st.grid, st.position, mine); !s.isOk()) return s;
+    auto keep = [&](auto& v) {
+      std::remove_reference_t<decltype(v)> kept;
+      kept.reserve(mine.size());
+      for (std::size_t i : mine) kept.push_back(v[i]);
+      v = std::move(kept);
+    };
+    keep(st.position);
+    keep(st.velocity);
+    keep(st.density);
+    keep(st.mass);
+    keep(st.kind);
+    st.gid.assign(mine.begin(), mine.end());
+    st.canonicalOrder = options.canonicalOrder || sim->m_domain->ranks() > 1;
+  }
+  sim->m_total = config.sph.size();
   sim->m_derived = derive(config.sph, config.sim);
   sim->m_method = config.sph;
   sim->m_method.position.clear();
@@ -162,21 +227,31 @@ Result<std::unique_ptr<SphSimulation>> SphSimulation::create(const RunConfig& co
   const bool single = config.sim.precision == Precision::kFloat;
   ExecutorKind kind = options.executor;
   if (kind == ExecutorKind::kAuto) kind = cudaDeviceCount() > 0 ? ExecutorKind::kCuda : ExecutorKind::kCpu;
+  Status made;
   try {
     if (kind == ExecutorKind::kCuda) {
       auto engine = makeCudaSphEngine(std::move(setup).value(), options.device, single);
-      if (!engine) return engine.status();
-      sim->m_engine = std::move(engine).value();
-      sim->m_timers.setFence([e = sim->m_engine.get()] { e->fence(); });
+      if (engine) {
+        sim->m_engine = std::move(engine).value();
+        sim->m_timers.setFence([e = sim->m_engine.get()] { e->fence(); });
+      } else {
+        made = engine.status();
+      }
     } else {
       sim->m_engine = makeCpuSphEngine(std::move(setup).value(), single);
     }
-    sim->m_engine->sortByCell();
-    sim->m_engine->computeRates();
+  } catch (const OutOfDeviceMemory& e) {
+    made = Status(StatusCode::kResourceExhausted, e.what());
+  } catch (const std::bad_alloc&) {
+    made = Status(StatusCode::kResourceExhausted, "host memory exhausted");
+  }
+  // A device that fails on one rank fails the run on all (the others would wait in the first exchange).
+  if (Status s = sim->m_domain->agree(made); !s.isOk()) return s;
+  try {
+    if (Status s = sim->rebuild(); !s.isOk()) return s;
+    sim->m_engine->computeRates(SphEngine::RateSet::kAll);
   } catch (const OutOfDeviceMemory& e) {
     return Status(StatusCode::kResourceExhausted, e.what());
-  } catch (const std::bad_alloc&) {
-    return Status(StatusCode::kResourceExhausted, "host memory exhausted");
   }
   return sim;
 }

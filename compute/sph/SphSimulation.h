@@ -9,6 +9,7 @@
 
 #include "common/Status.h"
 #include "compute/core/ExecutorKind.h"
+#include "compute/sim/Domain.h"
 #include "compute/sim/PhaseTimers.h"
 #include "compute/sim/RunConfig.h"
 #include "compute/sph/SphConfig.h"
@@ -19,6 +20,13 @@ namespace pflow::compute::sph {
 struct SphOptions {
   ExecutorKind executor = ExecutorKind::kCpu;
   int device = 0;
+  // How the run is split across processes (compute/mpi's MpiDomain, the same as DEM's); null: one process.
+  std::shared_ptr<Domain> domain;
+  // Distributed runs: compute the interior particles' rates while the halo travels (seed 003); false: in sequence.
+  bool overlapHalo = true;
+  // Neighbours summed in global-id order (SphSetup::canonicalOrder): one process reproducing a distributed run
+  // bit for bit. Distributed runs always use it.
+  bool canonicalOrder = false;
 };
 
 class SphSimulation {
@@ -41,19 +49,26 @@ class SphSimulation {
   double time() const { return m_time; }
   double dt() const { return m_dt; }          // the last step's
   double stableDt() const { return m_stable; } // the CFL limit at the current state
-  std::size_t numParticles() const { return m_engine->size(); }
-  std::size_t fluidParticles() const { return m_fluid; }
+  std::size_t numParticles() const { return m_engine->size(); }  // on this rank
+  std::size_t totalParticles() const { return m_total; }        // on every rank
+  std::size_t fluidParticles() const { return m_fluid; }        // on every rank
   std::int64_t rebuilds() const { return m_rebuilds; }
   const SphDerived& derived() const { return m_derived; }
   const CellGrid& grid() const { return m_grid; }
-  double fluidEnergy() const { return m_engine->fluidEnergy(); }
-  double fluidReach(Vec3d direction) const { return m_engine->fluidReach(direction); }
+  // Collective in a distributed run (every rank calls them and gets the same value).
+  double fluidEnergy() const { return m_domain->sum(m_engine->fluidEnergy()); }
+  double fluidReach(Vec3d direction) const { return m_domain->max(m_engine->fluidReach(direction)); }
   // The scene's probes now, in their order: a pressure probe's Shepard-interpolated pressure [Pa] (0 where no
   // fluid reaches it), a gauge's free-surface height above the tank's floor [m] (going up the vertical through it,
   // where the fluid's kernel share first falls to 1/2; 0 when dry). docs/sph.md, "Probes and gauges".
   std::vector<double> probeValues() const;
   const std::vector<SphProbe>& probes() const { return m_method.probes; }
-  ParticleSnapshot snapshot(const std::vector<std::string>& fields = {}) const { return m_engine->snapshot(m_step, m_time, fields); }
+  // Host copy of the particles now; in a distributed run every rank calls it and rank 0 gets all of them in id
+  // order (`localOnly`: this rank's own, no communication).
+  ParticleSnapshot snapshot(const std::vector<std::string>& fields = {}, bool localOnly = false) const {
+    ParticleSnapshot s = m_engine->snapshot(m_step, m_time, fields);
+    return localOnly ? s : m_domain->gather(std::move(s));
+  }
   const PhaseTimers& timers() const { return m_timers; }
   PhaseTimers& timers() { return m_timers; }
   std::string executorDescription() const { return m_engine->executorDescription(); }
@@ -64,10 +79,16 @@ class SphSimulation {
  private:
   SphSimulation() = default;
   Status stepPhases();  // the step loop itself (SphSimulation.cc, top of the file)
+  Status rates(double moved2);  // rebuild or refresh the ghosts, then the rates
+  Status rebuild();
   double nextDt();
   Status withStep(Status s) const;
 
   std::unique_ptr<SphEngine> m_engine;
+  std::shared_ptr<Domain> m_domain;
+  bool m_overlapHalo = true;
+  std::size_t m_total = 0;
+  double m_costMark = 0;  // rate seconds at the last rebuild (the domain's cost measure)
   SphDerived m_derived;
   SphConfig m_method;  // the configuration, without its particles
   CellGrid m_grid;

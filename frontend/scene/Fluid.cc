@@ -21,10 +21,11 @@ std::optional<SphRegion> Loader::parseSphBox(const Fields& f, const std::string&
   if (!lo || !hi) return std::nullopt;
   const bool flatY = m_config.sph.dimension == 2;
   if (!(r.lo.x < r.hi.x) || !(r.lo.z < r.hi.z) || (!flatY && !(r.lo.y < r.hi.y)) || (flatY && r.lo.y != r.hi.y)) {
-    badValue(f.child("max"),
-             "must exceed min along every axis" + std::string(flatY ? " but y, which min and max share in a 2D run (the plane)" : "") +
-                 " (min " + format::vec(r.lo) + ", max " + format::vec(r.hi) + ")",
-             markFor(f.child("max")));
+    // Built by appending: GCC 12 warns falsely (-Wrestrict) on long std::string + chains.
+    std::string message = "must exceed min along every axis";
+    if (flatY) message.append(" but y, which min and max share in a 2D run (the plane)");
+    message.append(" (min ").append(format::vec(r.lo)).append(", max ").append(format::vec(r.hi)).append(")");
+    badValue(f.child("max"), message, markFor(f.child("max")));
     return std::nullopt;
   }
   return r;

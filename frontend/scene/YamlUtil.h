@@ -56,7 +56,8 @@ std::string unknownName(std::string_view what, std::string_view word, const Rang
   std::string msg = "unknown " + std::string(what) + " '" + std::string(word) + "'";
   const std::string guess = closest(word, candidates);
   if (!guess.empty()) msg += "; did you mean '" + guess + "'?";
-  msg += " " + std::string(listName) + ": " + joinNames(candidates);
+  // Appended piece by piece: GCC 12 warns falsely (-Wrestrict, PR105329) on `" " + std::string` chains.
+  msg.append(" ").append(listName).append(": ").append(joinNames(candidates));
   return msg;
 }
 

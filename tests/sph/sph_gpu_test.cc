@@ -18,7 +18,9 @@ namespace {
   if (compute::cudaDeviceCount() == 0) GTEST_SKIP() << "no CUDA device"
 
 std::unique_ptr<SphSimulation> make(const RunConfig& c, ExecutorKind kind) {
-  auto sim = SphSimulation::create(c, {kind, 0});
+  SphOptions o;
+  o.executor = kind;
+  auto sim = SphSimulation::create(c, o);
   EXPECT_TRUE(sim.isOk()) << sim.status().message();
   return sim.isOk() ? std::move(sim).value() : nullptr;
 }
