@@ -50,6 +50,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     // reallocate it).
     if (m_ref.bytes() < std::size_t(m_n) * sizeof(Vec3d)) m_ref.resize(std::size_t(m_n) * sizeof(Vec3d) * 5 / 4 + sizeof(Vec3d));
     m_mem.copyWithin(m_ref.data(), ptr<SphField::Position>(), std::size_t(m_n) * sizeof(Vec3d));
+    m_wetStale = true;
   }
 
   // ---- distributed runs (DistributedRows): LocalRows's operations (ForwardDistributedRows), and these ----
@@ -64,6 +65,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
       });
     sizeLocalBuffers();
     splitBoundary();
+    m_wetStale = true;
   }
   void dropGhosts() override {
     m_numBoundary = 0;
@@ -81,6 +83,8 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
       k.ghostBase = m_owned;
       if (m_setup.canonicalOrder) k.gid = cptr<SphField::Gid>();
     }
+    if (m_wetStale) markWet();
+    k.wet = m_wet.as<std::uint8_t>();
     if (set == RateSet::kAll || (m_numBoundary == 0 && set == RateSet::kInterior)) {
       m_exec.forEach(m_owned, k);
       return;
@@ -188,6 +192,20 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     m_exec.forEach(m_owned, compute::kernels::SplitByFlag{flag, scan, m_numBoundary, m_split.as<Index>()});
   }
 
+  // Which boundary particles can have fluid neighbours until the next sort (MarkWet), after each sort and halo.
+  void markWet() {
+    if (m_wet.bytes() < std::max<std::size_t>(1, m_owned)) m_wet.resize(std::max<std::size_t>(1, m_owned) * 5 / 4 + 1);
+    kernels::MarkWet w{m_setup.grid, m_cellStart.as<Index>(), m_ref.as<Vec3d>(), cptr<SphField::Kind>()};
+    if (m_n > m_owned) {
+      w.ghostCellStart = m_rows.ghostCellStart();
+      w.ghostItems = m_rows.ghostItems();
+      w.ghostBase = m_owned;
+    }
+    w.wet = m_wet.as<std::uint8_t>();
+    m_exec.forEach(m_owned, w);
+    m_wetStale = false;
+  }
+
   // Per-particle work buffers sized for the local rows (kept when big enough).
   void sizeLocalBuffers() {
     auto atLeast = [](Buffer& b, std::size_t bytes) {
@@ -283,6 +301,8 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
   Buffer m_cond{m_mem, sizeof(Conditions)};
   mutable Buffer m_samples{m_mem, 0};  // sample(): points, then fractions and pressures
   Buffer m_split{m_mem, 0}, m_splitFlag{m_mem, 0};  // boundary rows, then interior ones (splitBoundary)
+  Buffer m_wet{m_mem, 0};  // MarkWet, per owned particle
+  bool m_wetStale = true;
   Index m_numBoundary = 0;
 };
 

@@ -45,12 +45,21 @@ struct Interact {
   // merged by id, so a particle's sums are taken in the same order whatever the ranks: a distributed run
   // equals one process bit for bit.
   const Gid* gid = nullptr;
+  // Boundary particles with no fluid listed in their 27 cells (MarkWet: wet[a] == 0) have no rates until the
+  // next sort: they are skipped (most of a tank's walls and lid, most of the time).
+  const std::uint8_t* wet = nullptr;
 
   PFLOW_HOSTDEVICE void operator()(Index a) const {
     const Vec3d xa = pos[a];
     const Vec3<R> va = vel[a];
     const R rhoA = rho[a], pA = p[a];
     const bool fluidA = kind[a] == kFluid;
+    if (!fluidA && wet && !wet[a]) {
+      acc[a] = Vec3<R>{R(0), R(0), R(0)};
+      drho[a] = R(0);
+      visc[a] = R(0);
+      return;
+    }
     const double cut2 = double(kernel.support()) * double(kernel.support());
     Vec3<R> sumAcc{R(0), R(0), R(0)};
     R sumDrho = R(0), maxVisc = R(0);
@@ -86,6 +95,32 @@ struct Interact {
     acc[a] = fluidA ? sumAcc + gravity : Vec3<R>{R(0), R(0), R(0)};
     drho[a] = sumDrho;
     visc[a] = maxVisc;
+  }
+};
+
+// wet[i] = 1 for a fluid particle, and for a boundary particle with a fluid particle (owned or ghost) listed in its
+// 27 cells: until the next sort, only those can have a fluid neighbour within 2h (no particle moves half the skin).
+struct MarkWet {
+  CellGrid grid;
+  const Index* cellStart;
+  const Vec3d* home;
+  const std::int32_t* kind;
+  const Index* ghostCellStart = nullptr;  // distributed runs
+  const Index* ghostItems = nullptr;
+  Index ghostBase = 0;
+  std::uint8_t* wet;
+  PFLOW_HOSTDEVICE void operator()(Index i) const {
+    if (kind[i] == kFluid) {
+      wet[i] = 1;
+      return;
+    }
+    bool any = false;
+    grid.forNeighbourCells(home[i], [&](std::uint32_t c) {
+      for (Index b = cellStart[c]; b < cellStart[c + 1] && !any; ++b) any = kind[b] == kFluid;
+      if (ghostCellStart)
+        for (Index k = ghostCellStart[c]; k < ghostCellStart[c + 1] && !any; ++k) any = kind[ghostBase + ghostItems[k]] == kFluid;
+    });
+    wet[i] = any ? 1 : 0;
   }
 };
 
