@@ -39,6 +39,12 @@ double bytesPerParticle(const compute::SimulationSettings& sim, int historySlots
 
 Result<SceneSummary> summarize(const LoadedScene& scene) {
   const compute::RunConfig& c = scene.config;
+  // The services' model (this summary, the manager's device count, the worker's loop) is DEM's so far: an SPH
+  // scene is refused with the way to run it rather than summarised as an empty granular scene.
+  if (c.solver == compute::Solver::kSph)
+    return Status(StatusCode::kFailedPrecondition,
+                  "solver: sph: SPH scenes run with `pflow run` (locally, CPU or GPU) or pflow-sph-bench under mpirun; "
+                  "the cluster services (pflow submit) do not run them yet");
   SceneSummary s;
   const auto& p = c.particles;
   s.particles = p.size();

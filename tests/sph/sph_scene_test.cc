@@ -5,6 +5,7 @@
 #include <string>
 
 #include "frontend/SceneLoader.h"
+#include "frontend/SceneSummary.h"
 
 namespace pflow::frontend {
 namespace {
@@ -89,6 +90,17 @@ TEST(SphScene, EveryErrorAtOnce) {
   auto dem = load(damBreak() + "materials: []\n");
   ASSERT_FALSE(dem.isOk());
   EXPECT_NE(dem.status().message().find("materials"), std::string::npos);
+}
+
+// The services do not run SPH yet: the frontend's summary (what pflow submit builds its job from) refuses the
+// scene and says how to run it, instead of describing an empty granular scene.
+TEST(SphScene, ServicesRefuseItWithTheWayToRunIt) {
+  auto r = load(damBreak());
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  auto summary = summarize(r.value());
+  ASSERT_FALSE(summary.isOk());
+  EXPECT_EQ(summary.status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(summary.status().message().find("pflow run"), std::string::npos) << summary.status().message();
 }
 
 TEST(SphScene, UnknownSolverIsNamed) {
