@@ -130,7 +130,7 @@ int validateSphScene(const std::string& scenePath, const frontend::LoadedScene& 
   const std::size_t n = c.sph.size(), fluid = c.sph.fluidCount();
   const compute::CellGrid& g = setup.value().grid;
   // The first step: the acoustic limit (the fluid starts at rest or at its block velocities).
-  const double dt0 = compute::sph::stableDt(c.sph.cfl, d.h, d.c0, 0, 0, c.sph.kinematicViscosity);
+  const double dt0 = compute::sph::stableDt(c.sph.cfl, d.h, c.sph.kinematicViscosity, compute::sph::inverseStep(d.h, d.c0, 0, 0, false));
   if (json) {
     nlohmann::json j{{"valid", true},         {"solver", "sph"},    {"particles", n},         {"fluid_particles", fluid},
                      {"boundary_particles", n - fluid}, {"dimension", c.sph.dimension}, {"spacing", c.sph.spacing},

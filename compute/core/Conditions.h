@@ -16,7 +16,7 @@ enum ConditionBits : std::uint32_t {
   kTooManyWallContacts = 1u << 5,   // more simultaneous triangle contacts than kMaxWallContacts
   kExcessiveOverlap = 1u << 6,      // an overlap beyond the run's limit (simulation.max_overlap): blow-up
   kTunnelled = 1u << 7,             // a centre behind a plane, or carried through a triangle's face
-  kLeftDomain = 1u << 8,            // a centre outside the scene's explicit simulation.domain
+  kLeftDomain = 1u << 8,            // a centre outside the scene's explicit simulation.domain (SPH: outside the tank's walls)
   kDensityOutOfRange = 1u << 9,     // SPH: a fluid particle's density outside the run's bounds (sph.density_bounds)
 };
 

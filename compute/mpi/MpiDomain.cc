@@ -100,19 +100,12 @@ Status MpiDomain::partition(EngineSetup& s) {
   std::vector<std::size_t> mine;
   if (Status st = partitionPoints(s.grid, s.position, mine); !st.isOk()) return st;
   // Keep this rank's particles, with their scene index as global id.
-  auto keep = [&](auto& v) {
-    if (v.empty()) return;
-    std::remove_reference_t<decltype(v)> kept;
-    kept.reserve(mine.size());
-    for (std::size_t i : mine) kept.push_back(v[i]);
-    v = std::move(kept);
-  };
-  keep(s.position);
-  keep(s.velocity);
-  keep(s.angularVelocity);
-  keep(s.radius);
-  keep(s.mass);
-  keep(s.material);
+  keepRows(s.position, mine);
+  keepRows(s.velocity, mine);
+  keepRows(s.angularVelocity, mine);
+  keepRows(s.radius, mine);
+  keepRows(s.mass, mine);
+  keepRows(s.material, mine);
   s.gid.assign(mine.begin(), mine.end());
   return Status::ok();
 }

@@ -142,10 +142,12 @@ class FieldRows {
     return s;
   }
 
- private:
+ protected:  // LocalRows works on the same executor, memory and store
   const Exec& m_exec;
   MemorySpace& m_mem;
   Store& m_store;
+
+ private:
   Buffer m_scratch{m_mem, 0};
   mutable Buffer m_stage{m_mem, 0};  // pack/copyIn staging
 };
@@ -157,7 +159,7 @@ template <class Exec, class Store>
 class LocalRows : public FieldRows<Exec, Store> {
  public:
   using Base = FieldRows<Exec, Store>;
-  LocalRows(const Exec& exec, MemorySpace& mem, Store& store) : Base(exec, mem, store), m_exec(exec), m_mem(mem), m_store(store) {}
+  LocalRows(const Exec& exec, MemorySpace& mem, Store& store) : Base(exec, mem, store) {}
 
   Index n = 0;      // local rows: owned, then ghosts
   Index owned = 0;
@@ -232,9 +234,9 @@ class LocalRows : public FieldRows<Exec, Store> {
   const Index* ghostItems() const { return m_ghostItems.template as<Index>(); }
 
  private:
-  const Exec& m_exec;
-  MemorySpace& m_mem;
-  Store& m_store;
+  using Base::m_exec;
+  using Base::m_mem;
+  using Base::m_store;
   mutable Buffer m_rowsBuf{m_mem, 0};      // pack's rows
   mutable Buffer m_haloRowsBuf{m_mem, 0};  // the halo's rows, on the device from one rebuild to the next
   std::vector<int> m_haloSegments;

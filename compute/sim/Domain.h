@@ -15,6 +15,17 @@ class DistributedRows;
 struct CellGrid;
 struct EngineSetup;
 
+// Keeps the entries `mine` of v, in that order (a rank's share of the scene's per-particle arrays); an empty v
+// (an optional array the scene left out) stays empty.
+template <class T>
+void keepRows(std::vector<T>& v, const std::vector<std::size_t>& mine) {
+  if (v.empty()) return;
+  std::vector<T> kept;
+  kept.reserve(mine.size());
+  for (std::size_t i : mine) kept.push_back(v[i]);
+  v = std::move(kept);
+}
+
 class Domain {
  public:
   virtual ~Domain() = default;

@@ -18,8 +18,6 @@ struct SimulationSettings;
 namespace pflow::compute::sph {
 
 enum class ParticleKind : std::int32_t { kFluid = 0, kBoundary = 1 };
-enum class BoundaryKind { kDynamic };  // Crespo et al. (2007) dynamic boundary particles
-enum class Integrator { kSymplectic };  // position-Verlet predictor-corrector (docs/sph.md)
 
 // A named region the frontend filled (fluid block, tank, obstacle): for messages and checks.
 struct SphRegion {
@@ -50,7 +48,7 @@ struct SphConfig {
   bool hydrostaticDiffusion = true;   // Fourtakas et al. (2019) correction of the density diffusion
   double cfl = 0.2;
   std::optional<double> dt;    // fixed step [s] (the convergence study); unset: CFL limits each step
-  BoundaryKind boundary = BoundaryKind::kDynamic;
+  // Walls are dynamic boundary particles (Crespo et al. 2007; sph.boundary: dynamic, the only kind yet).
   int boundaryLayers = 0;      // 0: enough to cover the kernel support, ceil(2h/dp)
   double skin = 0.25;          // neighbour skin as a fraction of h: cells are 2h + skin wide
   // Density bounds (DualSPHysics's RhopOut): a fluid particle outside [min, max] x rho0 stops the run.

@@ -22,7 +22,7 @@ struct SphSetup {
   std::vector<Gid> gid;            // empty: the index
   KernelKind kernel = KernelKind::kWendlandC2;
   int dimension = 2;
-  double h = 0, spacing = 0;
+  double h = 0;
   double rho0 = 1000, c0 = 0, gamma = 7;
   double alpha = 0, nu = 0, delta = 0;
   bool hydrostaticDiffusion = true;
@@ -65,14 +65,11 @@ class SphEngine : public DistributedRows {
   enum class RateSet { kAll, kInterior, kBoundary };
   virtual void computeRates(RateSet set) = 0;
   void computeRates() { computeRates(RateSet::kAll); }
-  // The largest |a| of a fluid particle and the largest viscous rate (the time step's inputs).
-  virtual double maxAcceleration() const = 0;
-  virtual double maxViscousRate() const = 0;
+  // The largest inverseStep over the owned particles (SphPhysics.h): the time step's input, one reduction.
+  virtual double maxInverseStep() const = 0;
   // The two halves of the symplectic step; each returns the largest squared displacement since the sort.
   virtual double predictor(double dt) = 0;
   virtual Status corrector(double dt, double& moved2) = 0;
-  // Kinetic + gravitational energy of the fluid [J] (one device reduction).
-  virtual double fluidEnergy() const = 0;
   // The furthest a fluid particle reaches along the unit vector `direction`: max of x.direction [m] (one
   // device reduction; the surge front of a dam break is this along +x).
   virtual double fluidReach(Vec3d direction) const = 0;

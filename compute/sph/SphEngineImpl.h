@@ -95,10 +95,10 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     m_exec.forEach(count, compute::kernels::OverList<kernels::Interact<R>>{k, list});
   }
 
-  double maxAcceleration() const override {
-    return std::sqrt(m_exec.maxOf(m_owned, kernels::AccelerationSquared<R>{cptr<SphField::Acceleration>(), cptr<SphField::Kind>()}));
+  double maxInverseStep() const override {
+    return m_exec.maxOf(m_owned, kernels::InverseStep<R>{cptr<SphField::Acceleration>(), cptr<SphField::ViscousRate>(),
+                                                         cptr<SphField::Kind>(), m_setup.h, m_setup.c0});
   }
-  double maxViscousRate() const override { return m_exec.maxOf(m_owned, kernels::MaxOfField<R>{cptr<SphField::ViscousRate>()}); }
 
   double predictor(double dt) override { return m_exec.maxOf(m_owned, kernels::Predictor<R>{stepArgs(dt)}); }
 
@@ -117,11 +117,6 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
                      "is outside the tank's walls below their top: it passed through a wall (dt too large, or too few "
                      "wall layers), or spilled over an open top (the tank is too low for this flow)");
     return Status::ok();
-  }
-
-  double fluidEnergy() const override {
-    return m_exec.sumOf(m_owned, kernels::FluidEnergy<R>{cptr<SphField::Position>(), cptr<SphField::Velocity>(), cptr<SphField::Mass>(),
-                                                     cptr<SphField::Kind>(), m_setup.gravity});
   }
 
   double fluidReach(Vec3d direction) const override {

@@ -108,7 +108,7 @@ struct MarkWet {
   const Index* ghostCellStart = nullptr;  // distributed runs
   const Index* ghostItems = nullptr;
   Index ghostBase = 0;
-  std::uint8_t* wet;
+  std::uint8_t* wet = nullptr;
   PFLOW_HOSTDEVICE void operator()(Index i) const {
     if (kind[i] == kFluid) {
       wet[i] = 1;
@@ -251,18 +251,16 @@ struct Corrector {
   }
 };
 
-// |a|^2 of fluid particles (the force limit of the time step).
+// Each particle's inverseStep (SphPhysics.h): their maximum sets the next step, in one reduction.
 template <class R>
-struct AccelerationSquared {
+struct InverseStep {
   const Vec3<R>* acc;
+  const R* visc;
   const std::int32_t* kind;
-  PFLOW_HOSTDEVICE double operator()(Index i) const { return kind[i] == kFluid ? double(norm2(acc[i])) : 0.0; }
-};
-
-template <class R>
-struct MaxOfField {
-  const R* v;
-  PFLOW_HOSTDEVICE double operator()(Index i) const { return double(v[i]); }
+  double h, c0;
+  PFLOW_HOSTDEVICE double operator()(Index i) const {
+    return inverseStep(h, c0, double(norm2(acc[i])), double(visc[i]), kind[i] == kFluid);
+  }
 };
 
 // Pressure from density (the start, and rows that arrive without it).
@@ -319,20 +317,6 @@ struct FluidReach {
     if (kind[i] != kFluid) return 0.0;
     const double d = dot(pos[i] - base, direction);
     return d > 0.0 ? d : 0.0;
-  }
-};
-
-// Kinetic and gravitational energy of fluid particles (relative to the origin along g) [J].
-template <class R>
-struct FluidEnergy {
-  const Vec3d* pos;
-  const Vec3<R>* vel;
-  const R* mass;
-  const std::int32_t* kind;
-  Vec3d gravity;
-  PFLOW_HOSTDEVICE double operator()(Index i) const {
-    if (kind[i] != kFluid) return 0.0;
-    return double(mass[i]) * (0.5 * double(norm2(vel[i])) - dot(gravity, pos[i]));
   }
 };
 

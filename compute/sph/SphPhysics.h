@@ -139,13 +139,20 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE PairRates<R> pairRates(const PairParams<R>& p
   return out;
 }
 
-// The step a run can take now (docs/sph.md, equation 10): CFL times the smaller of the force limit
-// sqrt(h / max|a|), the acoustic-viscous limit h / (c0 + h max visc) and, with laminar viscosity, h^2/nu
-// (as 0.125 h^2 / nu divided by the CFL, which holds it at Morris's 0.125).
-inline double stableDt(double cfl, double h, double c0, double maxAccel, double maxViscous, double nu) {
-  double dt = h / (c0 + h * maxViscous);
-  if (maxAccel > 0) dt = std::fmin(dt, std::sqrt(h / maxAccel));
-  dt *= cfl;
+// The reciprocal of the step one particle allows before the CFL factor (docs/sph.md, equation 10): the larger of
+// sqrt(|a| / h) (the force limit; fluid only: walls do not move) and (c0 + h visc) / h (the acoustic-viscous
+// limit, visc the particle's largest viscous rate). Its maximum over the particles is one reduction.
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE double inverseStep(double h, double c0, double accel2, double viscous, bool fluid) {
+  const double acoustic = (c0 + h * viscous) / h;
+  if (!fluid) return acoustic;
+  const double force = std::sqrt(std::sqrt(accel2) / h);
+  return force > acoustic ? force : acoustic;
+}
+
+// The step a run can take now: CFL over the largest inverseStep, and with laminar viscosity at most 0.125 h^2/nu
+// (Morris et al. 1997; not divided by the CFL).
+inline double stableDt(double cfl, double h, double nu, double maxInverseStep) {
+  double dt = cfl / maxInverseStep;
   if (nu > 0) dt = std::fmin(dt, 0.125 * h * h / nu);
   return dt;
 }

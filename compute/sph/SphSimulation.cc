@@ -70,13 +70,9 @@ Status SphSimulation::rebuild() {
 // equation 10), or the fixed sph.dt; shortened to land on the next output time (two equal steps when one
 // would leave a sliver).
 double SphSimulation::nextDt() {
-  double maxAccel, maxVisc;
-  {
-    auto t = m_timers.time(Phase::kIntegrate1);
-    maxAccel = m_domain->max(m_engine->maxAcceleration());
-    maxVisc = m_domain->max(m_engine->maxViscousRate());
-  }
-  m_stable = sph::stableDt(m_method.cfl, m_derived.h, m_derived.c0, maxAccel, maxVisc, m_method.kinematicViscosity);
+  double inverse;
+  { auto t = m_timers.time(Phase::kIntegrate1); inverse = m_domain->max(m_engine->maxInverseStep()); }
+  m_stable = sph::stableDt(m_method.cfl, m_derived.h, m_method.kinematicViscosity, inverse);
   double dt = m_stable;
   if (m_method.dt) {
     dt = *m_method.dt;
@@ -201,26 +197,20 @@ Result<std::unique_ptr<SphSimulation>> SphSimulation::create(const RunConfig& co
     SphSetup& st = setup.value();
     std::vector<std::size_t> mine;
     if (Status s = sim->m_domain->partitionPoints(st.grid, st.position, mine); !s.isOk()) return s;
-    auto keep = [&](auto& v) {
-      std::remove_reference_t<decltype(v)> kept;
-      kept.reserve(mine.size());
-      for (std::size_t i : mine) kept.push_back(v[i]);
-      v = std::move(kept);
-    };
-    keep(st.position);
-    keep(st.velocity);
-    keep(st.density);
-    keep(st.mass);
-    keep(st.kind);
+    keepRows(st.position, mine);
+    keepRows(st.velocity, mine);
+    keepRows(st.density, mine);
+    keepRows(st.mass, mine);
+    keepRows(st.kind, mine);
     st.gid.assign(mine.begin(), mine.end());
     st.canonicalOrder = options.canonicalOrder || sim->m_domain->ranks() > 1;
   }
   sim->m_total = config.sph.size();
   sim->m_derived = derive(config.sph, config.sim);
-  sim->m_method = config.sph;
-  sim->m_method.position.clear();
-  sim->m_method.velocity.clear();
-  sim->m_method.kind.clear();
+  sim->m_method = config.sph;  // the method and the probes; the particles are the engine's now
+  std::vector<Vec3d>().swap(sim->m_method.position);
+  std::vector<Vec3d>().swap(sim->m_method.velocity);
+  std::vector<ParticleKind>().swap(sim->m_method.kind);
   sim->m_grid = setup.value().grid;
   sim->m_skin = setup.value().skin;
   sim->m_fluid = config.sph.fluidCount();
@@ -269,7 +259,6 @@ Result<SphSetup> prepareSphSetup(const RunConfig& config) {
   s.kernel = c.kernel;
   s.dimension = c.dimension;
   s.h = d.h;
-  s.spacing = c.spacing;
   s.rho0 = c.density;
   s.c0 = d.c0;
   s.gamma = c.gamma;

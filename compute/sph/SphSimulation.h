@@ -56,7 +56,6 @@ class SphSimulation {
   const SphDerived& derived() const { return m_derived; }
   const CellGrid& grid() const { return m_grid; }
   // Collective in a distributed run (every rank calls them and gets the same value).
-  double fluidEnergy() const { return m_domain->sum(m_engine->fluidEnergy()); }
   double fluidReach(Vec3d direction) const { return m_domain->max(m_engine->fluidReach(direction)); }
   // The scene's probes now, in their order: a pressure probe's Shepard-interpolated pressure [Pa] (0 where no
   // fluid reaches it), a gauge's free-surface height above the tank's floor [m] (going up the vertical through it,
