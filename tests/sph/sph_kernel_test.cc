@@ -20,7 +20,7 @@ class KernelTest : public ::testing::TestWithParam<Case> {};
 
 // Sum over a lattice of spacing dp = h / ratio around a point off the lattice: sum W dV -> 1, and the first
 // moment sum (x_b - x_a) (x) grad_a W dV -> identity (the kernel gradient's consistency), within the
-// lattice's discretisation error at h/dp = 1.5 and 2 (1e-3 and 1e-2 bounds from the kernels' smoothness).
+// lattice's discretisation error (bounds below, from the measured values).
 TEST_P(KernelTest, NormalisedAndGradientConsistentOnALattice) {
   const Case c = GetParam();
   for (double ratio : {1.5, 2.0, 3.0}) {
@@ -45,15 +45,15 @@ TEST_P(KernelTest, NormalisedAndGradientConsistentOnALattice) {
           for (int p = 0; p < 3; ++p)
             for (int q = 0; q < 3; ++q) m[p][q] += db[p] * g[q] * dV;
         }
-    const double tol = ratio >= 2 ? 2e-3 : 1.5e-2;
-    EXPECT_NEAR(sum, 1.0, tol) << "h/dp " << ratio;
-    const int axes[2] = {0, 2};
+    // Measured (both kernels, 2D and 3D): |sum - 1| <= 2.5e-4, moments within 4.3e-3 of I at h/dp = 1.5 and 7.4e-4
+    // at h/dp >= 2; the bounds are twice that.
+    EXPECT_NEAR(sum, 1.0, 5e-4) << "h/dp " << ratio;
+    const double tol = ratio >= 2 ? 1.5e-3 : 1e-2;
     for (int p = 0; p < 3; ++p)
       for (int q = 0; q < 3; ++q) {
         if (c.dimension == 2 && (p == 1 || q == 1)) continue;
-        EXPECT_NEAR(m[p][q], p == q ? 1.0 : 0.0, 2 * tol) << "moment " << p << q << " at h/dp " << ratio;
+        EXPECT_NEAR(m[p][q], p == q ? 1.0 : 0.0, tol) << "moment " << p << q << " at h/dp " << ratio;
       }
-    (void)axes;
   }
 }
 
@@ -110,18 +110,31 @@ TEST(PairRates, AntisymmetricMomentum) {
   for (int c = 0; c < 3; ++c) EXPECT_NEAR((&ab.acceleration.x)[c], -(&ba.acceleration.x)[c], 1e-12 * norm(ab.acceleration));
   // Approaching: the artificial viscosity is on and repels (dv_a along x_ab).
   EXPECT_GT(dot(ab.acceleration, xab), 0.0);
-  // Continuity: approaching particles compress (drho/dt > 0) for either side.
-  EXPECT_GT(ab.densityRate - 0.0, -1e300);
+  // Continuity: approaching particles compress, both sides at the same rate (equal masses; diffusion off here: it
+  // moves density from the denser to the lighter one and is checked below).
+  PairParams<double> noDiffusion = p;
+  noDiffusion.delta = 0;
+  const auto cab = pairRates(noDiffusion, xab, vab, r2, f, 1005.0, 998.0, 2000.0, -300.0, m, 30.0, 30.0, true);
+  const auto cba = pairRates(noDiffusion, -xab, -vab, r2, f, 998.0, 1005.0, -300.0, 2000.0, m, 30.0, 30.0, true);
+  EXPECT_GT(cab.densityRate, 0.0);
+  EXPECT_DOUBLE_EQ(cab.densityRate, cba.densityRate);
+  // Diffusion: the denser particle a loses density to b, b gains as much (conservative for equal mass and density).
+  EXPECT_LT(ab.densityRate - cab.densityRate, 0.0);
+  EXPECT_GT(ba.densityRate - cba.densityRate, 0.0);
   const auto still = pairRates(p, xab, Vec3d{0, 0, 0}, r2, f, 1000.0, 1000.0, 0.0, 0.0, m, 30.0, 30.0, true);
   EXPECT_EQ(norm(still.acceleration), 0.0);
   EXPECT_EQ(still.densityRate, 0.0);
 }
 
-// The time step: the smallest limit times the CFL number; the viscous limit 0.125 h^2/nu on its own.
+// The time step: the smallest limit times the CFL number (the force limit for fluid only); the viscous limit
+// 0.125 h^2/nu on its own.
 TEST(StableDt, SmallestLimit) {
-  EXPECT_DOUBLE_EQ(stableDt(0.2, 0.01, 40, 0, 0, 0), 0.2 * 0.01 / 40);
-  EXPECT_DOUBLE_EQ(stableDt(0.2, 0.01, 40, 1e6, 0, 0), 0.2 * std::sqrt(0.01 / 1e6));
-  EXPECT_DOUBLE_EQ(stableDt(0.2, 0.01, 40, 0, 0, 1.0), 0.125 * 1e-4);
+  const double h = 0.01, c0 = 40;
+  EXPECT_DOUBLE_EQ(stableDt(0.2, h, 0, inverseStep(h, c0, 0, 0, true)), 0.2 * h / c0);
+  EXPECT_NEAR(stableDt(0.2, h, 0, inverseStep(h, c0, 1e6 * 1e6, 0, true)), 0.2 * std::sqrt(h / 1e6), 1e-15);
+  EXPECT_DOUBLE_EQ(stableDt(0.2, h, 0, inverseStep(h, c0, 1e6 * 1e6, 0, false)), 0.2 * h / c0);  // walls do not move
+  EXPECT_NEAR(stableDt(0.2, h, 0, inverseStep(h, c0, 0, 500, true)), 0.2 * h / (c0 + h * 500), 1e-15);
+  EXPECT_DOUBLE_EQ(stableDt(0.2, h, 1.0, inverseStep(h, c0, 0, 0, true)), 0.125 * 1e-4);
 }
 
 }  // namespace
