@@ -48,6 +48,8 @@ std::string defaultOutput(const frontend::LoadedScene& scene, const std::string&
   return (p.parent_path() / (p.stem().string() + ".h5")).string();
 }
 
+}  // namespace
+
 std::string humanSeconds(double s) {
   char buf[64];
   if (s < 120) std::snprintf(buf, sizeof buf, "%.1f s", s);
@@ -55,8 +57,6 @@ std::string humanSeconds(double s) {
   else std::snprintf(buf, sizeof buf, "%.1f h", s / 3600);
   return buf;
 }
-
-}  // namespace
 
 Result<std::unique_ptr<backend::SnapshotWriter>> openOutput(const std::string& path) {
   if (const fs::path parent = fs::path(path).parent_path(); !parent.empty()) {

@@ -44,6 +44,8 @@ struct RunSummary {
 enum ExitCode { kExitOk = 0, kExitInvalid = 1, kExitIo = 2, kExitSimulation = 3, kExitUnavailable = 4, kExitRefused = 5, kExitCancelled = 6 };
 
 Result<RunSummary> runScene(const RunOptions& options);
+// "42.0 s", "3.5 min", "2.1 h": a duration for a progress line (every solver's driver).
+std::string humanSeconds(double seconds);
 // The output file's folder created and its snapshot writer opened (every solver's driver).
 Result<std::unique_ptr<backend::SnapshotWriter>> openOutput(const std::string& path);
 int exitCodeFor(const Status& s);

@@ -84,8 +84,8 @@ Result<RunSummary> runSphScene(const RunOptions& o, const frontend::LoadedScene&
       const double wall = std::chrono::duration<double>(now - wallStart).count();
       const double rate = double(s.numParticles()) * double(s.stepCount()) / wall;
       const double eta = s.time() > 0 ? wall / s.time() * (duration - s.time()) : 0;
-      spdlog::info("step {} t = {:.5g}/{} s, dt {:.3g} s, {:.3g} particle-steps/s, ETA {:.1f} s", s.stepCount(), s.time(), duration,
-                   s.dt(), rate, eta);
+      spdlog::info("step {} t = {:.5g}/{} s, dt {:.3g} s, {:.3g} particle-steps/s, ETA {}", s.stepCount(), s.time(), duration,
+                   s.dt(), rate, humanSeconds(eta));
     }
     return Status::ok();
   };
@@ -114,7 +114,7 @@ Result<RunSummary> runSphScene(const RunOptions& o, const frontend::LoadedScene&
     spdlog::error("snapshots up to step {} are in {}", sim.stepCount(), sum.outputPath);
     return run;
   }
-  spdlog::info("done: {} steps in {:.1f} s, {:.3g} particle-steps/s; {} snapshots in {}; {} cell sorts", sum.steps, sum.wallSeconds,
+  spdlog::info("done: {} steps in {}, {:.3g} particle-steps/s; {} snapshots in {}; {} cell sorts", sum.steps, humanSeconds(sum.wallSeconds),
                sum.particleStepsPerSecond, sum.snapshots, sum.outputPath, sim.rebuilds());
   return sum;
 }

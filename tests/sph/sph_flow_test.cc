@@ -152,7 +152,7 @@ TEST(SphDamBreak, SurgeFrontFollowsMartinMoyce) {
 }
 
 // The seed's kernel (cubic spline) runs the same case with the same parameters: at 20 x 40 its front reaches each Z
-// within 5 % of the Wendland run's time (measured: 2-3 % later; the spline's flatter core smooths more).
+// within 5 % of the Wendland run's time (measured: 1-2 % later).
 TEST(SphDamBreak, CubicSplineFollowsTheWendlandRun) {
   const double dp = 0.01;
   RunConfig wendland = test::damBreak2D(dp);
