@@ -49,6 +49,8 @@ struct LoadOptions {
   std::string baseDir;                        // relative file names in the scene resolve here; "" = current dir
   std::size_t maxParticles = std::size_t(1) << 30;
   std::size_t maxTriangles = 20'000'000;
+  // Most lattice sites one particle set may test against its region (the work of a thin region in large bounds).
+  std::size_t maxLatticeSites = std::size_t(1) << 32;
   // The accuracy study's table that simulation.accuracy.quantity must name a quantity of (null: the built-in
   // one; an empty table accepts any name, and validate says it has no proposal).
   const compute::AccuracyTable* accuracyTable = nullptr;

@@ -444,7 +444,7 @@ Result<Particles> generateLattice(const Region& region, const SizeDistribution& 
   const bool haveExisting = !avoid.position.empty();
   Particles out;
   const std::size_t target = options.count.value_or(std::numeric_limits<std::size_t>::max());
-  std::size_t usable = 0;
+  std::size_t usable = 0, visited = 0;
   // x fastest, then y, then z: a count cap fills the lowest layers first.
   for (long iz = 0; iz < nz && out.size() < target; ++iz) {
     for (long iy = 0; iy < ny && out.size() < target; ++iy) {
@@ -456,6 +456,11 @@ Result<Particles> generateLattice(const Region& region, const SizeDistribution& 
           const double shiftX = 0.5 * static_cast<double>((iy + iz) % 2), shiftY = static_cast<double>(iz % 2) / 3.0;
           site = cmin + Vec3d{(static_cast<double>(ix) + shiftX) * dx, (static_cast<double>(iy) + shiftY) * dy, static_cast<double>(iz) * dz};
           if (site.x > cmax.x + slack || site.y > cmax.y + slack || site.z > cmax.z + slack) continue;
+        }
+        if (++visited > options.maxSites) {
+          return exhausted("lattice: visited " + std::to_string(options.maxSites) + " sites of the region's bounds (" + std::to_string(nx) + " x " +
+                           std::to_string(ny) + " x " + std::to_string(nz) + ") and found " + std::to_string(out.size()) +
+                           " particles; that is the loader's limit: use a larger spacing, a count the first layers hold, or a region whose bounds it fills");
         }
         if (!box && !region.containsSphere(site, rmax)) continue;
         ++usable;

@@ -11,6 +11,7 @@
 #pragma once
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <span>
 #include <string>
@@ -44,6 +45,9 @@ struct LatticeOptions {
   double spacing = 0;                // centre-to-centre (nearest-neighbour) distance [m]; 0: 2.1 x max radius
   double jitter = 0.005;             // random shift per axis, uniform in [-jitter, +jitter] x the particle's radius
   std::optional<std::size_t> count;  // first `count` usable sites in fill order; unset: every site
+  // Most sites of the region's bounds to visit (a bound on the work of a thin region in large bounds, such as a
+  // long diagonal drum); past it generation stops with kResourceExhausted.
+  std::size_t maxSites = std::numeric_limits<std::size_t>::max();
 };
 // Simple cubic sites at bounds.min + rmax + k x spacing per axis (the scene loader's lattice); HCP sites are
 // ABAB layers with nearest-neighbour distance `spacing`. Sites are visited x fastest, then y, then z. A site is

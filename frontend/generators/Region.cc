@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <numbers>
 #include <sstream>
 #include <vector>
@@ -262,13 +263,36 @@ Result<Region> Region::mesh(const TriMesh& mesh) {
     return std::pair<std::size_t, std::size_t>{static_cast<std::size_t>(std::clamp(std::floor((lo - origin) / w), 0.0, top)),
                                                static_cast<std::size_t>(std::clamp(std::floor((hi - origin) / w), 0.0, top))};
   };
+  // A triangle goes into the columns its projection overlaps, row by row: in the row's slab ylo <= y <= yhi the
+  // clipped triangle spans the x of its vertices inside the slab and of its edges' crossings of the slab's two
+  // lines. (Its bounding box alone would put a long triangle across the grid's diagonal into most columns, and
+  // every inside test would then visit most triangles.)
   m.columns.build(m.cx * m.cy, m.projected.size(), [&](std::size_t i, auto visit) {
     const auto& v = m.projected[i].v;
-    const Vec3d &a = m.vertices[v[0]], &b = m.vertices[v[1]], &c = m.vertices[v[2]];
-    const auto [x0, x1] = colRange(std::min({a.x, b.x, c.x}), std::max({a.x, b.x, c.x}), m.box.min.x, m.colW, m.cx);
-    const auto [y0, y1] = colRange(std::min({a.y, b.y, c.y}), std::max({a.y, b.y, c.y}), m.box.min.y, m.colH, m.cy);
-    for (std::size_t y = y0; y <= y1; ++y)
+    const Vec3d* p[3] = {&m.vertices[v[0]], &m.vertices[v[1]], &m.vertices[v[2]]};
+    const auto [y0, y1] = colRange(std::min({p[0]->y, p[1]->y, p[2]->y}), std::max({p[0]->y, p[1]->y, p[2]->y}), m.box.min.y, m.colH, m.cy);
+    for (std::size_t y = y0; y <= y1; ++y) {
+      // The slab, widened by a rounding margin so that a point on a row boundary finds the triangle either way.
+      const double margin = 1e-9 * m.colH;
+      const double ylo = y == y0 ? -std::numeric_limits<double>::infinity() : m.box.min.y + static_cast<double>(y) * m.colH - margin;
+      const double yhi = y == y1 ? std::numeric_limits<double>::infinity() : m.box.min.y + static_cast<double>(y + 1) * m.colH + margin;
+      double xlo = std::numeric_limits<double>::infinity(), xhi = -xlo;
+      auto take = [&](double x) {
+        xlo = std::min(xlo, x);
+        xhi = std::max(xhi, x);
+      };
+      for (int k = 0; k < 3; ++k) {
+        const Vec3d &a = *p[k], &b = *p[(k + 1) % 3];
+        if (a.y >= ylo && a.y <= yhi) take(a.x);
+        for (double line : {ylo, yhi}) {
+          if (!std::isfinite(line) || (a.y - line) * (b.y - line) > 0 || a.y == b.y) continue;
+          take(a.x + (b.x - a.x) * (line - a.y) / (b.y - a.y));
+        }
+      }
+      if (!(xlo <= xhi)) continue;
+      const auto [x0, x1] = colRange(xlo - 1e-9 * m.colW, xhi + 1e-9 * m.colW, m.box.min.x, m.colW, m.cx);
       for (std::size_t x = x0; x <= x1; ++x) visit(y * m.cx + x);
+    }
   });
 
   // Cell grid: about one cell per triangle, cubic cells, at most 256 per axis.

@@ -365,6 +365,7 @@ void Loader::parseParticleSet(const YAML::Node& item, const std::string& path, L
     RandomOptions random;
     TiledOptions tiled;
     lattice.count = count;
+    lattice.maxSites = m_options.maxLatticeSites;
     random.count = count;
     random.solidFraction = fraction;
     tiled.count = count;

@@ -12,6 +12,7 @@
 
 #include "frontend/SceneLoader.h"
 #include "frontend/generators/Generators.h"
+#include "frontend/geometry/Primitives.h"
 
 namespace pflow::frontend {
 namespace {
@@ -390,6 +391,39 @@ TEST(Region, MillionPointsAgainstTenThousandTriangles) {
   }
 }
 
+// A long drum along a diagonal: its side triangles are thin and their bounding boxes cover most of the x-y
+// grid; the columns hold each triangle only where its projection passes, and the inside test still agrees with
+// the analytic cylinder (inside the inscribed polygon: in; beyond the radius or the ends: out).
+TEST(Region, LongDiagonalDrumAgreesWithTheCylinder) {
+  DrumSpec drum;
+  drum.axis = Vec3d{1, 1, 0.3};
+  drum.radius = 0.05;
+  drum.length = 5.0;
+  const TriMesh mesh = tessellate(drum).value();
+  auto region = Region::mesh(mesh);
+  ASSERT_TRUE(region.isOk()) << region.status().message();
+  const Vec3d a = (1.0 / norm(drum.axis)) * drum.axis;
+  const double inner = drum.radius * std::cos(std::numbers::pi / double(circleSegments(drum.radius, {}).value()));
+  const Bounds b = region->bounds();
+  Random rng(21);
+  std::size_t inside = 0, checked = 0;
+  for (int i = 0; i < 200000; ++i) {
+    // Points near the axis (most of the bounds' volume is far from the drum).
+    const double t = rng.uniform(-2.6, 2.6);
+    const Vec3d p = t * a + Vec3d{rng.uniform(-0.06, 0.06), rng.uniform(-0.06, 0.06), rng.uniform(-0.06, 0.06)};
+    const double along = dot(p, a), d = norm(p - along * a);
+    const bool in = region->containsPoint(p);
+    inside += in;
+    if (d < inner - 1e-12 && std::fabs(along) < 0.5 * drum.length - 1e-12) {
+      ++checked;
+      ASSERT_TRUE(in) << "at " << p.x << ", " << p.y << ", " << p.z;
+    }
+    if (d > drum.radius || std::fabs(along) > 0.5 * drum.length) ASSERT_FALSE(in) << "at " << p.x << ", " << p.y << ", " << p.z;
+  }
+  EXPECT_GT(checked, 10000u);
+  EXPECT_GT(b.size().x, 3.0);
+}
+
 // ---- lattice ------------------------------------------------------------------------------------------------------
 
 // The scene loader's lattice is this generator, seeded per set from simulation.seed (docs/scene-format.md).
@@ -461,6 +495,22 @@ TEST(Lattice, JitterBoundCountAndFillOrder) {
   options.jitter = 0;
   options.spacing = 1.9e-3;
   EXPECT_HAS(generateLattice(box, SizeDistribution::single(r), options, 5).status().message(), "lattice.spacing: 0.0019 must be >= the largest diameter 0.002");
+}
+
+// A thin diagonal cylinder in large bounds: the sites visited are bounded, and the error says where it stopped.
+TEST(Lattice, StopsAtTheSiteLimitWithAClearError) {
+  const Region cyl = Region::cylinder({0, 0, 0}, {1, 1, 0}, 0.01, 2.0).value();
+  LatticeOptions options;
+  options.count = 500;
+  options.maxSites = 10000;
+  auto p = generateLattice(cyl, SizeDistribution::single(1e-3), options, 5);
+  ASSERT_FALSE(p.isOk());
+  EXPECT_EQ(p.status().code(), StatusCode::kResourceExhausted);
+  EXPECT_HAS(p.status().message(), "lattice: visited 10000 sites of the region's bounds");
+  options.maxSites = std::numeric_limits<std::size_t>::max();
+  auto all = generateLattice(cyl, SizeDistribution::single(1e-3), options, 5);
+  ASSERT_TRUE(all.isOk()) << all.status().message();
+  EXPECT_EQ(all->size(), 500u);
 }
 
 TEST(Lattice, HexagonalClosePackedAndPolydisperseInACylinder) {

@@ -12,6 +12,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   options.baseDir = "/nonexistent-pflow-fuzz";  // file references fail cleanly
   options.maxParticles = 20000;                 // keep each input fast
   options.maxTriangles = 20000;
+  options.maxLatticeSites = 2'000'000;          // a thin region in huge bounds stops instead of timing out
   auto scene = pflow::frontend::loadSceneFromString(yaml, "<fuzz>", options);
   if (scene) {
     volatile std::size_t n = scene.value().config.particles.size();
