@@ -300,24 +300,53 @@ Result<std::optional<GridFields>> SnapshotStore::computeGrid(SnapshotStaging& st
   const ArrayMeta* velocity = m.find("velocity");
   const ArrayMeta* radius = m.find("radius");
   const ArrayMeta* mass = m.find("mass");
+  const ArrayMeta* density = m.find("density");
+  const ArrayMeta* pressure = m.find("pressure");
+  const ArrayMeta* kind = m.find("kind");
+  // A fluid (SPH) snapshot: no radius; each fluid particle's sphere from its volume m / rho (GridFields.h).
+  const bool fluid = radius == nullptr && isFloat(mass) && hasShape(mass, m.n, 1) && isFloat(density) && hasShape(density, m.n, 1);
   if (!(isFloat(position) && hasShape(position, m.n, 3) && isFloat(velocity) && hasShape(velocity, m.n, 3) &&
-        isFloat(radius) && hasShape(radius, m.n, 1))) {
-    spdlog::info("step {}: no grid fields (they need f64/f32 position (n,3), velocity (n,3) and radius (n))", m.step);
+        (fluid || (isFloat(radius) && hasShape(radius, m.n, 1))))) {
+    spdlog::info("step {}: no grid fields (they need f64/f32 position (n,3), velocity (n,3) and radius (n), or mass and density (n) for a fluid)",
+                 m.step);
     return std::optional<GridFields>();
   }
   if (m.n == 0) return std::optional<GridFields>();
   const bool withMass = isFloat(mass) && hasShape(mass, m.n, 1);
-  std::vector<double> x, v, r, w;
+  const bool withPressure = fluid && isFloat(pressure) && hasShape(pressure, m.n, 1);
+  const bool withKind = fluid && kind != nullptr && hasShape(kind, m.n, 1);
+  std::vector<double> x, v, r, w, p, rho, k;
+  std::vector<std::uint8_t> excluded;
   auto load = [&](std::uint64_t first, std::uint64_t rows, bool velocities) -> Result<ParticleBlock> {
     if (Status st = staging.readParticleRowsF64("position", first, rows, x); !st) return st;
-    if (Status st = staging.readParticleRowsF64("radius", first, rows, r); !st) return st;
+    if (fluid) {
+      if (Status st = staging.readParticleRowsF64("mass", first, rows, w); !st) return st;
+      if (Status st = staging.readParticleRowsF64("density", first, rows, rho); !st) return st;
+      if (withKind)
+        if (Status st = staging.readParticleRowsF64("kind", first, rows, k); !st) return st;
+      r.resize(rows);
+      excluded.assign(rows, 0);
+      for (std::uint64_t i = 0; i < rows; ++i) {
+        excluded[i] = withKind && k[i] != 0;  // boundary particles are not fluid
+        r[i] = excluded[i] ? 0.0 : fluidRadius(w[i], rho[i]);
+      }
+    } else if (Status st = staging.readParticleRowsF64("radius", first, rows, r); !st) {
+      return st;
+    }
     if (velocities) {
       if (Status st = staging.readParticleRowsF64("velocity", first, rows, v); !st) return st;
-      if (withMass) {
+      if (withMass && !fluid)
         if (Status st = staging.readParticleRowsF64("mass", first, rows, w); !st) return st;
-      }
+      if (withPressure)
+        if (Status st = staging.readParticleRowsF64("pressure", first, rows, p); !st) return st;
     }
-    return ParticleBlock{rows, x.data(), v.data(), r.data(), withMass ? w.data() : nullptr};
+    return ParticleBlock{rows,
+                         x.data(),
+                         v.data(),
+                         r.data(),
+                         withMass ? w.data() : nullptr,
+                         withPressure ? p.data() : nullptr,
+                         fluid ? excluded.data() : nullptr};
   };
   ParticleBounds bounds;
   for (std::uint64_t first = 0; first < m.n; first += kGridBlockRows) {
@@ -325,13 +354,14 @@ Result<std::optional<GridFields>> SnapshotStore::computeGrid(SnapshotStaging& st
     if (!b) return b.status();
     bounds.add(b->n, b->position, b->radius);
   }
+  if (bounds.count == 0) return std::optional<GridFields>();  // no fluid particle (or none usable)
   auto spec = gridCovering(bounds, m_options.gridCellSize);
   if (!spec) {
     spdlog::warn("step {}: no grid fields: {}", m.step, spec.status().message());
     return std::optional<GridFields>();
   }
-  GridAccumulator acc(spec.value());
-  for (int pass = 0; pass < 2; ++pass) {
+  GridAccumulator acc(spec.value(), withPressure, fluid);
+  for (int pass = 0; pass < (fluid ? 1 : 2); ++pass) {
     for (std::uint64_t first = 0; first < m.n; first += kGridBlockRows) {
       auto b = load(first, std::min(kGridBlockRows, m.n - first), true);
       if (!b) return b.status();

@@ -104,14 +104,17 @@ Result<GridSpec> gridCovering(const ParticleBounds& bounds, double cellSize) {
   return invalidArgument("particles span too large a box for a grid");
 }
 
-GridAccumulator::GridAccumulator(const GridSpec& spec)
+GridAccumulator::GridAccumulator(const GridSpec& spec, bool withPressure, bool fluid)
     : m_spec(spec),
       m_volume(spec.cellCount(), 0.0),
       m_weight(spec.cellCount(), 0.0),
       m_momentum(3 * spec.cellCount(), 0.0),
-      m_fluct(spec.cellCount(), 0.0) {}
+      m_fluct(fluid ? 0 : spec.cellCount(), 0.0),
+      m_pressure(withPressure ? spec.cellCount() : 0, 0.0),
+      m_fluid(fluid) {}
 
 bool GridAccumulator::usable(const ParticleBlock& b, std::size_t p) const {
+  if (!m_pressure.empty() && (b.pressure == nullptr || !std::isfinite(b.pressure[p]))) return false;
   const double r = b.radius[p];
   if (!std::isfinite(r) || r <= 0) return false;
   for (int c = 0; c < 3; ++c)
@@ -161,7 +164,9 @@ void GridAccumulator::forEachOverlap(const ParticleBlock& b, std::size_t p, F&& 
 }
 
 void GridAccumulator::addMoments(const ParticleBlock& b) {
+  const bool withPressure = !m_pressure.empty();
   for (std::size_t p = 0; p < b.n; ++p) {
+    if (b.excluded != nullptr && b.excluded[p]) continue;
     if (!usable(b, p)) {
       ++m_skipped;
       continue;
@@ -177,6 +182,7 @@ void GridAccumulator::addMoments(const ParticleBlock& b) {
       m_momentum[3 * c] += w * v[0];
       m_momentum[3 * c + 1] += w * v[1];
       m_momentum[3 * c + 2] += w * v[2];
+      if (withPressure) m_pressure[c] += w * b.pressure[p];
     });
   }
 }
@@ -190,8 +196,9 @@ void GridAccumulator::endMoments() {
 }
 
 void GridAccumulator::addFluctuations(const ParticleBlock& b) {
+  if (m_fluid) return;
   for (std::size_t p = 0; p < b.n; ++p) {
-    if (!usable(b, p)) continue;
+    if ((b.excluded != nullptr && b.excluded[p]) || !usable(b, p)) continue;
     const double r = b.radius[p];
     const double mass = b.mass != nullptr ? b.mass[p] : r * r * r;
     const double* v = b.velocity + 3 * p;
@@ -209,28 +216,87 @@ GridFields GridAccumulator::finish() && {
   const double cellVolume = m_spec.cellSize * m_spec.cellSize * m_spec.cellSize;
   out.solidFraction = std::move(m_volume);
   for (double& v : out.solidFraction) v /= cellVolume;
+  out.fluid = m_fluid;
   out.granularTemperature = std::move(m_fluct);
-  for (std::size_t c = 0; c < m_weight.size(); ++c)
+  for (std::size_t c = 0; c < out.granularTemperature.size(); ++c)
     out.granularTemperature[c] = m_weight[c] > 0 ? out.granularTemperature[c] / (3.0 * m_weight[c]) : 0.0;
+  out.meanPressure = std::move(m_pressure);
+  for (std::size_t c = 0; c < out.meanPressure.size(); ++c) out.meanPressure[c] = m_weight[c] > 0 ? out.meanPressure[c] / m_weight[c] : 0.0;
   out.meanVelocity = std::move(m_momentum);
   out.skippedParticles = m_skipped;
   return out;
 }
 
-Result<GridFields> computeGridFields(const ParticleSnapshot& snapshot, const GridSpec& spec) {
-  if (Status st = validateGridSpec(spec); !st) return st;
+namespace {
+
+// The arrays of a snapshot in f64, a fluid's radii derived from its volumes and its boundary rows excluded.
+struct Prepared {
+  std::vector<double> position, velocity, radius, mass, pressure;
+  std::vector<std::uint8_t> excluded;
+  bool fluid = false;
+  ParticleBlock block(std::size_t n) const {
+    return {n,
+            position.data(),
+            velocity.data(),
+            radius.data(),
+            mass.empty() ? nullptr : mass.data(),
+            pressure.empty() ? nullptr : pressure.data(),
+            excluded.empty() ? nullptr : excluded.data()};
+  }
+};
+
+Result<Prepared> prepare(const ParticleSnapshot& snapshot, bool needVelocity) {
+  Prepared p;
   bool present = false, hasMass = false;
+  p.fluid = snapshot.find("radius") == nullptr && snapshot.find("density") != nullptr && snapshot.find("mass") != nullptr;
   auto position = asDoubles(snapshot, "position", 3, false, present);
   if (!position) return position.status();
-  auto velocity = asDoubles(snapshot, "velocity", 3, false, present);
-  if (!velocity) return velocity.status();
-  auto radius = asDoubles(snapshot, "radius", 1, false, present);
-  if (!radius) return radius.status();
+  p.position = std::move(position).value();
+  if (needVelocity) {
+    auto velocity = asDoubles(snapshot, "velocity", 3, false, present);
+    if (!velocity) return velocity.status();
+    p.velocity = std::move(velocity).value();
+  }
   auto mass = asDoubles(snapshot, "mass", 1, true, hasMass);
   if (!mass) return mass.status();
-  const ParticleBlock block{snapshot.n, position->data(), velocity->data(), radius->data(),
-                            hasMass ? mass->data() : nullptr};
-  GridAccumulator acc(spec);
+  p.mass = std::move(mass).value();
+  if (!p.fluid) {
+    auto radius = asDoubles(snapshot, "radius", 1, false, present);
+    if (!radius) return radius.status();
+    p.radius = std::move(radius).value();
+    return p;
+  }
+  auto density = asDoubles(snapshot, "density", 1, false, present);
+  if (!density) return density.status();
+  bool hasPressure = false;
+  auto pressure = asDoubles(snapshot, "pressure", 1, true, hasPressure);
+  if (!pressure) return pressure.status();
+  p.pressure = std::move(pressure).value();
+  p.radius.resize(snapshot.n);
+  p.excluded.assign(snapshot.n, 0);
+  const SnapshotArray* kind = snapshot.find("kind");
+  if (kind != nullptr && (kind->type != ScalarType::kI32 || kind->components != 1 || kind->data.size() != 4 * snapshot.n))
+    return invalidArgument("grid fields need 'kind' as one i32 per particle");
+  for (std::size_t i = 0; i < snapshot.n; ++i) {
+    p.excluded[i] = kind != nullptr && kind->as<std::int32_t>()[i] != 0;
+    p.radius[i] = p.excluded[i] ? 0.0 : fluidRadius(p.mass[i], density.value()[i]);
+  }
+  return p;
+}
+
+}  // namespace
+
+double fluidRadius(double mass, double density) {
+  if (!(mass > 0) || !(density > 0) || !std::isfinite(mass / density)) return 0;
+  return std::cbrt(3.0 * mass / (4.0 * std::numbers::pi * density));
+}
+
+Result<GridFields> computeGridFields(const ParticleSnapshot& snapshot, const GridSpec& spec) {
+  if (Status st = validateGridSpec(spec); !st) return st;
+  auto p = prepare(snapshot, true);
+  if (!p) return p.status();
+  const ParticleBlock block = p->block(snapshot.n);
+  GridAccumulator acc(spec, block.pressure != nullptr, p->fluid);
   acc.addMoments(block);
   acc.endMoments();
   acc.addFluctuations(block);
@@ -238,13 +304,10 @@ Result<GridFields> computeGridFields(const ParticleSnapshot& snapshot, const Gri
 }
 
 Result<GridFields> computeGridFields(const ParticleSnapshot& snapshot, double cellSize) {
-  bool present = false;
-  auto position = asDoubles(snapshot, "position", 3, false, present);
-  if (!position) return position.status();
-  auto radius = asDoubles(snapshot, "radius", 1, false, present);
-  if (!radius) return radius.status();
+  auto p = prepare(snapshot, false);
+  if (!p) return p.status();
   ParticleBounds bounds;
-  bounds.add(snapshot.n, position->data(), radius->data());
+  bounds.add(snapshot.n, p->position.data(), p->radius.data());
   auto spec = gridCovering(bounds, cellSize);
   if (!spec) return spec.status();
   return computeGridFields(snapshot, spec.value());

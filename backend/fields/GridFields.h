@@ -68,14 +68,22 @@ struct ParticleBlock {
   const double* position = nullptr;
   const double* velocity = nullptr;
   const double* radius = nullptr;
-  const double* mass = nullptr;  // optional
+  const double* mass = nullptr;      // optional
+  const double* pressure = nullptr;  // optional (fluids): averaged like the velocity
+  const std::uint8_t* excluded = nullptr;  // optional: rows left out without being counted as skipped
 };
 
+// A fluid's grid (an SPH snapshot: `mass`, `density` and `pressure`, no `radius`) is the same computation with
+// each fluid particle's volume V = m / rho as its sphere (r = (3V / 4 pi)^(1/3)) and the boundary particles
+// (kind != 0) left out: fluid_fraction, mean_velocity and mean_pressure (the mass-weighted mean, Pa); no
+// granular temperature.
 struct GridFields {
   GridSpec spec;
+  bool fluid = false;                       // solidFraction is the fluid fraction; no granular temperature
   std::vector<double> solidFraction;        // cellCount(), dimensionless
   std::vector<double> meanVelocity;         // cellCount() x 3, m/s
-  std::vector<double> granularTemperature;  // cellCount(), m^2/s^2
+  std::vector<double> granularTemperature;  // cellCount(), m^2/s^2; empty for a fluid
+  std::vector<double> meanPressure;         // cellCount(), Pa; empty unless the particles carry a pressure
   std::size_t skippedParticles = 0;         // non-finite or radius <= 0
 };
 
@@ -84,7 +92,9 @@ struct GridFields {
 //   GridFields f = std::move(acc).finish();
 class GridAccumulator {
  public:
-  explicit GridAccumulator(const GridSpec& spec);
+  // withPressure: the blocks carry pressure, and mean_pressure is computed; fluid: the fraction is a fluid's and
+  // the fluctuation pass is not needed (finish() leaves granularTemperature empty).
+  explicit GridAccumulator(const GridSpec& spec, bool withPressure = false, bool fluid = false);
   void addMoments(const ParticleBlock& block);
   void endMoments();  // mean velocities from the first pass
   void addFluctuations(const ParticleBlock& block);
@@ -100,15 +110,21 @@ class GridAccumulator {
   std::vector<double> m_weight;  // sum w
   std::vector<double> m_momentum;  // sum w v (3 per cell), then <v>
   std::vector<double> m_fluct;   // sum w |v - <v>|^2
+  std::vector<double> m_pressure;  // sum w p (with pressure)
+  bool m_fluid = false;
   std::size_t m_skipped = 0;
   bool m_meansDone = false;
 };
+
+// The radius of the sphere of a fluid particle's volume m / rho; 0 (left out) when either is not > 0.
+double fluidRadius(double mass, double density);
 
 // Side of the cube with the volume of a sphere of radius r: (4 pi / 3)^(1/3) r.
 double equalVolumeCubeSide(double r);
 
 // The whole computation for a snapshot held in memory. Needs `position` (n x 3), `velocity` (n x 3) and `radius`
-// (n) of f64 or f32, and uses `mass` (n) when present; INVALID_ARGUMENT otherwise.
+// (n) of f64 or f32, and uses `mass` (n) when present; a fluid's snapshot (no radius; mass, density, pressure
+// and kind) gives the fluid's fields. INVALID_ARGUMENT otherwise.
 Result<GridFields> computeGridFields(const compute::ParticleSnapshot& snapshot, const GridSpec& spec);
 // The grid covering the snapshot's particles (gridCovering) and its fields.
 Result<GridFields> computeGridFields(const compute::ParticleSnapshot& snapshot, double cellSize);

@@ -865,7 +865,8 @@ Result<StepMeta> readStepMeta(hid_t file, const std::string& path, std::int64_t 
 Status writeGridGroup(hid_t stepGroup, const GridFields& g, const std::string& file, const std::string& stepWhere) {
   if (Status st = validateGridSpec(g.spec); !st) return {st.code(), file + ": " + st.message()};
   const std::size_t cells = g.spec.cellCount();
-  if (g.solidFraction.size() != cells || g.meanVelocity.size() != 3 * cells || g.granularTemperature.size() != cells)
+  if (g.solidFraction.size() != cells || g.meanVelocity.size() != 3 * cells ||
+      g.granularTemperature.size() != (g.fluid ? 0 : cells) || (!g.meanPressure.empty() && g.meanPressure.size() != cells))
     return invalidArgument(file + ": grid field arrays do not match the grid's " + std::to_string(cells) + " cells");
   const std::string where = stepWhere + "/" + kGridGroupName;
   auto group = createGroup(stepGroup, kGridGroupName, true, file);
@@ -879,10 +880,12 @@ Status writeGridGroup(hid_t stepGroup, const GridFields& g, const std::string& f
     const char* unit;
     const std::vector<double>& data;
   };
-  const Field fields[] = {{kSolidFractionName, shape, "", g.solidFraction},
+  const Field fields[] = {{g.fluid ? kFluidFractionName : kSolidFractionName, shape, "", g.solidFraction},
                           {kMeanVelocityName, shape3, "m/s", g.meanVelocity},
-                          {kGranularTemperatureName, shape, "m^2/s^2", g.granularTemperature}};
+                          {kGranularTemperatureName, shape, "m^2/s^2", g.granularTemperature},
+                          {kMeanPressureName, shape, "Pa", g.meanPressure}};
   for (const auto& f : fields) {
+    if (f.data.empty()) continue;  // a fluid has no granular temperature; a granular flow no pressure
     auto dset = createNdDataset(group->get(), f.name, H5T_IEEE_F64LE, f.shape, f.unit, file, where);
     if (!dset) return dset.status();
     if (Status st = writeRows(dset->get(), f.shape, 0, f.shape[0], H5T_NATIVE_DOUBLE, f.data.data(), file,
@@ -1770,9 +1773,16 @@ Result<GridFields> SnapshotReader::readGrid(std::int64_t step) const {
     std::memcpy(out.data(), bytes.data(), bytes.size());
     return Status::ok();
   };
-  if (Status st = load(kSolidFractionName, g.solidFraction, 1); !st) return st;
+  auto has = [&](const char* name) {
+    return std::any_of(m->grid->arrays.begin(), m->grid->arrays.end(), [&](const ArrayMeta& a) { return a.name == name; });
+  };
+  g.fluid = has(kFluidFractionName);
+  if (Status st = load(g.fluid ? kFluidFractionName : kSolidFractionName, g.solidFraction, 1); !st) return st;
   if (Status st = load(kMeanVelocityName, g.meanVelocity, 3); !st) return st;
-  if (Status st = load(kGranularTemperatureName, g.granularTemperature, 1); !st) return st;
+  if (!g.fluid)
+    if (Status st = load(kGranularTemperatureName, g.granularTemperature, 1); !st) return st;
+  if (has(kMeanPressureName))
+    if (Status st = load(kMeanPressureName, g.meanPressure, 1); !st) return st;
   return g;
 }
 

@@ -19,6 +19,8 @@
 //       solid_fraction       (nx, ny, nz) f64, ""
 //       mean_velocity        (nx, ny, nz, 3) f64, "m/s"
 //       granular_temperature (nx, ny, nz) f64, "m^2/s^2"
+//                          a fluid's (SPH) grid: fluid_fraction instead of solid_fraction, mean_velocity, and
+//       mean_pressure        (nx, ny, nz) f64, "Pa" instead of granular_temperature
 //                          cell (i, j, k) is element [i][j][k] (C order, k fastest). The grid is not in the .xmf.
 //   /xdmf/polyvertex_index helper for the sidecar: u32 0..M-1 (M = largest n so far); the .xmf selects its
 //                          first n entries as the particles' vertex cells
@@ -85,6 +87,8 @@ struct StepMeta {
 inline constexpr const char* kSolidFractionName = "solid_fraction";
 inline constexpr const char* kMeanVelocityName = "mean_velocity";
 inline constexpr const char* kGranularTemperatureName = "granular_temperature";
+inline constexpr const char* kFluidFractionName = "fluid_fraction";  // a fluid's grid, instead of solid_fraction
+inline constexpr const char* kMeanPressureName = "mean_pressure";
 
 // One snapshot being assembled piece by piece in a scratch HDF5 file (removed by the destructor), for ingest
 // without holding the snapshot in memory. Not a pflow snapshot file itself.

@@ -185,5 +185,53 @@ TEST(GridFields, BadInput) {
   EXPECT_EQ(g->skippedParticles, 1u);
 }
 
+
+// A fluid block (SPH snapshot: mass, density, pressure, kind; no radius) of spacing dp on a lattice whose period
+// divides the cells: every cell inside is full (fluid fraction 1), the mean pressure is the mass-weighted mean of
+// its particles' pressures (here a hydrostatic column), the boundary particles around it are left out, and there
+// is no granular temperature.
+TEST(GridFields, FluidFractionVelocityAndPressureOfAnSphSnapshot) {
+  const double dp = 0.01, rho = 1000, g = 9.81, h = 2 * dp;
+  const int n = 8;  // 8 x 8 x 8 fluid particles in [0, 0.08)^3, centres at (i + 1/2) dp
+  std::vector<double> x, v, m, d, p;
+  std::vector<std::int32_t> kind;
+  for (int k = -1; k <= n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const bool wall = k < 0 || k == n;  // a layer of boundary particles below and above, far from rest
+        x.insert(x.end(), {(i + 0.5) * dp, (j + 0.5) * dp, (k + 0.5) * dp});
+        v.insert(v.end(), {wall ? 99.0 : 0.5, 0.0, wall ? 99.0 : -0.25});
+        m.push_back(rho * dp * dp * dp);
+        d.push_back(rho);
+        p.push_back(wall ? 1e9 : rho * g * (n * dp - (k + 0.5) * dp));
+        kind.push_back(wall ? 1 : 0);
+      }
+  ParticleSnapshot s;
+  s.n = kind.size();
+  SnapshotArray kinds{"kind", ScalarType::kI32, 1, "", {}};
+  kinds.data.resize(kind.size() * 4);
+  std::memcpy(kinds.data.data(), kind.data(), kinds.data.size());
+  s.arrays = {f64Array("position", 3, x), f64Array("velocity", 3, v), f64Array("mass", 1, m), f64Array("density", 1, d),
+              f64Array("pressure", 1, p), kinds};
+  auto f = computeGridFields(s, spec({0, 0, 0}, h, 4, 4, 4));
+  ASSERT_TRUE(f) << f.status().toString();
+  EXPECT_TRUE(f->fluid);
+  EXPECT_TRUE(f->granularTemperature.empty());
+  ASSERT_EQ(f->meanPressure.size(), 64u);
+  for (std::uint32_t c = 0; c < 64; ++c) {
+    const std::uint32_t kz = c % 4;
+    EXPECT_NEAR(f->solidFraction[c], 1.0, 1e-12) << c;
+    EXPECT_NEAR(f->meanVelocity[3 * c], 0.5, 1e-12);
+    EXPECT_NEAR(f->meanVelocity[3 * c + 2], -0.25, 1e-12);
+    // The cell's two particle layers at (2 kz + 1/2) dp and (2 kz + 3/2) dp: their mean depth.
+    EXPECT_NEAR(f->meanPressure[c], rho * g * (n * dp - (2.0 * kz + 1.0) * dp), 1e-9) << c;
+  }
+  // The grid the back-end chooses covers the fluid only (the boundary layers are not in the box).
+  auto covering = computeGridFields(s, 0.0);
+  ASSERT_TRUE(covering) << covering.status().toString();
+  EXPECT_NEAR(covering->spec.origin.z, 0.5 * dp - fluidRadius(rho * dp * dp * dp, rho), 1e-12);
+  EXPECT_NEAR(fluidRadius(rho * dp * dp * dp, rho), std::cbrt(3.0 / (4.0 * std::numbers::pi)) * dp, 1e-15);
+}
+
 }  // namespace
 }  // namespace pflow::backend
