@@ -25,12 +25,15 @@ class BackendClient {
   // stored; INVALID_ARGUMENT for a snapshot that does not fit together.
   virtual Status writeSnapshot(const std::string& jobId, const compute::ParticleSnapshot& snapshot,
                                const compute::GeometrySnapshot* geometryOrNull) = 0;
+  // Appends probe samples (the ones since the last call) to the job's series, in requests of <= 1 MiB.
+  virtual Status appendProbes(const std::string& jobId, const ProbeSeries& samples) = 0;
   // The job's snapshots by step. NOT_FOUND for an unknown job.
   virtual Result<std::vector<SnapshotInfo>> list(const std::string& jobId) = 0;
   // Streams snapshot `step` (nullopt = the last) into a new local file `outputH5` (+ .xmf) in the store's layout,
-  // chunk by chunk through a scratch file (never the whole snapshot in memory). fields empty = all.
+  // chunk by chunk through a scratch file (never the whole snapshot in memory). fields empty = all. includeProbes:
+  // the job's whole probe series too, as /probes and as CSV beside the file (probesCsvPathFor).
   virtual Status fetch(const std::string& jobId, std::optional<std::int64_t> step, const std::string& outputH5,
-                       std::vector<std::string> fields, bool includeGrid, bool includeGeometry) = 0;
+                       std::vector<std::string> fields, bool includeGrid, bool includeGeometry, bool includeProbes = false) = 0;
 };
 
 struct BackendClientOptions {
@@ -49,9 +52,10 @@ class LocalBackendClient final : public BackendClient {
   explicit LocalBackendClient(SnapshotStore& store) : m_store(store) {}
   Status writeSnapshot(const std::string& jobId, const compute::ParticleSnapshot& snapshot,
                        const compute::GeometrySnapshot* geometryOrNull) override;
+  Status appendProbes(const std::string& jobId, const ProbeSeries& samples) override;
   Result<std::vector<SnapshotInfo>> list(const std::string& jobId) override;
   Status fetch(const std::string& jobId, std::optional<std::int64_t> step, const std::string& outputH5,
-               std::vector<std::string> fields, bool includeGrid, bool includeGeometry) override;
+               std::vector<std::string> fields, bool includeGrid, bool includeGeometry, bool includeProbes = false) override;
 
  private:
   SnapshotStore& m_store;

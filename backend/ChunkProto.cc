@@ -1,5 +1,8 @@
 #include "backend/ChunkProto.h"
 
+#include <algorithm>
+#include <cstring>
+
 namespace pflow::backend {
 
 namespace cv1 = pflow::common::v1;
@@ -14,6 +17,7 @@ Result<Chunk> chunkFromProto(v1::SnapshotChunk&& m) {
     case v1::SECTION_PARTICLES: c.section = Section::kParticles; break;
     case v1::SECTION_GEOMETRY: c.section = Section::kGeometry; break;
     case v1::SECTION_GRID: c.section = Section::kGrid; break;
+    case v1::SECTION_PROBES: c.section = Section::kProbes; break;
     default: return invalidArgument("chunk of array '" + m.array().name() + "' has no section");
   }
   cv1::ArrayChunk* a = m.mutable_array();
@@ -33,6 +37,8 @@ Result<Chunk> chunkFromProto(v1::SnapshotChunk&& m) {
   c.array.rows = a->rows();
   c.array.unit = a->unit();
   c.array.data = std::move(*a->mutable_data());
+  if (c.section == Section::kProbes && m.has_probe_point())
+    c.point = Vec3d{m.probe_point().x(), m.probe_point().y(), m.probe_point().z()};
   if (c.section == Section::kGrid) {
     const auto& g = m.grid();
     if (g.cells_size() != 3) return invalidArgument("grid chunk of '" + a->name() + "' has no grid spec with 3 cell counts");
@@ -55,6 +61,12 @@ void chunkToProto(Chunk&& c, v1::SnapshotChunk* m) {
     case Section::kParticles: m->set_section(v1::SECTION_PARTICLES); break;
     case Section::kGeometry: m->set_section(v1::SECTION_GEOMETRY); break;
     case Section::kGrid: m->set_section(v1::SECTION_GRID); break;
+    case Section::kProbes: m->set_section(v1::SECTION_PROBES); break;
+  }
+  if (c.point) {
+    m->mutable_probe_point()->set_x(c.point->x);
+    m->mutable_probe_point()->set_y(c.point->y);
+    m->mutable_probe_point()->set_z(c.point->z);
   }
   cv1::ArrayChunk* a = m->mutable_array();
   a->set_name(c.array.name);
@@ -80,6 +92,61 @@ void chunkToProto(Chunk&& c, v1::SnapshotChunk* m) {
     g->set_cell_size(c.grid->cellSize);
     for (auto n : c.grid->cells) g->add_cells(n);
   }
+}
+
+Result<ProbeSeries> probesFromProto(const v1::AppendProbesRequest& r) {
+  ProbeSeries s;
+  for (const auto& p : r.probes()) {
+    s.names.push_back(p.name());
+    s.units.push_back(p.unit());
+    s.points.push_back({p.point().x(), p.point().y(), p.point().z()});
+  }
+  const std::size_t probes = s.names.size();
+  if (probes == 0) return invalidArgument("AppendProbes names no probes");
+  if (r.time().size() % sizeof(double) != 0) return invalidArgument("AppendProbes: time is not whole f64 values");
+  const std::size_t k = r.time().size() / sizeof(double);
+  if (r.values().size() != k * probes * sizeof(double))
+    return invalidArgument("AppendProbes: " + std::to_string(r.values().size()) + " value bytes for " + std::to_string(k) + " samples of " +
+                           std::to_string(probes) + " probes (need " + std::to_string(k * probes * sizeof(double)) + ")");
+  s.time.resize(k);
+  std::memcpy(s.time.data(), r.time().data(), r.time().size());
+  std::vector<double> v(k * probes);
+  std::memcpy(v.data(), r.values().data(), r.values().size());
+  s.values.assign(probes, std::vector<double>(k));
+  for (std::size_t i = 0; i < k; ++i)
+    for (std::size_t p = 0; p < probes; ++p) s.values[p][i] = v[i * probes + p];
+  return s;
+}
+
+Result<std::vector<v1::AppendProbesRequest>> probesToProto(const std::string& jobId, const ProbeSeries& s) {
+  const std::size_t probes = s.names.size(), k = s.time.size();
+  if (probes == 0 || s.units.size() != probes || s.points.size() != probes || s.values.size() != probes)
+    return invalidArgument("a probe series needs names, and one unit, point and value list per name");
+  for (const auto& v : s.values)
+    if (v.size() != k) return invalidArgument("a probe series needs one value per probe and sample time");
+  const std::size_t perRequest = std::max<std::size_t>(1, kMaxChunkBytes / ((probes + 1) * sizeof(double)));
+  std::vector<v1::AppendProbesRequest> out;
+  for (std::size_t first = 0; first < k || out.empty(); first += perRequest) {
+    const std::size_t count = std::min(perRequest, k - first);
+    v1::AppendProbesRequest r;
+    r.set_job_id(jobId);
+    for (std::size_t p = 0; p < probes; ++p) {
+      auto* info = r.add_probes();
+      info->set_name(s.names[p]);
+      info->set_unit(s.units[p]);
+      info->mutable_point()->set_x(s.points[p].x);
+      info->mutable_point()->set_y(s.points[p].y);
+      info->mutable_point()->set_z(s.points[p].z);
+    }
+    r.set_time(std::string(reinterpret_cast<const char*>(s.time.data() + first), count * sizeof(double)));
+    std::vector<double> v(count * probes);
+    for (std::size_t i = 0; i < count; ++i)
+      for (std::size_t p = 0; p < probes; ++p) v[i * probes + p] = s.values[p][first + i];
+    r.set_values(std::string(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(double)));
+    out.push_back(std::move(r));
+    if (k == 0) break;
+  }
+  return out;
 }
 
 }  // namespace pflow::backend

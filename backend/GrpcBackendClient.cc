@@ -38,6 +38,18 @@ class GrpcBackendClient final : public BackendClient {
     return rpc::fromGrpc(writer->Finish(), "WriteSnapshot job '" + jobId + "' step " + std::to_string(snapshot.step));
   }
 
+  Status appendProbes(const std::string& jobId, const ProbeSeries& samples) override {
+    auto requests = probesToProto(jobId, samples);
+    if (!requests) return requests.status();
+    for (const auto& request : requests.value()) {
+      auto context = rpc::contextWithDeadline(m_options.controlDeadlineSeconds);
+      v1::AppendProbesResponse response;
+      if (Status st = rpc::fromGrpc(m_stub->AppendProbes(context.get(), request, &response), "AppendProbes job '" + jobId + "'"); !st)
+        return st;
+    }
+    return Status::ok();
+  }
+
   Result<std::vector<SnapshotInfo>> list(const std::string& jobId) override {
     auto context = rpc::contextWithDeadline(m_options.controlDeadlineSeconds);
     v1::ListSnapshotsRequest request;
@@ -51,7 +63,7 @@ class GrpcBackendClient final : public BackendClient {
   }
 
   Status fetch(const std::string& jobId, std::optional<std::int64_t> step, const std::string& outputH5,
-               std::vector<std::string> fields, bool includeGrid, bool includeGeometry) override {
+               std::vector<std::string> fields, bool includeGrid, bool includeGeometry, bool includeProbes) override {
     auto context = rpc::contextWithDeadline(m_options.bulkDeadlineSeconds);
     v1::ReadSnapshotRequest request;
     request.set_job_id(jobId);
@@ -60,6 +72,7 @@ class GrpcBackendClient final : public BackendClient {
     for (auto& f : fields) request.add_fields(std::move(f));
     request.set_include_grid(includeGrid);
     request.set_include_geometry(includeGeometry);
+    request.set_include_probes(includeProbes);
     auto reader = m_stub->ReadSnapshot(context.get(), request);
     SnapshotFileSink sink(outputH5);
     v1::SnapshotChunk message;

@@ -14,6 +14,10 @@ Status LocalBackendClient::writeSnapshot(const std::string& jobId, const compute
   return result.status();
 }
 
+Status LocalBackendClient::appendProbes(const std::string& jobId, const ProbeSeries& samples) {
+  return m_store.appendProbes(jobId, samples).status();
+}
+
 Result<std::vector<SnapshotInfo>> LocalBackendClient::list(const std::string& jobId) {
   auto listing = m_store.list(jobId);
   if (!listing) return listing.status();
@@ -22,9 +26,9 @@ Result<std::vector<SnapshotInfo>> LocalBackendClient::list(const std::string& jo
 
 Status LocalBackendClient::fetch(const std::string& jobId, std::optional<std::int64_t> step,
                                  const std::string& outputH5, std::vector<std::string> fields, bool includeGrid,
-                                 bool includeGeometry) {
+                                 bool includeGeometry, bool includeProbes) {
   SnapshotFileSink sink(outputH5);
-  ReadRequest request{step, std::move(fields), includeGrid, includeGeometry};
+  ReadRequest request{step, std::move(fields), includeGrid, includeGeometry, includeProbes};
   if (Status st = m_store.readChunks(jobId, request, [&](Chunk&& c) { return sink.add(c); }); !st) return st;
   return sink.finish();
 }

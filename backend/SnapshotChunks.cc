@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <fstream>
 
 namespace pflow::backend {
 namespace {
@@ -93,6 +94,7 @@ const char* sectionName(Section s) {
     case Section::kParticles: return "particles";
     case Section::kGeometry: return "geometry";
     case Section::kGrid: return "grid";
+    case Section::kProbes: return "probes";
   }
   return "?";
 }
@@ -302,6 +304,7 @@ Status ChunkAssembler::add(const Chunk& c) {
   const ArrayPiece& p = c.array;
   m_bytes += p.data.size();
   if (c.section == Section::kGeometry) return m_geometry.add(p);
+  if (c.section == Section::kProbes) return invalidArgument("probe array '" + p.name + "': probes are sent with AppendProbes, not in a snapshot");
   const auto type = storedTypeOf(p.dtype);
   if (!type)
     return invalidArgument(std::string(sectionName(c.section)) + " array '" + p.name + "': dtype " +
@@ -333,7 +336,39 @@ Status snapshotChunks(const std::string& jobId, const compute::ParticleSnapshot&
   return Status::ok();
 }
 
+std::string probesCsvPathFor(const std::string& h5Path) {
+  const std::string stem = h5Path.size() > 3 && h5Path.compare(h5Path.size() - 3, 3, ".h5") == 0 ? h5Path.substr(0, h5Path.size() - 3) : h5Path;
+  return stem + ".probes.csv";
+}
+
+std::string SnapshotFileSink::probesCsvPath() const { return probesCsvPathFor(m_output); }
+
+// "time" then one array per probe, each in row order (FileCursor in SnapshotStore.cc sends them so).
+Status SnapshotFileSink::addProbes(const Chunk& c) {
+  const ArrayPiece& p = c.array;
+  if (p.dtype != DType::kF64 || p.shape.size() != 1 || p.data.size() != p.rows * sizeof(double))
+    return invalidArgument("probe array '" + p.name + "' must be f64 of shape (k) with whole rows");
+  std::vector<double>* target = nullptr;
+  if (p.name == "time") {
+    target = &m_probes.time;
+  } else {
+    if (m_probes.names.empty() || m_probes.names.back() != p.name) {
+      m_probes.names.push_back(p.name);
+      m_probes.units.push_back(p.unit);
+      m_probes.points.push_back(c.point.value_or(Vec3d{0, 0, 0}));
+      m_probes.values.emplace_back();
+    }
+    target = &m_probes.values.back();
+  }
+  if (p.firstRow != target->size()) return invalidArgument("probe array '" + p.name + "': pieces out of order");
+  const std::size_t at = target->size();
+  target->resize(at + p.rows);
+  std::memcpy(target->data() + at, p.data.data(), p.data.size());
+  return Status::ok();
+}
+
 Status SnapshotFileSink::add(const Chunk& chunk) {
+  if (chunk.section == Section::kProbes) return addProbes(chunk);
   if (!m_assembler) {
     auto a = ChunkAssembler::create(m_output + ".part", chunk);
     if (!a) return a.status();
@@ -355,6 +390,13 @@ Status SnapshotFileSink::finish() {
   if (Status st = writer.value()->commit(m_assembler->staging(), nullptr); !st) return st;
   if (Status st = writer.value()->close(); !st) return st;
   m_assembler.reset();
+  if (m_probes.names.empty()) return Status::ok();
+  for (const auto& v : m_probes.values)
+    if (v.size() != m_probes.time.size()) return invalidArgument(m_output + ": the probe series arrived incomplete");
+  if (Status st = writeProbeSeries(m_output, m_probes); !st) return st;
+  std::ofstream csv(probesCsvPath());
+  csv << probeSeriesCsv(m_probes);
+  if (!csv) return ioError("cannot write " + probesCsvPath());
   return Status::ok();
 }
 

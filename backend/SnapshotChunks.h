@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "backend/fields/GridFields.h"
+#include "backend/store/ProbeSeries.h"
 #include "backend/store/SnapshotFile.h"
 #include "common/Status.h"
 #include "compute/particles/ParticleSnapshot.h"
@@ -32,7 +33,7 @@ namespace pflow::backend {
 inline constexpr std::size_t kMaxChunkBytes = std::size_t(1) << 20;  // payload bytes per chunk
 inline constexpr std::size_t kMaxGeometryBytes = std::size_t(256) << 20;
 
-enum class Section { kParticles, kGeometry, kGrid };
+enum class Section { kParticles, kGeometry, kGrid, kProbes };
 enum class DType { kF64, kF32, kI32, kU32, kI64, kU64, kString };  // pflow.common.v1.DType without UNSPECIFIED
 
 const char* sectionName(Section s);
@@ -60,6 +61,7 @@ struct Chunk {
   Section section = Section::kParticles;
   ArrayPiece array;
   std::optional<GridSpec> grid;  // kGrid only
+  std::optional<Vec3d> point;    // kProbes, a probe's array: where it samples [m]
 };
 
 using PieceSink = std::function<Status(ArrayPiece&&)>;
@@ -127,12 +129,20 @@ class SnapshotFileSink {
  public:
   explicit SnapshotFileSink(std::string outputH5) : m_output(std::move(outputH5)) {}
   Status add(const Chunk& chunk);
-  // INVALID_ARGUMENT if nothing arrived or an array is incomplete; otherwise writes the file.
+  // INVALID_ARGUMENT if nothing arrived or an array is incomplete; otherwise writes the file, and, when probe
+  // chunks came, its /probes and the same series as CSV in probesCsvPath().
   Status finish();
+  std::string probesCsvPath() const;  // <output without .h5>.probes.csv
+  std::size_t probeSamples() const { return m_probes.time.size(); }
 
  private:
+  Status addProbes(const Chunk& chunk);
   std::string m_output;
   std::unique_ptr<ChunkAssembler> m_assembler;
+  ProbeSeries m_probes;
 };
+
+// The CSV beside a snapshot file: out.h5 -> out.probes.csv.
+std::string probesCsvPathFor(const std::string& h5Path);
 
 }  // namespace pflow::backend

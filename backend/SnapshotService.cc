@@ -92,6 +92,7 @@ class SnapshotStreamer final : public grpc::ServerWriteReactor<v1::SnapshotChunk
     m_request.fields.assign(request.fields().begin(), request.fields().end());
     m_request.includeGrid = request.include_grid();
     m_request.includeGeometry = request.include_geometry();
+    m_request.includeProbes = request.include_probes();
     m_jobId = request.job_id();
     m_executor.post([this] { open(); });
   }
@@ -172,6 +173,31 @@ grpc::ServerUnaryReactor* SnapshotService::ListSnapshots(grpc::CallbackServerCon
 grpc::ServerWriteReactor<v1::SnapshotChunk>* SnapshotService::ReadSnapshot(grpc::CallbackServerContext*,
                                                                           const v1::ReadSnapshotRequest* request) {
   return new SnapshotStreamer(m_store, *m_executor, *request);
+}
+
+grpc::ServerUnaryReactor* SnapshotService::AppendProbes(grpc::CallbackServerContext* context, const v1::AppendProbesRequest* request,
+                                                        v1::AppendProbesResponse* response) {
+  auto* reactor = context->DefaultReactor();
+  m_executor->post([this, context, reactor, request, response] {
+    if (context->IsCancelled()) {  // the caller's deadline passed while the call waited for the executor
+      reactor->Finish(grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, "AppendProbes waited past its deadline"));
+      return;
+    }
+    auto samples = probesFromProto(*request);
+    if (!samples) {
+      reactor->Finish(rpc::toGrpc(samples.status()));
+      return;
+    }
+    auto stored = m_store.appendProbes(request->job_id(), samples.value());
+    if (!stored) {
+      spdlog::warn("AppendProbes: {}", stored.status().toString());
+      reactor->Finish(rpc::toGrpc(stored.status()));
+      return;
+    }
+    response->set_samples(stored.value());
+    reactor->Finish(grpc::Status::OK);
+  });
+  return reactor;
 }
 
 }  // namespace pflow::backend

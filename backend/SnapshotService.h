@@ -3,7 +3,7 @@
 //    starts; the client's half-close commits; a cancelled or failed stream aborts (no partial snapshot).
 //  * ReadSnapshot: SnapshotStreamer (ServerWriteReactor): reads the next chunk (<= 1 MiB, on the executor) only
 //    after the previous write completed, so a stream holds one chunk in memory whatever the snapshot's size.
-//  * ListSnapshots: unary (DefaultReactor).
+//  * ListSnapshots, AppendProbes: unary (DefaultReactor), the store's work on the executor.
 // Reactions never block: HDF5 work runs on a small executor owned by the service (which must outlive the server).
 #pragma once
 #include <grpcpp/grpcpp.h>
@@ -29,6 +29,8 @@ class SnapshotService final : public v1::SnapshotService::CallbackService {
                                           v1::ListSnapshotsResponse* response) override;
   grpc::ServerWriteReactor<v1::SnapshotChunk>* ReadSnapshot(grpc::CallbackServerContext* context,
                                                            const v1::ReadSnapshotRequest* request) override;
+  grpc::ServerUnaryReactor* AppendProbes(grpc::CallbackServerContext* context, const v1::AppendProbesRequest* request,
+                                         v1::AppendProbesResponse* response) override;
 
  private:
   SnapshotStore& m_store;

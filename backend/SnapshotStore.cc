@@ -40,12 +40,13 @@ class FileCursor final : public SnapshotCursor {
   };
 
   FileCursor(std::string jobId, std::unique_ptr<SnapshotReader> reader, StepMeta meta, std::vector<Item> items,
-             bool geometry)
+             bool geometry, std::optional<ProbeSeries> probes)
       : m_jobId(std::move(jobId)),
         m_reader(std::move(reader)),
         m_meta(std::move(meta)),
         m_items(std::move(items)),
-        m_geometry(geometry) {}
+        m_geometry(geometry),
+        m_probes(std::move(probes)) {}
 
   const StepMeta& meta() const override { return m_meta; }
 
@@ -95,6 +96,33 @@ class FileCursor final : public SnapshotCursor {
       m_pieces.pop_front();
       return std::optional<Chunk>(std::move(c));
     }
+    // The probe series: "time", then each probe's values, in pieces of whole rows.
+    if (m_probes) {
+      const ProbeSeries& s = *m_probes;
+      while (m_probe <= s.names.size()) {
+        const std::vector<double>& v = m_probe == 0 ? s.time : s.values[m_probe - 1];
+        if (m_probeRow >= v.size() && !(v.empty() && m_probeRow == 0 && !m_probeEmptySent)) {
+          ++m_probe;
+          m_probeRow = 0;
+          m_probeEmptySent = false;
+          continue;
+        }
+        Chunk c = header(Section::kProbes);
+        ArrayPiece& p = c.array;
+        p.name = m_probe == 0 ? "time" : s.names[m_probe - 1];
+        p.unit = m_probe == 0 ? "s" : s.units[m_probe - 1];
+        if (m_probe > 0) c.point = s.points[m_probe - 1];
+        p.dtype = DType::kF64;
+        p.shape = {v.size()};
+        p.firstRow = m_probeRow;
+        p.rows = std::min<std::uint64_t>(rowsPerPiece(sizeof(double)), v.size() - m_probeRow);
+        p.data.assign(reinterpret_cast<const char*>(v.data() + m_probeRow), p.rows * sizeof(double));
+        m_probeRow += p.rows;
+        m_probeEmptySent = true;
+        return std::optional<Chunk>(std::move(c));
+      }
+      m_probes.reset();
+    }
     return std::optional<Chunk>();
   }
 
@@ -117,6 +145,10 @@ class FileCursor final : public SnapshotCursor {
   std::deque<ArrayPiece> m_pieces;  // geometry, cut once it is reached
   std::size_t m_item = 0;
   std::uint64_t m_row = 0;
+  std::optional<ProbeSeries> m_probes;  // still to send
+  std::size_t m_probe = 0;              // 0: time, k: probe k - 1
+  std::uint64_t m_probeRow = 0;
+  bool m_probeEmptySent = false;        // an empty series still sends one empty piece per array
 };
 
 }  // namespace
@@ -317,6 +349,25 @@ Result<std::optional<GridFields>> SnapshotStore::computeGrid(SnapshotStaging& st
   const bool withKind = fluid && kind != nullptr && hasShape(kind, m.n, 1);
   std::vector<double> x, v, r, w, p, rho, k;
   std::vector<std::uint8_t> excluded;
+  // A planar (2D) fluid: every fluid particle at one y (GridFields.h); found in a pass of its own.
+  bool planar = false;
+  if (fluid) {
+    bool any = false, same = true;
+    double y0 = 0;
+    for (std::uint64_t first = 0; first < m.n && same; first += kGridBlockRows) {
+      const std::uint64_t rows = std::min(kGridBlockRows, m.n - first);
+      if (Status st = staging.readParticleRowsF64("position", first, rows, x); !st) return st;
+      if (withKind)
+        if (Status st = staging.readParticleRowsF64("kind", first, rows, k); !st) return st;
+      for (std::uint64_t i = 0; i < rows && same; ++i) {
+        if ((withKind && k[i] != 0) || !std::isfinite(x[3 * i + 1])) continue;
+        if (any && x[3 * i + 1] != y0) same = false;
+        y0 = x[3 * i + 1];
+        any = true;
+      }
+    }
+    planar = any && same;
+  }
   auto load = [&](std::uint64_t first, std::uint64_t rows, bool velocities) -> Result<ParticleBlock> {
     if (Status st = staging.readParticleRowsF64("position", first, rows, x); !st) return st;
     if (fluid) {
@@ -328,7 +379,7 @@ Result<std::optional<GridFields>> SnapshotStore::computeGrid(SnapshotStaging& st
       excluded.assign(rows, 0);
       for (std::uint64_t i = 0; i < rows; ++i) {
         excluded[i] = withKind && k[i] != 0;  // boundary particles are not fluid
-        r[i] = excluded[i] ? 0.0 : fluidRadius(w[i], rho[i]);
+        r[i] = excluded[i] ? 0.0 : fluidRadius(w[i], rho[i], planar);
       }
     } else if (Status st = staging.readParticleRowsF64("radius", first, rows, r); !st) {
       return st;
@@ -355,12 +406,15 @@ Result<std::optional<GridFields>> SnapshotStore::computeGrid(SnapshotStaging& st
     bounds.add(b->n, b->position, b->radius);
   }
   if (bounds.count == 0) return std::optional<GridFields>();  // no fluid particle (or none usable)
+  const double plane = 0.5 * (bounds.lo.y + bounds.hi.y);
+  if (planar) bounds.flattenY();
   auto spec = gridCovering(bounds, m_options.gridCellSize);
   if (!spec) {
     spdlog::warn("step {}: no grid fields: {}", m.step, spec.status().message());
     return std::optional<GridFields>();
   }
-  GridAccumulator acc(spec.value(), withPressure, fluid);
+  if (planar) spec->origin.y = plane - 0.5 * spec->cellSize;  // the one layer of cells centred on the plane
+  GridAccumulator acc(spec.value(), withPressure, fluid, planar);
   for (int pass = 0; pass < (fluid ? 1 : 2); ++pass) {
     for (std::uint64_t first = 0; first < m.n; first += kGridBlockRows) {
       auto b = load(first, std::min(kGridBlockRows, m.n - first), true);
@@ -439,8 +493,26 @@ Result<std::unique_ptr<SnapshotCursor>> SnapshotStore::openRead(const std::strin
       items.push_back({Section::kGrid, a});
     }
   const bool geometry = request.includeGeometry && reader.value()->hasGeometry();
-  return std::unique_ptr<SnapshotCursor>(
-      new FileCursor(jobId, std::move(reader.value()), std::move(meta.value()), std::move(items), geometry));
+  std::optional<ProbeSeries> probes;
+  if (request.includeProbes) {
+    auto read = reader.value()->readProbes();
+    if (read) probes = std::move(read).value();
+    else if (read.status().code() != StatusCode::kNotFound) return read.status();
+  }
+  return std::unique_ptr<SnapshotCursor>(new FileCursor(jobId, std::move(reader.value()), std::move(meta.value()), std::move(items),
+                                                        geometry, std::move(probes)));
+}
+
+Result<std::uint64_t> SnapshotStore::appendProbes(const std::string& jobId, const ProbeSeries& samples) {
+  std::unique_lock<std::mutex> lock;
+  auto j = job(jobId, JobMode::kCreate, lock);
+  if (!j) return j.status();
+  if (Status st = j.value()->writer->appendProbes(samples); !st) return st;
+  auto reader = SnapshotReader::open(jobFile(jobId));
+  if (!reader) return reader.status();
+  auto stored = reader.value()->readProbes();
+  if (!stored) return stored.status();
+  return std::uint64_t(stored->time.size());
 }
 
 Status SnapshotStore::readChunks(const std::string& jobId, const ReadRequest& request,

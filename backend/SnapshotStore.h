@@ -58,6 +58,7 @@ struct ReadRequest {
   std::vector<std::string> fields;   // particle arrays to send; empty = all
   bool includeGrid = false;
   bool includeGeometry = false;
+  bool includeProbes = false;        // the job's probe series after everything else (Section::kProbes)
 };
 
 // Reads one snapshot piece by piece: particle arrays (in stored order or the order asked), then grid fields,
@@ -110,6 +111,9 @@ class SnapshotStore {
   // NOT_FOUND for an unknown job, a step that does not exist, or a job without snapshots when the last is asked;
   // INVALID_ARGUMENT for a field the snapshot does not have (the message lists the ones it has).
   Result<std::unique_ptr<SnapshotCursor>> openRead(const std::string& jobId, const ReadRequest& request);
+  // Appends samples to the job's /probes (SnapshotWriter::appendProbes); creates the job on first use. Returns
+  // the samples stored in all.
+  Result<std::uint64_t> appendProbes(const std::string& jobId, const ProbeSeries& samples);
   // Streams a snapshot through `sink`, one chunk (<= 1 MiB of data) at a time; stops at the first error.
   Status readChunks(const std::string& jobId, const ReadRequest& request, const std::function<Status(Chunk&&)>& sink);
 

@@ -309,7 +309,10 @@ int watchJob(const Endpoints& e, const std::string& id, bool json) {
 
 int fetchSnapshot(const Endpoints& e, const FetchOptions& o, bool json) {
   auto client = backend::makeGrpcBackendClient(e.backend);
-  const Status s = client->fetch(o.jobId, o.step, o.output, o.fields, o.grid, o.geometry);
+  const std::string csv = backend::probesCsvPathFor(o.output);
+  std::error_code ec;
+  if (o.probes) fs::remove(csv, ec);  // replaced like the output file: a leftover would pass for this job's
+  const Status s = client->fetch(o.jobId, o.step, o.output, o.fields, o.grid, o.geometry, o.probes);
   if (!s.isOk()) {
     std::string msg = s.message();
     if (s.code() == StatusCode::kUnavailable || s.code() == StatusCode::kDeadlineExceeded)
@@ -318,8 +321,15 @@ int fetchSnapshot(const Endpoints& e, const FetchOptions& o, bool json) {
     return exitCodeFor(s);
   }
   const std::string xmf = fs::path(o.output).replace_extension(".xmf").string();
-  if (json) std::printf("%s\n", nlohmann::json{{"job", o.jobId}, {"output", o.output}, {"xdmf", xmf}}.dump().c_str());
-  else std::printf("job %s: snapshot written to %s (open %s in ParaView)\n", o.jobId.c_str(), o.output.c_str(), xmf.c_str());
+  const bool probes = o.probes && fs::exists(csv, ec);  // the fetch wrote it (an SPH job with probes)
+  if (json) {
+    nlohmann::json j{{"job", o.jobId}, {"output", o.output}, {"xdmf", xmf}};
+    if (probes) j["probes_csv"] = csv;
+    std::printf("%s\n", j.dump().c_str());
+  } else {
+    std::printf("job %s: snapshot written to %s (open %s in ParaView)\n", o.jobId.c_str(), o.output.c_str(), xmf.c_str());
+    if (probes) std::printf("job %s: probe and gauge series in %s (/probes) and %s\n", o.jobId.c_str(), o.output.c_str(), csv.c_str());
+  }
   return kExitOk;
 }
 

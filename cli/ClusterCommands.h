@@ -31,6 +31,7 @@ struct FetchOptions {
   std::vector<std::string> fields;
   bool grid = true;
   bool geometry = true;
+  bool probes = true;  // an SPH job's probe series: /probes in the file and <output>.probes.csv
 };
 
 // Each prints its result (a table or, with json, one JSON object) and returns the process exit code.

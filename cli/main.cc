@@ -71,7 +71,7 @@ int main(int argc, char** argv) {
   watchCmd->add_option("id", jobId, "job id")->required();
   watchCmd->add_flag("--json", qjson, "print one JSON object per event");
   pflow::cli::FetchOptions fetch;
-  bool fetchLast = false, noGrid = false;
+  bool fetchLast = false, noGrid = false, noProbes = false;
   std::int64_t fetchStep = -1;
   auto* fetchCmd = app.add_subcommand("fetch", "download a job's snapshot from the back-end into an HDF5 file (+ .xmf)");
   fetchCmd->add_option("id", fetch.jobId, "job id")->required();
@@ -80,6 +80,7 @@ int main(int argc, char** argv) {
   fetchCmd->add_option("-o,--output", fetch.output, "output HDF5 file")->required();
   fetchCmd->add_option("--fields", fetch.fields, "particle fields (default: all)");
   fetchCmd->add_flag("--no-grid", noGrid, "leave out the grid fields");
+  fetchCmd->add_flag("--no-probes", noProbes, "leave out an SPH job's probe series (else /probes and OUTPUT.probes.csv)");
   fetchCmd->add_flag("--json", qjson, "print JSON");
 #endif
 
@@ -96,6 +97,7 @@ int main(int argc, char** argv) {
   if (*fetchCmd) {
     if (fetchStep >= 0) fetch.step = fetchStep;
     fetch.grid = !noGrid;
+    fetch.probes = !noProbes;
     return pflow::cli::fetchSnapshot(endpoints, fetch, qjson);
   }
 #endif

@@ -39,12 +39,7 @@ double bytesPerParticle(const compute::SimulationSettings& sim, int historySlots
 
 Result<SceneSummary> summarize(const LoadedScene& scene) {
   const compute::RunConfig& c = scene.config;
-  // The services' model (this summary, the manager's device count, the worker's loop) is DEM's so far: an SPH
-  // scene is refused with the way to run it rather than summarised as an empty granular scene.
-  if (c.solver == compute::Solver::kSph)
-    return Status(StatusCode::kFailedPrecondition,
-                  "solver: sph: SPH scenes run with `pflow run` (locally, CPU or GPU) or pflow-sph-bench under mpirun; "
-                  "the cluster services (pflow submit) do not run them yet");
+  if (c.solver == compute::Solver::kSph) return summarizeSph(scene);
   SceneSummary s;
   const auto& p = c.particles;
   s.particles = p.size();
@@ -106,7 +101,8 @@ std::string toJson(const SceneSummary& s) {
                            {"softening", p.softening}, {"skin_fraction", p.skinFraction},
                            {"rebuild_interval", p.rebuildInterval}, {"worst_error", p.worstError},
                            {"wall_s_per_sim_s", p.cost}, {"problems", p.problems}});
-    const nlohmann::json j{                          {"particles", s.particles},
+    const nlohmann::json j{{"solver", s.solver},
+                          {"particles", s.particles},
                           {"radius_min_m", s.minRadius},
                           {"radius_max_m", s.maxRadius},
                           {"solid_volume_m3", s.solidVolume},

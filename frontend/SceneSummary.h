@@ -13,6 +13,7 @@
 namespace pflow::frontend {
 
 struct SceneSummary {
+  std::string solver = "dem";  // "dem" or "sph" (SphSummary.cc: sets are the fluid and the wall particles)
   std::size_t particles = 0;
   double minRadius = 0, maxRadius = 0;  // [m]
   double solidVolume = 0;               // [m^3]
@@ -41,6 +42,8 @@ struct SceneSummary {
 };
 
 Result<SceneSummary> summarize(const LoadedScene& scene);
+// The SPH scene's summary (summarize() calls it for solver: sph).
+Result<SceneSummary> summarizeSph(const LoadedScene& scene);
 
 // One JSON object (SI units in the key names: radius_min_m, dt_s, ...), as `pflow validate --json` prints it.
 std::string toJson(const SceneSummary& summary);

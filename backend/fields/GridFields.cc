@@ -104,14 +104,15 @@ Result<GridSpec> gridCovering(const ParticleBounds& bounds, double cellSize) {
   return invalidArgument("particles span too large a box for a grid");
 }
 
-GridAccumulator::GridAccumulator(const GridSpec& spec, bool withPressure, bool fluid)
+GridAccumulator::GridAccumulator(const GridSpec& spec, bool withPressure, bool fluid, bool planar)
     : m_spec(spec),
       m_volume(spec.cellCount(), 0.0),
       m_weight(spec.cellCount(), 0.0),
       m_momentum(3 * spec.cellCount(), 0.0),
       m_fluct(fluid ? 0 : spec.cellCount(), 0.0),
       m_pressure(withPressure ? spec.cellCount() : 0, 0.0),
-      m_fluid(fluid) {}
+      m_fluid(fluid),
+      m_planar(planar) {}
 
 bool GridAccumulator::usable(const ParticleBlock& b, std::size_t p) const {
   if (!m_pressure.empty() && (b.pressure == nullptr || !std::isfinite(b.pressure[p]))) return false;
@@ -125,7 +126,8 @@ bool GridAccumulator::usable(const ParticleBlock& b, std::size_t p) const {
 // Calls f(cell, fraction) for every cell the particle's equal-volume cube overlaps (fraction of the cube's volume).
 template <class F>
 void GridAccumulator::forEachOverlap(const ParticleBlock& b, std::size_t p, F&& f) const {
-  const double a = equalVolumeCubeSide(b.radius[p]);
+  // Planar: the square of the disc's area in x-z, across the grid's cells in y (each a fraction 1 of it).
+  const double a = m_planar ? std::sqrt(std::numbers::pi) * b.radius[p] : equalVolumeCubeSide(b.radius[p]);
   const double h = m_spec.cellSize;
   const double origin[3] = {m_spec.origin.x, m_spec.origin.y, m_spec.origin.z};
   // Per axis: the cells [first, last] touched and the fraction of the side in each (at most a few cells).
@@ -134,6 +136,13 @@ void GridAccumulator::forEachOverlap(const ParticleBlock& b, std::size_t p, F&& 
   int span[3];
   double frac[3][kMaxSpan];
   for (int d = 0; d < 3; ++d) {
+    if (m_planar && d == 1) {  // every layer in y takes the whole particle (a planar grid has one)
+      first[d] = 0;
+      span[d] = 1;
+      frac[d][0] = 1.0;
+      if (m_spec.cells[1] != 1) return;  // not a planar grid: nothing sensible to add
+      continue;
+    }
     const double lo = (b.position[3 * p + d] - 0.5 * a - origin[d]) / h;  // in cell units
     const double hi = (b.position[3 * p + d] + 0.5 * a - origin[d]) / h;
     const double n = m_spec.cells[d];
@@ -172,7 +181,7 @@ void GridAccumulator::addMoments(const ParticleBlock& b) {
       continue;
     }
     const double r = b.radius[p];
-    const double volume = sphereVolume(r);
+    const double volume = m_planar ? std::numbers::pi * r * r : sphereVolume(r);  // planar: the area
     const double mass = b.mass != nullptr ? b.mass[p] : r * r * r;
     const double* v = b.velocity + 3 * p;
     forEachOverlap(b, p, [&](std::size_t c, double f) {
@@ -213,7 +222,8 @@ GridFields GridAccumulator::finish() && {
   if (!m_meansDone) endMoments();
   GridFields out;
   out.spec = m_spec;
-  const double cellVolume = m_spec.cellSize * m_spec.cellSize * m_spec.cellSize;
+  // Planar: areas over the cell's x-z face.
+  const double cellVolume = m_spec.cellSize * m_spec.cellSize * (m_planar ? 1.0 : m_spec.cellSize);
   out.solidFraction = std::move(m_volume);
   for (double& v : out.solidFraction) v /= cellVolume;
   out.fluid = m_fluid;
@@ -233,7 +243,7 @@ namespace {
 struct Prepared {
   std::vector<double> position, velocity, radius, mass, pressure;
   std::vector<std::uint8_t> excluded;
-  bool fluid = false;
+  bool fluid = false, planar = false;
   ParticleBlock block(std::size_t n) const {
     return {n,
             position.data(),
@@ -277,17 +287,31 @@ Result<Prepared> prepare(const ParticleSnapshot& snapshot, bool needVelocity) {
   const SnapshotArray* kind = snapshot.find("kind");
   if (kind != nullptr && (kind->type != ScalarType::kI32 || kind->components != 1 || kind->data.size() != 4 * snapshot.n))
     return invalidArgument("grid fields need 'kind' as one i32 per particle");
-  for (std::size_t i = 0; i < snapshot.n; ++i) {
-    p.excluded[i] = kind != nullptr && kind->as<std::int32_t>()[i] != 0;
-    p.radius[i] = p.excluded[i] ? 0.0 : fluidRadius(p.mass[i], density.value()[i]);
-  }
+  for (std::size_t i = 0; i < snapshot.n; ++i) p.excluded[i] = kind != nullptr && kind->as<std::int32_t>()[i] != 0;
+  p.planar = planarFluid(snapshot.n, p.position.data(), p.excluded.data());
+  for (std::size_t i = 0; i < snapshot.n; ++i) p.radius[i] = p.excluded[i] ? 0.0 : fluidRadius(p.mass[i], density.value()[i], p.planar);
   return p;
 }
 
 }  // namespace
 
-double fluidRadius(double mass, double density) {
+bool planarFluid(std::size_t n, const double* position, const std::uint8_t* excluded) {
+  bool any = false;
+  double y = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (excluded != nullptr && excluded[i]) continue;
+    const double yi = position[3 * i + 1];
+    if (!std::isfinite(yi)) continue;
+    if (any && yi != y) return false;
+    y = yi;
+    any = true;
+  }
+  return any;
+}
+
+double fluidRadius(double mass, double density, bool planar) {
   if (!(mass > 0) || !(density > 0) || !std::isfinite(mass / density)) return 0;
+  if (planar) return std::sqrt(mass / (std::numbers::pi * density));
   return std::cbrt(3.0 * mass / (4.0 * std::numbers::pi * density));
 }
 
@@ -296,7 +320,7 @@ Result<GridFields> computeGridFields(const ParticleSnapshot& snapshot, const Gri
   auto p = prepare(snapshot, true);
   if (!p) return p.status();
   const ParticleBlock block = p->block(snapshot.n);
-  GridAccumulator acc(spec, block.pressure != nullptr, p->fluid);
+  GridAccumulator acc(spec, block.pressure != nullptr, p->fluid, p->planar);
   acc.addMoments(block);
   acc.endMoments();
   acc.addFluctuations(block);
@@ -308,8 +332,11 @@ Result<GridFields> computeGridFields(const ParticleSnapshot& snapshot, double ce
   if (!p) return p.status();
   ParticleBounds bounds;
   bounds.add(snapshot.n, p->position.data(), p->radius.data());
+  const double y = 0.5 * (bounds.lo.y + bounds.hi.y);
+  if (p->planar) bounds.flattenY();
   auto spec = gridCovering(bounds, cellSize);
   if (!spec) return spec.status();
+  if (p->planar) spec->origin.y = y - 0.5 * spec->cellSize;  // the one layer of cells centred on the plane
   return computeGridFields(snapshot, spec.value());
 }
 

@@ -54,6 +54,11 @@ struct ParticleBounds {
   double maxRadius = 0;
   std::size_t count = 0;  // particles that entered the box (finite position and radius > 0)
   void add(std::size_t n, const double* position, const double* radius);
+  // A planar fluid's box: one cell deep in y whatever the radius (the cells stay cubic, of the x-z size).
+  void flattenY() {
+    const double y = 0.5 * (lo.y + hi.y);
+    lo.y = hi.y = y;
+  }
 };
 
 // A grid of cubic cells of `cellSize` (<= 0: 4 x the largest radius) whose lower corner is bounds.lo and which
@@ -76,7 +81,9 @@ struct ParticleBlock {
 // A fluid's grid (an SPH snapshot: `mass`, `density` and `pressure`, no `radius`) is the same computation with
 // each fluid particle's volume V = m / rho as its sphere (r = (3V / 4 pi)^(1/3)) and the boundary particles
 // (kind != 0) left out: fluid_fraction, mean_velocity and mean_pressure (the mass-weighted mean, Pa); no
-// granular temperature.
+// granular temperature. A planar (2D) fluid, every fluid particle at one y, has m / rho = A, its area in the x-z
+// plane per metre of depth: each particle is the square of side sqrt(A) in x-z across the grid's one layer of
+// cells in y, and the fluid fraction is sum f A / h^2 (the `radius` such a block carries is sqrt(A / pi)).
 struct GridFields {
   GridSpec spec;
   bool fluid = false;                       // solidFraction is the fluid fraction; no granular temperature
@@ -93,8 +100,8 @@ struct GridFields {
 class GridAccumulator {
  public:
   // withPressure: the blocks carry pressure, and mean_pressure is computed; fluid: the fraction is a fluid's and
-  // the fluctuation pass is not needed (finish() leaves granularTemperature empty).
-  explicit GridAccumulator(const GridSpec& spec, bool withPressure = false, bool fluid = false);
+  // the fluctuation pass is not needed (finish() leaves granularTemperature empty); planar: a 2D fluid (above).
+  explicit GridAccumulator(const GridSpec& spec, bool withPressure = false, bool fluid = false, bool planar = false);
   void addMoments(const ParticleBlock& block);
   void endMoments();  // mean velocities from the first pass
   void addFluctuations(const ParticleBlock& block);
@@ -111,13 +118,16 @@ class GridAccumulator {
   std::vector<double> m_momentum;  // sum w v (3 per cell), then <v>
   std::vector<double> m_fluct;   // sum w |v - <v>|^2
   std::vector<double> m_pressure;  // sum w p (with pressure)
-  bool m_fluid = false;
+  bool m_fluid = false, m_planar = false;
   std::size_t m_skipped = 0;
   bool m_meansDone = false;
 };
 
-// The radius of the sphere of a fluid particle's volume m / rho; 0 (left out) when either is not > 0.
-double fluidRadius(double mass, double density);
+// The radius of the sphere of a fluid particle's volume m / rho (planar: of the disc of area m / rho); 0 (left
+// out) when either is not > 0.
+double fluidRadius(double mass, double density, bool planar = false);
+// True when every row not excluded (with a finite y) has the same y: a planar (2D) fluid.
+bool planarFluid(std::size_t n, const double* position, const std::uint8_t* excluded);
 
 // Side of the cube with the volume of a sphere of radius r: (4 pi / 3)^(1/3) r.
 double equalVolumeCubeSide(double r);

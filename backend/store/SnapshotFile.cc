@@ -24,6 +24,13 @@
 #endif
 
 namespace pflow::backend {
+
+// HDF5 is built without thread safety: every entry point holds this lock (ProbeSeries.cc too).
+std::recursive_mutex& hdf5Mutex() {
+  static std::recursive_mutex mutex;
+  return mutex;
+}
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -43,11 +50,6 @@ constexpr hsize_t kMaxIndexChunk = 65536;
 
 static_assert(sizeof(Vec3d) == 3 * sizeof(double), "Vec3d must be three packed doubles");
 
-// HDF5 is built without thread safety: every entry point holds this lock.
-std::recursive_mutex& hdf5Mutex() {
-  static std::recursive_mutex mutex;
-  return mutex;
-}
 
 // Errors come back as Status; HDF5 must not print its error stack to stderr.
 void quietHdf5() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
@@ -1152,6 +1154,15 @@ Status SnapshotWriter::flush() {
   return d.writeXdmf();
 }
 
+Status SnapshotWriter::appendProbes(const ProbeSeries& samples) {
+  std::lock_guard lock(hdf5Mutex());
+  quietHdf5();
+  Impl& d = *m_impl;
+  if (Status st = d.checkOpen(); !st) return st;
+  if (Status st = appendProbeSeries(d.file.get(), samples, d.path); !st) return st;
+  return d.flushFile();
+}
+
 Status SnapshotWriter::close() {
   std::lock_guard lock(hdf5Mutex());
   quietHdf5();
@@ -1784,6 +1795,12 @@ Result<GridFields> SnapshotReader::readGrid(std::int64_t step) const {
   if (has(kMeanPressureName))
     if (Status st = load(kMeanPressureName, g.meanPressure, 1); !st) return st;
   return g;
+}
+
+Result<ProbeSeries> SnapshotReader::readProbes() const {
+  std::lock_guard lock(hdf5Mutex());
+  quietHdf5();
+  return readProbeSeries(m_impl->file.get(), m_impl->path);
 }
 
 }  // namespace pflow::backend

@@ -47,6 +47,7 @@
 #include <vector>
 
 #include "backend/fields/GridFields.h"
+#include "backend/store/ProbeSeries.h"
 #include "common/Status.h"
 #include "compute/particles/ParticleSnapshot.h"
 
@@ -155,6 +156,9 @@ class SnapshotWriter {
   // (`grid` when given, else the staged grid arrays if any). ALREADY_EXISTS if the step is stored; INVALID_ARGUMENT
   // for an incomplete or invalid snapshot (no 3-component float `position`). On any error nothing is left behind.
   Status commit(const SnapshotStaging& staged, const GridFields* grid);
+  // Appends samples to /probes (ProbeSeries.h), creating it on the first call; the probes' names must be the
+  // ones already there, in the same order (INVALID_ARGUMENT otherwise).
+  Status appendProbes(const ProbeSeries& samples);
   // Flushes HDF5 buffers and rewrites the sidecar (writes already do both; cheap to call again).
   Status flush();
   // Closes the file and reports any error; later writes are FAILED_PRECONDITION. The destructor does the same.
@@ -196,6 +200,8 @@ class SnapshotReader {
   Result<GridFields> readGrid(std::int64_t step) const;
   // NOT_FOUND if the file has no /geometry.
   Result<compute::GeometrySnapshot> readGeometry() const;
+  // The whole /probes series; NOT_FOUND if the file has none.
+  Result<ProbeSeries> readProbes() const;
 
   const std::string& path() const;
 

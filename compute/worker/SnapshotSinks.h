@@ -4,6 +4,7 @@
 #include <string>
 
 #include "common/Status.h"
+#include "backend/store/ProbeSeries.h"
 #include "compute/particles/ParticleSnapshot.h"
 
 namespace pflow::worker {
@@ -13,6 +14,8 @@ class SnapshotSink {
   virtual ~SnapshotSink() = default;
   virtual Status writeGeometry(compute::GeometrySnapshot geometry) = 0;
   virtual Status write(const compute::ParticleSnapshot& snapshot) = 0;
+  // Appends probe samples (an SPH run's, since the last call) to the job's /probes.
+  virtual Status writeProbes(const backend::ProbeSeries& samples) = 0;
   virtual Status close() = 0;
 };
 

@@ -32,89 +32,17 @@
 #include "compute/sim/Simulation.h"
 #include "compute/worker/SnapshotSinks.h"
 #include "compute/worker/WorkerOptions.h"
+#include "compute/worker/WorkerRun.h"
 #include "frontend/SceneLoader.h"
 #include "pflow/manager/v1/node_registry.grpc.pb.h"
 
 namespace {
 
 using namespace pflow;
+using worker::fail;
+using worker::ProgressReporter;
 
-// SIGTERM or SIGINT (the agent stopping the job, mpirun forwarding it): stop at the next step boundary, close the
-// snapshot sink and tell the other ranks, instead of dying mid-write.
-volatile std::sig_atomic_t g_stopSignal = 0;
-void onStopSignal(int) { g_stopSignal = 1; }
-
-// Sends progress to the manager from its own thread, so a slow or unreachable manager never holds up the step
-// loop: the loop posts the latest numbers (no wait) and reads the manager's last cancel answer.
-class ProgressReporter {
- public:
-  ProgressReporter(const std::string& address, std::string jobId, double interval) : m_jobId(std::move(jobId)), m_interval(interval) {
-    if (address.empty()) return;
-    m_stub = manager::v1::NodeRegistry::NewStub(rpc::makeChannel(address));
-    m_thread = std::thread([this] { run(); });
-  }
-  ~ProgressReporter() {
-    {
-      std::lock_guard lock(m_mu);
-      m_stop = true;
-    }
-    m_cv.notify_all();
-    if (m_thread.joinable()) m_thread.join();
-  }
-  void post(const manager::v1::Progress& p, const std::string& message) {
-    std::lock_guard lock(m_mu);
-    m_latest = p;
-    m_message = message;
-    m_fresh = true;
-  }
-  bool cancelRequested() const { return m_cancel.load(std::memory_order_relaxed); }
-  // The last report, sent now and waited for (the run is over).
-  void final(const manager::v1::Progress& p, const std::string& message) {
-    if (m_stub) send(p, message);
-  }
-
- private:
-  void run() {
-    std::unique_lock lock(m_mu);
-    while (!m_stop) {
-      m_cv.wait_for(lock, std::chrono::duration<double>(m_interval), [this] { return m_stop; });
-      if (m_stop || !m_fresh) continue;
-      const manager::v1::Progress p = m_latest;
-      const std::string message = m_message;
-      m_fresh = false;
-      lock.unlock();
-      send(p, message);
-      lock.lock();
-    }
-  }
-  void send(const manager::v1::Progress& p, const std::string& message) {
-    manager::v1::ReportProgressRequest req;
-    req.set_job_id(m_jobId);
-    *req.mutable_progress() = p;
-    req.set_message(message);
-    manager::v1::ReportProgressResponse resp;
-    auto ctx = rpc::contextWithDeadline(5);
-    const grpc::Status s = m_stub->ReportProgress(ctx.get(), req, &resp);
-    if (!s.ok()) {
-      if (!m_warned) spdlog::warn("progress report to the manager failed: {} (the run goes on)", s.error_message());
-      m_warned = true;
-      return;
-    }
-    m_warned = false;
-    if (resp.cancel()) m_cancel.store(true, std::memory_order_relaxed);
-  }
-
-  std::string m_jobId;
-  double m_interval;
-  std::unique_ptr<manager::v1::NodeRegistry::Stub> m_stub;
-  std::mutex m_mu;
-  std::condition_variable m_cv;
-  manager::v1::Progress m_latest;
-  std::string m_message;
-  bool m_fresh = false, m_stop = false, m_warned = false;
-  std::atomic<bool> m_cancel{false};
-  std::thread m_thread;
-};
+void onStopSignal(int) { worker::g_stopSignal = 1; }
 
 // `particles`: over all ranks.
 manager::v1::Progress progressOf(const compute::Simulation& sim, std::int64_t totalSteps, double duration, double rate,
@@ -129,17 +57,12 @@ manager::v1::Progress progressOf(const compute::Simulation& sim, std::int64_t to
   return p;
 }
 
-int fail(int code, const std::string& message) {
-  spdlog::error("{}", message);
-  std::fprintf(stderr, "%s\n", message.c_str());  // the agent reports the last stderr line
-  return code;
-}
-
 // Runs the job on this rank; returns the exit code (the same on every rank), -1 when cancelled.
 int runRank(const worker::WorkerOptions& o, int rank, int ranks) {
   const bool lead = rank == 0;
   auto scene = frontend::loadScene((std::filesystem::path(o.modelDir) / "scene.yaml").string());
   if (!scene) return fail(1, "cannot load the model: " + scene.status().message());
+  if (scene.value().config.solver == compute::Solver::kSph) return worker::runSphRank(o, rank, ranks, scene.value());
   compute::RunConfig cfg = scene.value().config;
   if (o.threads > 0) cfg.sim.threads = o.threads;
   const worker::LeasedDevice& device = o.devices[std::size_t(rank)];
@@ -194,7 +117,7 @@ int runRank(const worker::WorkerOptions& o, int rank, int ranks) {
   auto observer = [&](const compute::Simulation& s) -> Status {
     if (s.outputDue())
       if (Status st = write(); !st.isOk()) return st;
-    int stop = (g_stopSignal || progress.cancelRequested()) ? 1 : 0;
+    int stop = (worker::g_stopSignal || progress.cancelRequested()) ? 1 : 0;
     if (domain) MPI_Allreduce(MPI_IN_PLACE, &stop, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);  // every rank stops together
     if (stop) {
       cancelled = true;

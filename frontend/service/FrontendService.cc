@@ -45,6 +45,7 @@ void toProto(const SceneSummary& s, double duration, v1::SceneSummary* out) {
   out->set_duration(duration);
   out->set_memory_bytes(s.memoryBytes);
   out->set_model(s.model.text());
+  out->set_solver(s.solver);
 }
 
 // Scene-level errors ("line L, column C: path: message" lines of the loader) as FieldErrors.

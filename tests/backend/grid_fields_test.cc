@@ -233,5 +233,37 @@ TEST(GridFields, FluidFractionVelocityAndPressureOfAnSphSnapshot) {
   EXPECT_NEAR(fluidRadius(rho * dp * dp * dp, rho), std::cbrt(3.0 / (4.0 * std::numbers::pi)) * dp, 1e-15);
 }
 
+
+// A planar (2D) fluid: mass per metre of depth rho dp^2, every particle at y = 0. Each is a dp x dp square in x-z
+// across the grid's one layer in y: cells inside the block are full, the layer is centred on the plane.
+TEST(GridFields, PlanarFluidFillsItsCells) {
+  const double dp = 0.01, rho = 1000;
+  std::vector<double> x, v, m, d;
+  for (int k = 0; k < 8; ++k)
+    for (int i = 0; i < 8; ++i) {
+      x.insert(x.end(), {(i + 0.5) * dp, 0.0, (k + 0.5) * dp});
+      v.insert(v.end(), {1.0, 0.0, 0.0});
+      m.push_back(rho * dp * dp);
+      d.push_back(rho);
+    }
+  ParticleSnapshot s;
+  s.n = m.size();
+  s.arrays = {f64Array("position", 3, x), f64Array("velocity", 3, v), f64Array("mass", 1, m), f64Array("density", 1, d)};
+  auto f = computeGridFields(s, 2 * dp);
+  ASSERT_TRUE(f) << f.status().toString();
+  EXPECT_TRUE(f->fluid);
+  EXPECT_EQ(f->spec.cells[1], 1u);
+  EXPECT_NEAR(f->spec.origin.y, -dp, 1e-15);
+  EXPECT_TRUE(f->meanPressure.empty());  // no pressure array
+  // The box starts at the block's edge minus (radius - dp/2): cells away from the edges are full.
+  double full = 0, total = 0;
+  for (std::size_t c = 0; c < f->solidFraction.size(); ++c) {
+    full = std::max(full, f->solidFraction[c]);
+    total += f->solidFraction[c] * 4 * dp * dp;
+  }
+  EXPECT_NEAR(full, 1.0, 1e-12);
+  EXPECT_NEAR(total, 64 * dp * dp, 1e-12);  // the block's area
+}
+
 }  // namespace
 }  // namespace pflow::backend

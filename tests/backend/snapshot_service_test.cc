@@ -298,6 +298,52 @@ long statusKb(pid_t pid, const char* key) {
   return -1;
 }
 
+// An SPH job's probe series: appended in two calls (the first one more than 1 MiB, so cut into several
+// requests), stored in /probes of the job's file, fetched with a snapshot into /probes and the CSV beside it;
+// probes that differ from the stored ones are refused.
+TEST_F(ServiceTest, ProbeSeriesAppendAndFetch) {
+  ASSERT_TRUE(client->writeSnapshot("sph-a", makeSnapshot(0, 10), nullptr));
+  ProbeSeries first;
+  first.names = {"P1", "H1"};
+  first.units = {"Pa", "m"};
+  first.points = {{0.8, 0.47, 0.02}, {0.5, 0.5, 0}};
+  for (int i = 0; i < 50000; ++i) first.add(1e-4 * i, {100.0 * i, 1e-3 * i});  // 1.2 MB of values with the times
+  ASSERT_TRUE(client->appendProbes("sph-a", first));
+  ProbeSeries second = probeSamples(first, first.time.size());
+  second.add(5.0, {1.0, 2.0});
+  ASSERT_TRUE(client->appendProbes("sph-a", second));
+  auto requests = probesToProto("sph-a", first);
+  ASSERT_TRUE(requests);
+  EXPECT_GE(requests->size(), 2u);
+  for (const auto& r : requests.value()) EXPECT_LE(r.time().size() + r.values().size(), kMaxChunkBytes);
+
+  const std::string out = (dir / "sph.h5").string();
+  ASSERT_TRUE(client->fetch("sph-a", std::nullopt, out, {}, false, false, true));
+  auto back = readProbeSeries(out);
+  ASSERT_TRUE(back) << back.status().toString();
+  EXPECT_EQ(back->names, first.names);
+  EXPECT_EQ(back->units, first.units);
+  EXPECT_EQ(back->points[0].y, 0.47);
+  ASSERT_EQ(back->time.size(), 50001u);
+  EXPECT_EQ(back->time.back(), 5.0);
+  EXPECT_EQ(back->values[0][49999], 100.0 * 49999);
+  EXPECT_EQ(back->values[1].back(), 2.0);
+  std::ifstream csv(probesCsvPathFor(out));
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_EQ(header, "time [s],P1 [Pa],H1 [m]");
+
+  // A fetch without probes leaves them out; other probes are refused with the reason.
+  const std::string plain = (dir / "plain.h5").string();
+  ASSERT_TRUE(client->fetch("sph-a", std::nullopt, plain, {}, false, false, false));
+  EXPECT_FALSE(readProbeSeries(plain));
+  ProbeSeries other = second;
+  other.names = {"P2", "H1"};
+  const Status refused = client->appendProbes("sph-a", other);
+  EXPECT_EQ(refused.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(refused.message().find("not the ones in /probes"), std::string::npos) << refused.message();
+}
+
 struct Child {
   pid_t pid = -1;
   int port = 0;
