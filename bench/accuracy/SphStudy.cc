@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include "common/Log.h"
@@ -37,7 +38,7 @@ std::string resolutionName(double dp) {
 
 // The dam break to Z = 4 (or t = 0.6 s): the front every step (one device reduction), its crossing times of
 // kFrontZ, the curve sampled every 0.02 in T, the wall time of the stepping alone.
-Run runOne(const SphStudyOptions& o, const std::string& sweep, double dp, double dt) {
+Run runOne(const SphStudyOptions& o, const std::string& sweep, double dp, double dt, bool mirror = false) {
   Run r;
   r.sweep = sweep;
   r.resolution = resolutionName(dp);
@@ -45,6 +46,7 @@ Run runOne(const SphStudyOptions& o, const std::string& sweep, double dp, double
   r.dt = dt;
   r.T.assign(test::kFrontZ.size(), std::nan(""));
   compute::RunConfig c = test::damBreak2D(dp, 0.6);
+  if (mirror) c = test::withMirrorWalls(c);
   c.sim.precision = o.precision;
   c.sim.threads = o.threads;
   if (dt > 0) c.sph.dt = dt;
@@ -103,8 +105,9 @@ double rmsRelativeError(const Run& r) {
   return n ? std::sqrt(sum / n) : std::nan("");
 }
 
-// Keeps the rows of `file` whose column `col` differs from `value` (another executor's), header excluded.
-std::vector<std::string> otherRows(const fs::path& file, int col, const std::string& value) {
+// Keeps the rows of `file` that this run does not replace: another executor's (column 4), or a sweep (column 0)
+// not run now. Header excluded.
+std::vector<std::string> otherRows(const fs::path& file, const std::string& executor, const std::set<std::string>& sweeps) {
   std::vector<std::string> keep;
   std::ifstream in(file);
   std::string line;
@@ -115,10 +118,9 @@ std::vector<std::string> otherRows(const fs::path& file, int col, const std::str
       continue;
     }
     std::stringstream ss(line);
-    std::string cell;
-    for (int k = 0; k <= col && std::getline(ss, cell, ','); ++k) {
-    }
-    if (cell != value) keep.push_back(line);
+    std::vector<std::string> cells;
+    for (std::string cell; cells.size() < 5 && std::getline(ss, cell, ',');) cells.push_back(cell);
+    if (cells.size() < 5 || cells[4] != executor || !sweeps.count(cells[0])) keep.push_back(line);
   }
   return keep;
 }
@@ -132,16 +134,25 @@ int runSphStudy(const SphStudyOptions& o) {
   // The resolution ladder at the CFL step, every other parameter as in examples/dam_break_2d.yaml.
   std::vector<double> ladder = {0.01, 0.005, 0.004, 0.002, 0.001};
   if (o.quick) ladder = {0.01, 0.005};
-  for (double dp : ladder) runs.push_back(runOne(o, "resolution", dp, 0));
+  auto wanted = [&](const std::string& sweep) { return o.only.empty() || o.only == sweep; };
+  std::set<std::string> sweeps;
+  if (wanted("resolution"))
+    for (double dp : ladder) runs.push_back(runOne(o, "resolution", dp, 0)), sweeps.insert("resolution");
+  // The same ladder with the tank's walls as mirrors (sph.boundary: mirror).
+  if (wanted("mirror"))
+    for (double dp : ladder) runs.push_back(runOne(o, "mirror", dp, 0, true)), sweeps.insert("mirror");
   // Seed 002's sweeps: dt at 20 x 40, and the particle count at dt = 1e-5 s.
   if (!o.quick) {
     // The seed's four steps, then larger ones until the run fails (the CFL limit at 20 x 40 is 7.6e-5 s).
-    for (double dt : {5e-4, 4e-4, 3e-4, 2e-4, 1.5e-4, 1e-4, 5e-5, 1e-5, 5e-6}) runs.push_back(runOne(o, "dt", 0.01, dt));
-    for (double dp : {0.01, 0.005, 0.004, 0.002, 0.001}) runs.push_back(runOne(o, "particles_at_1e-5", dp, 1e-5));
+    if (wanted("dt"))
+      for (double dt : {5e-4, 4e-4, 3e-4, 2e-4, 1.5e-4, 1e-4, 5e-5, 1e-5, 5e-6}) runs.push_back(runOne(o, "dt", 0.01, dt)), sweeps.insert("dt");
+    if (wanted("particles_at_1e-5"))
+      for (double dp : {0.01, 0.005, 0.004, 0.002, 0.001})
+        runs.push_back(runOne(o, "particles_at_1e-5", dp, 1e-5)), sweeps.insert("particles_at_1e-5");
   }
   fs::create_directories(o.out);
   const fs::path conv = fs::path(o.out) / "convergence.csv";
-  std::vector<std::string> keep = otherRows(conv, 4, executor);
+  std::vector<std::string> keep = otherRows(conv, executor, sweeps);
   {
     std::ofstream f(conv);
     f << "sweep,resolution,dp,dt,executor,precision,status,particles,steps,sim_time,wall_s,wall_per_sim_s";
@@ -158,11 +169,13 @@ int runSphStudy(const SphStudyOptions& o) {
       f << "," << rmsRelativeError(r) << "\n";
     }
   }
-  {
-    std::ofstream f(fs::path(o.out) / "dam_break_2d.csv");
+  // The front curves of each ladder run now: dam_break_2d.csv (boundary particles), dam_break_2d_mirror.csv.
+  for (const std::string sweep : {"resolution", "mirror"}) {
+    if (!sweeps.count(sweep)) continue;
+    std::ofstream f(fs::path(o.out) / (sweep == "mirror" ? "dam_break_2d_mirror.csv" : "dam_break_2d.csv"));
     f << "resolution,T,Z\n";
     for (const Run& r : runs)
-      if (r.sweep == "resolution")
+      if (r.sweep == sweep)
         for (const auto& [T, Z] : r.curve) f << r.resolution << "," << T << "," << Z << "\n";
   }
   std::printf("%-18s %-9s %-9s %-8s %9s %8s %9s", "sweep", "res", "dt", "status", "particles", "steps", "wall/sim");
@@ -177,7 +190,7 @@ int runSphStudy(const SphStudyOptions& o) {
   }
   std::printf("experiment (Martin & Moyce 1952, a = 2.25 in):");
   for (double t : test::kMartinMoyceT) std::printf(" %.3f", t);
-  std::printf("\nwrote %s and %s\n", conv.c_str(), (fs::path(o.out) / "dam_break_2d.csv").c_str());
+  std::printf("\nwrote %s and the front curves in %s\n", conv.c_str(), o.out.c_str());
   return 0;
 }
 

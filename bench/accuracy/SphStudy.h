@@ -16,6 +16,9 @@ struct SphStudyOptions {
   compute::Precision precision = compute::Precision::kDouble;
   std::string out = "docs/sph";
   bool quick = false;  // 20 x 40 and 40 x 80 only, no dt sweep
+  // The sweeps to run ("" every one): resolution (boundary particles), mirror (the resolution ladder with mirror
+  // walls), dt, particles_at_1e-5. Rows of the sweeps not run are kept in convergence.csv.
+  std::string only;
   int threads = 0;
 };
 

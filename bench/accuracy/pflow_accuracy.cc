@@ -255,7 +255,8 @@ int main(int argc, char** argv) {
   app.add_flag("--quick", o.quick, "a small subset (CI smoke): Chung & Ooi glass and aluminium, one restitution, the bouncing sphere");
   auto* outOpt = app.add_option("--out", o.out, "directory of study.csv, stability.csv and noise.csv (merged with what is there; "
                                                 "default docs/accuracy, with --quick build/accuracy-quick)");
-  app.add_option("--only", o.only, "run only the problems whose name starts with this (e.g. chung_ooi_1, settled_bed)");
+  app.add_option("--only", o.only, "run only the problems whose name starts with this (e.g. chung_ooi_1, settled_bed); "
+                                   "sph: one sweep (resolution, mirror, dt, particles_at_1e-5)");
   app.add_option("--threads", o.threads, "OpenMP threads (0 = all)");
   std::string solver = "dem", precision = "double";
   app.add_option("--solver", solver, "dem: the DEM problems (docs/accuracy.md); sph: the dam break's convergence (docs/sph.md)")
@@ -268,6 +269,7 @@ int main(int argc, char** argv) {
     so.precision = precision == "float" ? pflow::compute::Precision::kFloat : pflow::compute::Precision::kDouble;
     so.quick = o.quick;
     so.threads = o.threads;
+    so.only = o.only;  // --only resolution | mirror | dt | particles_at_1e-5
     so.out = outOpt->count() ? o.out : (o.quick ? "build/sph-quick" : "docs/sph");
     spdlog::set_level(spdlog::level::warn);
     return runSphStudy(so);

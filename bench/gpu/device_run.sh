@@ -2,7 +2,7 @@
 # One call on the lent GPU machine (see bench/README.md): unpack the bundle built here, run the GPU
 # tests, measure the copy bandwidth and the settled-bed throughput, print a short table last.
 # Usage (from the repository root on the device machine):
-#   bash bench/gpu/device_run.sh [tests] [sanitize] [bench] [scaling] [largest] [cpu] [cpuab] [layouts] [mpi] [model] [accuracy] [sph] [sph3d]
+#   bash bench/gpu/device_run.sh [tests] [sanitize] [bench] [scaling] [largest] [cpu] [cpuab] [layouts] [mpi] [model] [accuracy] [sph] [sph3d] [sphmirror]
 # Logs and JSON go to $OUT (or ./out).
 set -uo pipefail
 OUT=${OUT:-out}
@@ -219,6 +219,35 @@ for line in open(sys.argv[1]):
   timeout "${SPH3D_TIMEOUT:-300}" "$B/pflow" run examples/dam_break_3d.yaml --executor cuda -o "$OUT/dam_break_3d.h5" > "$OUT/sph3d_run.log" 2>&1
   summary+=("pflow run dam_break_3d rc=$? $((SECONDS - start))s $(grep -E 'done:|PERFORMANCE' "$OUT/sph3d_run.log" | tr '\n' ' ')")
   rm -f "$OUT/dam_break_3d.h5" "$OUT/dam_break_3d.xmf"
+fi
+# Mirror walls (sph.boundary: mirror): the SPH GPU tests, the 2D ladder with mirror walls against Martin & Moyce,
+# SPHERIC test 2 with mirror tank walls (the box still of particles): throughput and the probes at 0.01 m.
+if has sphmirror; then
+  start=$SECONDS
+  timeout 300 "$B/sph_gpu_test" > "$OUT/sph_gpu_test.log" 2>&1
+  summary+=("sph_gpu_test rc=$? $((SECONDS - start))s $(grep -E '^\[  (PASSED|FAILED)|largest CPU-GPU' "$OUT/sph_gpu_test.log" | tr '\n' ' ')")
+  start=$SECONDS
+  timeout "${SPH_STUDY_TIMEOUT:-600}" "$B/pflow-accuracy" --solver sph --executor cuda --precision double --only mirror \
+    --out "$OUT/sph_mirror" > "$OUT/sph_study_mirror.log" 2>&1
+  summary+=("sph study mirror rc=$? $((SECONDS - start))s" "$(grep -E '^mirror|^experiment' "$OUT/sph_study_mirror.log")")
+  sed 's/^sph:$/sph:\n  boundary: mirror/' examples/dam_break_3d.yaml > "$OUT/dam_break_3d_mirror.yaml"
+  "$B/pflow-gpu-bandwidth" > "$OUT/bandwidth.json" 2>&1
+  bw=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["memcpy_gb_per_s"])' "$OUT/bandwidth.json" 2>/dev/null || echo 0)
+  timeout 300 "$B/pflow-sph-bench" --scene "$OUT/dam_break_3d_mirror.yaml" --executor cuda --precision float \
+    --spacing "${SPH_MIRROR_SPACINGS:-0.01,0.0064,0.0055}" --warmup 10 --steps 50 --copy-bandwidth "$bw" --device "$dev" --commit "$commit" \
+    >> "$OUT/sph_bench_mirror.jsonl" 2>> "$OUT/sph_bench_mirror.log"
+  summary+=("pflow-sph-bench mirror rc=$?" "$(python3 -c '
+import json, sys
+for line in open(sys.argv[1]):
+    j = json.loads(line)
+    print(j["precision"], "n=%d" % j["n"], "%.2f ms/step" % j["ms_per_step"], "%.3g p-s/s" % j["particle_steps_per_s"],
+          "%.0f B/p" % j["device_bytes_per_particle"])
+' "$OUT/sph_bench_mirror.jsonl" 2>&1)")
+  sed -i 's/spacing: 0.02$/spacing: 0.01/' "$OUT/dam_break_3d_mirror.yaml"
+  start=$SECONDS
+  timeout "${SPH3D_TIMEOUT:-400}" "$B/pflow" run "$OUT/dam_break_3d_mirror.yaml" --executor cuda -o "$OUT/spheric_mirror.h5" > "$OUT/sph3d_mirror_run.log" 2>&1
+  summary+=("pflow run SPHERIC mirror 0.01 rc=$? $((SECONDS - start))s $(grep -E 'done:|PERFORMANCE' "$OUT/sph3d_mirror_run.log" | tr '\n' ' ')")
+  rm -f "$OUT/spheric_mirror.h5" "$OUT/spheric_mirror.xmf"
 fi
 if [[ -s $OUT/bench.jsonl ]]; then
   summary+=("$(python3 - "$OUT/bench.jsonl" <<'PY'

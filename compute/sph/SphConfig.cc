@@ -19,7 +19,9 @@ const char* kernelName(KernelKind k) { return k == KernelKind::kWendlandC2 ? "we
 SphDerived derive(const SphConfig& c, const SimulationSettings& sim) {
   SphDerived d;
   d.h = c.smoothingRatio * c.spacing;
-  d.boundaryLayers = c.boundaryLayers > 0 ? c.boundaryLayers : std::max(1, int(std::ceil(2.0 * d.h / c.spacing - 1e-9)));
+  d.boundaryLayers = c.boundary == BoundaryKind::kMirror ? 0
+                     : c.boundaryLayers > 0           ? c.boundaryLayers
+                                                      : std::max(1, int(std::ceil(2.0 * d.h / c.spacing - 1e-9)));
   d.particleMass = c.density * std::pow(c.spacing, c.dimension);
   // The deepest fluid along gravity: the extent of the fluid particles' projections, plus one spacing (each
   // particle stands for a cell dp wide).
@@ -84,6 +86,11 @@ ErrorList SphConfig::validate(const SimulationSettings& sim) const {
   if (dt) positive(e, "sph.dt", *dt);
   within(e, "sph.skin", skin, 0.0, 2.0, "a fraction of h");
   if (boundaryLayers < 0) e.add("sph.boundary_layers", std::to_string(boundaryLayers) + " must be >= 0 (0: automatic)");
+  if (boundary == BoundaryKind::kMirror && !tank)
+    e.add("sph.boundary", "mirror walls are the tank's walls: give a tank (or use sph.boundary: dynamic)");
+  if (boundary == BoundaryKind::kMirror && boundaryLayers > 0)
+    e.add("sph.boundary_layers", "applies to dynamic walls; mirror walls have no particles");
+  if (boundary != BoundaryKind::kMirror && freeSlip) e.add("sph.wall_slip", "applies to mirror walls (sph.boundary: mirror)");
   if (!(minDensityRatio > 0 && minDensityRatio < 1)) e.add("sph.density_bounds", "the lower bound " + num(minDensityRatio) + " must be in (0, 1)");
   if (!(maxDensityRatio > 1)) e.add("sph.density_bounds", "the upper bound " + num(maxDensityRatio) + " must be > 1");
   positive(e, "simulation.duration", sim.duration);

@@ -19,6 +19,11 @@ namespace pflow::compute::sph {
 
 enum class ParticleKind : std::int32_t { kFluid = 0, kBoundary = 1 };
 
+// How the tank's walls act (sph.boundary): layers of dynamic boundary particles (Crespo et al. 2007), or mirror
+// images of the fluid across the tank's flat walls (seed 002; MirrorWalls in SphPhysics.h). Obstacles are
+// boundary particles either way.
+enum class BoundaryKind { kDynamic, kMirror };
+
 // A named region the frontend filled (fluid block, tank, obstacle): for messages and checks.
 struct SphRegion {
   std::string name;  // "fluid.blocks[0]" style path or the entry's name
@@ -48,8 +53,9 @@ struct SphConfig {
   bool hydrostaticDiffusion = true;   // Fourtakas et al. (2019) correction of the density diffusion
   double cfl = 0.2;
   std::optional<double> dt;    // fixed step [s] (the convergence study); unset: CFL limits each step
-  // Walls are dynamic boundary particles (Crespo et al. 2007; sph.boundary: dynamic, the only kind yet).
-  int boundaryLayers = 0;      // 0: enough to cover the kernel support, ceil(2h/dp)
+  BoundaryKind boundary = BoundaryKind::kDynamic;  // the tank's walls
+  bool freeSlip = false;       // mirror walls: the image keeps the tangential velocity (sph.wall_slip: free_slip)
+  int boundaryLayers = 0;      // dynamic walls: 0 = enough to cover the kernel support, ceil(2h/dp)
   double skin = 0.25;          // neighbour skin as a fraction of h: cells are 2h + skin wide
   // Density bounds (DualSPHysics's RhopOut): a fluid particle outside [min, max] x rho0 stops the run.
   double minDensityRatio = 0.7, maxDensityRatio = 1.3;
@@ -60,6 +66,7 @@ struct SphConfig {
   std::vector<ParticleKind> kind;
   std::vector<SphRegion> fluidBlocks;  // what was filled with fluid
   std::optional<SphRegion> tank;       // the container (inside of its walls)
+  bool tankOpenTop = true;             // no wall (or mirror) at tank->hi.z
   std::vector<SphRegion> obstacles;
   std::vector<SphProbe> probes;
   double probeInterval = 0;  // [s]; 0: at the snapshots only

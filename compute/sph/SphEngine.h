@@ -30,6 +30,7 @@ struct SphSetup {
   double minDensity = 0, maxDensity = 0;  // [kg/m^3], fluid
   bool checkBox = false;  // leak check (the tank's outer walls; open top)
   Vec3d boxLo{0, 0, 0}, boxHi{0, 0, 0};
+  MirrorWalls mirror;     // sph.boundary: mirror (mirror.any false: none)
   CellGrid grid;
   double skin = 0;  // [m]
   int threads = 0;

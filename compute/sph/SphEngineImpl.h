@@ -85,6 +85,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     }
     if (m_wetStale) markWet();
     k.wet = m_wet.as<std::uint8_t>();
+    k.mirror = m_setup.mirror;
     if (set == RateSet::kAll || (m_numBoundary == 0 && set == RateSet::kInterior)) {
       m_exec.forEach(m_owned, k);
       return;
@@ -267,6 +268,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     a.checkBox = m_setup.checkBox;
     a.boxLo = m_setup.boxLo;
     a.boxHi = m_setup.boxHi;
+    a.mirror = m_setup.mirror;
     a.cond = m_cond.as<Conditions>();
     return a;
   }

@@ -48,6 +48,8 @@ struct Interact {
   // Boundary particles with no fluid listed in their 27 cells (MarkWet: wet[a] == 0) have no rates until the
   // next sort: they are skipped (most of a tank's walls and lid, most of the time).
   const std::uint8_t* wet = nullptr;
+  // Mirror walls (SphPhysics.h); mirror.any false: none.
+  MirrorWalls mirror;
 
   PFLOW_HOSTDEVICE void operator()(Index a) const {
     const Vec3d xa = pos[a];
@@ -65,9 +67,40 @@ struct Interact {
     R sumDrho = R(0), maxVisc = R(0);
     // The cells around the one the particle is listed in (where it was at the sort): every neighbour within 2h
     // now is listed in one of them, since no particle has moved half the skin since (cells are 2h + skin).
+    // Mirror images reach a only through a wall a is near itself (an image is at least as far as a's distance
+    // to the wall plus b's).
+    const int nearA = mirror.any ? mirror.near(xa) : 0;
+    auto images = [&](Index b) {
+      const int shared = nearA & mirror.near(pos[b]);  // walls both are near
+      // Every non-empty subset of those walls: one image per subset.
+      for (int m = shared; m != 0; m = (m - 1) & shared) {
+        const Vec3d xi = mirror.reflect(pos[b], m);
+        const Vec3d d = xa - xi;
+        const double r2 = norm2(d);
+        if (r2 >= cut2) continue;
+        const R r = R(std::sqrt(r2));
+        const R pI = p[b] + rho[b] * dot(gravity, vcast<R>(xi - pos[b]));  // hydrostatic across the wall
+        const R fab = kernel.f(r);
+        // Continuity sees the wall as impermeable only (the free-slip image: no tangential divergence at the
+        // wall); the momentum's viscous terms see the wall's condition (no-slip: the reversed velocity).
+        const Vec3<R> vSlip = va - mirror.imageVelocity(vel[b], m, false);
+        const PairRates<R> out = pairRates(params, vcast<R>(d), vSlip, R(r2), fab, rhoA, rho[b], pA, pI, mass[b], params.c0, params.c0, false);
+        sumDrho += out.densityRate;
+        if (mirror.noSlip) {
+          const PairRates<R> wall = pairRates(params, vcast<R>(d), va - mirror.imageVelocity(vel[b], m, true), R(r2), fab, rhoA, rho[b], pA,
+                                              pI, mass[b], params.c0, params.c0, false);
+          sumAcc += wall.acceleration;
+          maxVisc = wall.viscousRate > maxVisc ? wall.viscousRate : maxVisc;
+        } else {
+          sumAcc += out.acceleration;
+          maxVisc = out.viscousRate > maxVisc ? out.viscousRate : maxVisc;
+        }
+      }
+    };
     auto consider = [&](Index b) {
       const bool fluidB = kind[b] == kFluid;
       if (!fluidA && !fluidB) return;
+      if (nearA && fluidB) images(b);
       const Vec3d d = xa - pos[b];
       const double r2 = norm2(d);
       if (r2 >= cut2 || b == a) return;
@@ -179,6 +212,7 @@ struct StepArgs {
   // has passed through a wall or spilled over an open top; above the walls' top it may be anywhere.
   bool checkBox = false;
   Vec3d boxLo{0, 0, 0}, boxHi{0, 0, 0};
+  MirrorWalls mirror;  // a fluid particle past a mirror wall is put back (MirrorWalls::keepInside)
   Conditions* cond = nullptr;
 };
 
@@ -198,8 +232,11 @@ struct Predictor {
     if (a.kind[i] == kFluid) {
       const Vec3<R> v0 = a.vel[i];
       a.vel0[i] = v0;
-      a.vel[i] = v0 + h * a.acc[i];
-      a.pos[i] = x0 + (0.5 * a.dt) * vcast<double>(v0);
+      Vec3<R> v = v0 + h * a.acc[i];
+      Vec3d x = x0 + (0.5 * a.dt) * vcast<double>(v0);
+      if (a.mirror.any) a.mirror.keepInside(x, v);
+      a.vel[i] = v;
+      a.pos[i] = x;
     } else if (r < a.boundaryFloor) {
       r = a.boundaryFloor;
     }
@@ -222,9 +259,10 @@ struct Corrector {
     const bool fluid = a.kind[i] == kFluid;
     if (fluid) {
       const Vec3<R> v0 = a.vel0[i];
-      const Vec3<R> v = v0 + dt * a.acc[i];
+      Vec3<R> v = v0 + dt * a.acc[i];
+      Vec3d x = a.pos0[i] + (0.5 * a.dt) * vcast<double>(v + v0);
+      if (a.mirror.any) a.mirror.keepInside(x, v);
       a.vel[i] = v;
-      const Vec3d x = a.pos0[i] + (0.5 * a.dt) * vcast<double>(v + v0);
       a.pos[i] = x;
       if (!isFinite(x) || !isFinite(v) || !std::isfinite(r)) {
         atomicOrU32(&a.cond->flags, kNonFinite);

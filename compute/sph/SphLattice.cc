@@ -53,8 +53,14 @@ std::size_t addTank(SphConfig& c, const std::string& name, Vec3d lo, Vec3d hi, b
     if (!inside) add(c, x, ParticleKind::kBoundary, {0, 0, 0});
   });
   c.tank = SphRegion{name, lo, hi};
+  c.tankOpenTop = openTop;
   if (!c.velocity.empty()) c.velocity.resize(c.size(), Vec3d{0, 0, 0});
   return c.size() - before;
+}
+
+void setMirrorTank(SphConfig& c, const std::string& name, Vec3d lo, Vec3d hi, bool openTop) {
+  c.tank = SphRegion{name, lo, hi};
+  c.tankOpenTop = openTop;
 }
 
 std::size_t addObstacle(SphConfig& c, const std::string& name, Vec3d lo, Vec3d hi) {

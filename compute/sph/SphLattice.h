@@ -16,6 +16,8 @@ std::size_t addFluidBlock(SphConfig& config, const std::string& name, Vec3d lo, 
 // ceil(2h/dp)) outside the floor and the side walls (2D: left and right), up to hi.z, and over the top
 // unless `openTop`. Recorded as config.tank.
 std::size_t addTank(SphConfig& config, const std::string& name, Vec3d lo, Vec3d hi, bool openTop = true, int layers = 0);
+// A tank of mirror walls (sph.boundary: mirror): recorded as config.tank, no particles.
+void setMirrorTank(SphConfig& config, const std::string& name, Vec3d lo, Vec3d hi, bool openTop = true);
 
 // A solid box [lo, hi] filled with boundary particles (a wall as thick as the box). Recorded in config.obstacles.
 std::size_t addObstacle(SphConfig& config, const std::string& name, Vec3d lo, Vec3d hi);

@@ -139,6 +139,75 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE PairRates<R> pairRates(const PairParams<R>& p
   return out;
 }
 
+// Mirror walls (sph.boundary: mirror; docs/sph.md, "Mirror walls"): the tank's flat walls, normal to the axes.
+// A fluid particle b within the kernel's support of a wall is seen through it as its image: the position
+// reflected, the velocity with its normal part reversed (free slip) in the continuity equation and in the
+// momentum equation's pressure and viscous terms, or wholly reversed (no-slip) in the momentum equation, the
+// density b's, the pressure b's plus the hydrostatic difference rho_b g.(x_b' - x_b). Near a corner b has an image
+// across each wall it is near and one across both (three walls: seven). The images act through the pair terms
+// without density diffusion (no flux across a wall).
+struct MirrorWalls {
+  bool lo[3] = {false, false, false}, hi[3] = {false, false, false};  // which walls are mirrors
+  double loAt[3] = {0, 0, 0}, hiAt[3] = {0, 0, 0};                   // where [m]
+  double reach = 0;                                                   // the kernel's support [m]
+  bool noSlip = true;
+  bool any = false;
+
+  // Per axis, the wall x is within reach of: bits 0-2 the low wall of axis 0-2, bits 3-5 the high wall (the
+  // nearer one when both are, in a tank narrower than two supports).
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE int near(const Vec3d& x) const {
+    int mask = 0;
+    for (int a = 0; a < 3; ++a) {
+      const double c = (&x.x)[a];
+      const double dLo = c - loAt[a], dHi = hiAt[a] - c;
+      const bool nLo = lo[a] && dLo < reach, nHi = hi[a] && dHi < reach;
+      if (nLo && (!nHi || dLo <= dHi)) mask |= 1 << a;
+      else if (nHi) mask |= 8 << a;
+    }
+    return mask;
+  }
+  // x reflected across the walls of `mask` (near()'s bits).
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE Vec3d reflect(Vec3d x, int mask) const {
+    for (int a = 0; a < 3; ++a) {
+      double& c = (&x.x)[a];
+      if (mask & (1 << a)) c = 2 * loAt[a] - c;
+      else if (mask & (8 << a)) c = 2 * hiAt[a] - c;
+    }
+    return x;
+  }
+  template <class R>
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE Vec3<R> imageVelocity(Vec3<R> v, int mask, bool reversed) const {
+    if (reversed) {  // no-slip: reversed once per wall
+      int walls = 0;
+      for (int a = 0; a < 3; ++a) walls += (mask >> a & 1) | (mask >> (a + 3) & 1);
+      return walls % 2 ? Vec3<R>{-v.x, -v.y, -v.z} : v;
+    }
+    for (int a = 0; a < 3; ++a)
+      if (mask & (9 << a)) (&v.x)[a] = -(&v.x)[a];
+    return v;
+  }
+  // A particle that crossed a mirror wall (a step too long for the repulsion) is put back: position reflected,
+  // normal velocity reversed. Returns true if it did.
+  template <class R>
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE bool keepInside(Vec3d& x, Vec3<R>& v) const {
+    bool moved = false;
+    for (int a = 0; a < 3; ++a) {
+      double& c = (&x.x)[a];
+      R& u = (&v.x)[a];
+      if (lo[a] && c < loAt[a]) {
+        c = 2 * loAt[a] - c;
+        u = u < R(0) ? -u : u;
+        moved = true;
+      } else if (hi[a] && c > hiAt[a]) {
+        c = 2 * hiAt[a] - c;
+        u = u > R(0) ? -u : u;
+        moved = true;
+      }
+    }
+    return moved;
+  }
+};
+
 // The reciprocal of the step one particle allows before the CFL factor (docs/sph.md, equation 10): the larger of
 // sqrt(|a| / h) (the force limit; fluid only: walls do not move) and (c0 + h visc) / h (the acoustic-viscous
 // limit, visc the particle's largest viscous rate). Its maximum over the particles is one reduction.

@@ -302,6 +302,19 @@ Result<SphSetup> prepareSphSetup(const RunConfig& config) {
   }
 
   // The leak check: fluid outside the tank's outer walls below their top (a closed tank: its lid's outside).
+  if (c.tank && c.boundary == BoundaryKind::kMirror) {  // the tank's walls as mirrors: every flat wall but an open top
+    MirrorWalls& m = s.mirror;
+    m.any = true;
+    m.noSlip = !c.freeSlip;
+    m.reach = Kernel<double>::make(c.kernel, c.dimension, d.h).support();
+    for (int a = 0; a < 3; ++a) {
+      const bool across = a == 1 && c.dimension == 2;  // a 2D run's plane has no walls across it
+      m.lo[a] = !across;
+      m.hi[a] = !across && !(a == 2 && c.tankOpenTop);
+      m.loAt[a] = (&c.tank->lo.x)[a];
+      m.hiAt[a] = (&c.tank->hi.x)[a];
+    }
+  }
   if (c.tank) {
     const double wall = (d.boundaryLayers + 1) * c.spacing;
     s.checkBox = true;
@@ -322,6 +335,10 @@ Result<SphSetup> prepareSphSetup(const RunConfig& config) {
     hi = {std::max(hi.x, x.x), std::max(hi.y, x.y), std::max(hi.z, x.z)};
   }
   if (n == 0) lo = hi = Vec3d{0, 0, 0};
+  if (c.tank && c.boundary == BoundaryKind::kMirror) {  // no wall particles: the tank's inside bounds the flow
+    lo = {std::min(lo.x, c.tank->lo.x), std::min(lo.y, c.tank->lo.y), std::min(lo.z, c.tank->lo.z)};
+    hi = {std::max(hi.x, c.tank->hi.x), std::max(hi.y, c.tank->hi.y), std::max(hi.z, c.tank->hi.z)};
+  }
   lo = lo - Vec3d{cell, cell, cell};
   hi = hi + Vec3d{cell, cell, cell};
   const Vec3d ext = hi - lo;

@@ -60,8 +60,17 @@ void Loader::parseSphScene(const Fields& top) {
       if (const Entry* dt = f->find("dt")) c.dt = autoOrNumber(*dt, "sph.dt", "s");
       if (const Entry* k = f->find("boundary")) {
         std::string name;
-        if (read(k->value, f->child("boundary"), k->loc, name) && name != "dynamic")
-          badValue(f->child("boundary"), unknownName("boundary", name, kSphBoundaries, "Choices"), k->loc);
+        if (read(k->value, f->child("boundary"), k->loc, name)) {
+          if (name == "dynamic" || name == "mirror") c.boundary = name == "mirror" ? compute::sph::BoundaryKind::kMirror : compute::sph::BoundaryKind::kDynamic;
+          else badValue(f->child("boundary"), unknownName("boundary", name, kSphBoundaries, "Choices"), k->loc);
+        }
+      }
+      if (const Entry* k = f->find("wall_slip")) {
+        std::string name;
+        if (read(k->value, f->child("wall_slip"), k->loc, name)) {
+          if (name == "no_slip" || name == "free_slip") c.freeSlip = name == "free_slip";
+          else badValue(f->child("wall_slip"), unknownName("wall slip", name, kWallSlips, "Choices"), k->loc);
+        }
       }
       if (const Entry* b = f->find("boundary_layers")) {
         const auto v = autoOrNumber(*b, "sph.boundary_layers", "");
@@ -164,7 +173,8 @@ void Loader::parseSphScene(const Fields& top) {
   };
   for (const Block& b : blocks) estimate += volume(b.r, 0);
   const double layers = c.boundaryLayers > 0 ? c.boundaryLayers : std::ceil(2 * c.smoothingRatio);
-  if (tank) estimate += volume(*tank, layers * c.spacing);
+  const bool mirror = c.boundary == compute::sph::BoundaryKind::kMirror;
+  if (tank && !mirror) estimate += volume(*tank, layers * c.spacing);
   for (const SphRegion& o : obstacles) estimate += volume(o, 0);
   if (estimate > double(m_options.maxParticles)) {
     badValue("sph.spacing", "about " + format::num(estimate) + " particles at " + format::num(c.spacing) + " m, more than the limit of " +
@@ -173,7 +183,8 @@ void Loader::parseSphScene(const Fields& top) {
     return;
   }
   for (const Block& b : blocks) compute::sph::addFluidBlock(c, b.r.name, b.r.lo, b.r.hi, b.v);
-  if (tank) compute::sph::addTank(c, "tank", tank->lo, tank->hi, openTop, c.boundaryLayers);
+  if (tank && mirror) compute::sph::setMirrorTank(c, "tank", tank->lo, tank->hi, openTop);
+  else if (tank) compute::sph::addTank(c, "tank", tank->lo, tank->hi, openTop, c.boundaryLayers);
   for (const SphRegion& o : obstacles) compute::sph::addObstacle(c, o.name, o.lo, o.hi);
 }
 

@@ -45,9 +45,10 @@ constexpr std::string_view kTankKeys[] = {"name", "min", "max", "open_top"};
 constexpr std::string_view kObstacleKeys[] = {"name", "min", "max"};
 constexpr std::string_view kSphKeys[] = {"dimension", "spacing", "smoothing_ratio", "kernel", "artificial_viscosity",
                                          "density_diffusion", "diffusion_correction", "cfl", "dt", "boundary",
-                                         "boundary_layers", "skin", "density_bounds"};
+                                         "boundary_layers", "wall_slip", "skin", "density_bounds"};
 constexpr std::string_view kSphKernels[] = {"wendland", "cubic_spline"};
-constexpr std::string_view kSphBoundaries[] = {"dynamic"};
+constexpr std::string_view kSphBoundaries[] = {"dynamic", "mirror"};
+constexpr std::string_view kWallSlips[] = {"no_slip", "free_slip"};
 constexpr std::string_view kDiffusionCorrections[] = {"hydrostatic", "none"};
 constexpr std::string_view kProbeKeys[] = {"name", "point", "gauge"};
 constexpr std::string_view kSphSimulationKeys[] = {"gravity", "duration", "snapshot_interval", "precision", "threads"};

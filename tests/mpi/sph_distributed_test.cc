@@ -35,9 +35,10 @@ struct Result {
   std::int64_t steps = 0;
 };
 
-Result run(bool distributed, bool overlap) {
+Result run(bool distributed, bool overlap, bool mirror = false) {
   const double dp = 0.01;
   RunConfig c = damBreak2D(dp, 0.45);
+  if (mirror) c = withMirrorWalls(c);
   SphOptions o;
   o.overlapHalo = overlap;
   o.canonicalOrder = true;  // the one-process reference sums in the distributed runs' order
@@ -82,6 +83,20 @@ TEST(SphDistributed, SurgeFrontWithinHalfAPercentOfOneProcess) {
     for (std::size_t k = 0; k < kFrontZ.size(); ++k) std::printf(" %.4f (one process %.4f)", split.t[k], one.t[k]);
     std::printf("; %lld steps (one process %lld)\n", (long long)split.steps, (long long)one.steps);
   }
+}
+
+// Mirror walls: the images are taken of whichever particle is listed near a wall, owned or ghost, in the same
+// canonical order, so ranks give the one process's front bit for bit.
+TEST(SphDistributed, MirrorWallsSameFrontAsOneProcess) {
+  const Result one = run(false, true, true);
+  const Result split = run(true, true, true);
+  ASSERT_EQ(one.t.size(), kFrontZ.size());
+  for (std::size_t k = 0; k < kFrontZ.size(); ++k) {
+    ASSERT_TRUE(std::isfinite(split.t[k])) << "Z = " << kFrontZ[k];
+    EXPECT_EQ(split.t[k], one.t[k]) << "Z = " << kFrontZ[k] << ": not bit for bit";
+  }
+  EXPECT_EQ(split.steps, one.steps);
+  if (worldRank() == 0) EXPECT_EQ(split.mass, one.mass);
 }
 
 }  // namespace

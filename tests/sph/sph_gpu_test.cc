@@ -69,4 +69,23 @@ TEST(SphCudaVsCpu, FloatFrontWithinOnePercentOfDouble) {
   for (std::size_t k = 0; k < zs.size(); ++k) EXPECT_NEAR(t32[k], t64[k], 0.01 * t64[k]) << "Z = " << zs[k];
 }
 
+// Mirror walls on both executors (double): the dam break to 0.1 s, every particle within 1e-6 m of its CPU
+// position, as with boundary particles.
+TEST(SphCudaVsCpu, MirrorWallsDamBreakAgrees) {
+  SKIP_WITHOUT_GPU();
+  RunConfig c = test::withMirrorWalls(test::damBreak2D(0.01, 0.1));
+  auto cpu = make(c, ExecutorKind::kCpu);
+  auto gpu = make(c, ExecutorKind::kCuda);
+  ASSERT_TRUE(cpu && gpu);
+  ASSERT_TRUE(cpu->runUntil(0.1).isOk());
+  ASSERT_TRUE(gpu->runUntil(0.1).isOk());
+  EXPECT_EQ(cpu->stepCount(), gpu->stepCount());
+  const auto a = positions(cpu->snapshot()), b = positions(gpu->snapshot());
+  ASSERT_EQ(a.size(), b.size());
+  double worst = 0;
+  for (const auto& [id, x] : a) worst = std::max(worst, norm(x - b.at(id)));
+  EXPECT_LT(worst, 1e-6) << "largest position difference [m]";
+  std::printf("mirror walls: largest CPU-GPU position difference after %lld steps: %.3g m\n", (long long)cpu->stepCount(), worst);
+}
+
 }  // namespace

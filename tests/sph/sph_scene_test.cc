@@ -92,15 +92,50 @@ TEST(SphScene, EveryErrorAtOnce) {
   EXPECT_NE(dem.status().message().find("materials"), std::string::npos);
 }
 
-// The services do not run SPH yet: the frontend's summary (what pflow submit builds its job from) refuses the
-// scene and says how to run it, instead of describing an empty granular scene.
-TEST(SphScene, ServicesRefuseItWithTheWayToRunIt) {
+// The services' summary (what pflow submit builds its job from): the particles of both kinds, the first CFL
+// step and the steps to the end, memory from the SPH field table, the method as the model's decisions.
+TEST(SphScene, SummaryForTheServices) {
   auto r = load(damBreak());
   ASSERT_TRUE(r.isOk()) << r.status().message();
   auto summary = summarize(r.value());
-  ASSERT_FALSE(summary.isOk());
-  EXPECT_EQ(summary.status().code(), StatusCode::kFailedPrecondition);
-  EXPECT_NE(summary.status().message().find("pflow run"), std::string::npos) << summary.status().message();
+  ASSERT_TRUE(summary.isOk()) << summary.status().message();
+  const SceneSummary& s = summary.value();
+  EXPECT_EQ(s.solver, "sph");
+  EXPECT_EQ(s.particles, r.value().config.sph.size());
+  ASSERT_EQ(s.sets.size(), 2u);
+  EXPECT_EQ(s.sets[0].info.count, 800u);
+  EXPECT_EQ(s.sets[0].info.name, "fluid");
+  EXPECT_EQ(s.sets[1].info.count, s.particles - 800u);
+  EXPECT_NEAR(s.dt, 7.572e-5, 1e-8);  // CFL 0.2 x h / c0 = 0.2 x 0.015 / 39.62
+  EXPECT_EQ(s.steps, std::llround(1.0 / s.dt));
+  EXPECT_GT(s.bytesPerParticle, 100);
+  EXPECT_GT(s.memoryBytes, s.bytesPerParticle * double(s.particles));
+  EXPECT_NE(s.model.text().find("solver: sph"), std::string::npos) << s.model.text();
+  EXPECT_NE(toJson(s).find("\"solver\":\"sph\""), std::string::npos);
+}
+
+// Mirror walls: no wall particles, the tank recorded; the keys that do not go with them are named.
+TEST(SphScene, MirrorWallsAndTheirErrors) {
+  auto r = load(damBreak("{dimension: 2, spacing: 0.01, boundary: mirror, wall_slip: free_slip}"));
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  const compute::sph::SphConfig& c = r.value().config.sph;
+  EXPECT_EQ(c.size(), 800u);
+  EXPECT_EQ(c.boundary, compute::sph::BoundaryKind::kMirror);
+  EXPECT_TRUE(c.freeSlip);
+  ASSERT_TRUE(c.tank.has_value());
+  EXPECT_TRUE(c.tankOpenTop);
+  auto bad = load("solver: sph\nfluid:\n  density: 1000\n  blocks:\n    - {min: [0, 0, 0], max: [0.2, 0, 0.4]}\n"
+                  "sph: {dimension: 2, spacing: 0.01, boundary: mirror, boundary_layers: 3}\nsimulation: {duration: 1.0}\n");
+  ASSERT_FALSE(bad.isOk());
+  const std::string m = bad.status().message();
+  EXPECT_NE(m.find("sph.boundary: mirror walls are the tank's walls: give a tank"), std::string::npos) << m;
+  EXPECT_NE(m.find("sph.boundary_layers: applies to dynamic walls"), std::string::npos) << m;
+  auto slip = load(damBreak("{dimension: 2, spacing: 0.01, wall_slip: free_slip}"));
+  ASSERT_FALSE(slip.isOk());
+  EXPECT_NE(slip.status().message().find("sph.wall_slip: applies to mirror walls"), std::string::npos) << slip.status().message();
+  auto unknown = load(damBreak("{dimension: 2, spacing: 0.01, boundary: ghost}"));
+  ASSERT_FALSE(unknown.isOk());
+  EXPECT_NE(unknown.status().message().find("dynamic, mirror"), std::string::npos) << unknown.status().message();
 }
 
 TEST(SphScene, UnknownSolverIsNamed) {

@@ -37,6 +37,24 @@ inline compute::RunConfig damBreak2D(double dp, double duration = 0.45) {
   return c;
 }
 
+// The tank's walls as mirrors instead of boundary particles (sph.boundary: mirror).
+inline compute::RunConfig withMirrorWalls(compute::RunConfig c) {
+  c.sph.boundary = compute::sph::BoundaryKind::kMirror;
+  std::size_t keep = 0;  // drop the tank's wall particles (the obstacles' stay)
+  std::vector<Vec3d> x;
+  std::vector<compute::sph::ParticleKind> k;
+  for (std::size_t i = 0; i < c.sph.size(); ++i)
+    if (c.sph.kind[i] == compute::sph::ParticleKind::kFluid) {
+      x.push_back(c.sph.position[i]);
+      k.push_back(c.sph.kind[i]);
+      ++keep;
+    }
+  c.sph.position = x;
+  c.sph.kind = k;
+  if (!c.sph.velocity.empty()) c.sph.velocity.resize(keep);
+  return c;
+}
+
 // Water H deep at rest in a tank `width` wide.
 inline compute::RunConfig hydrostaticTank(double dp, double width, double depth, double duration) {
   compute::RunConfig c = sphBase(dp, duration);

@@ -1,0 +1,128 @@
+// Mirror walls (sph.boundary: mirror; docs/sph.md, "Mirror walls"): the images' geometry, a tank at rest, the dam
+// break against Martin & Moyce with the same tolerances as the dynamic boundary particles', and a particle that
+// would cross a wall being put back.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "tests/support/SphScenes.h"
+
+using namespace pflow;
+using namespace pflow::compute;
+using namespace pflow::compute::sph;
+
+namespace {
+
+MirrorWalls box2D(bool noSlip) {
+  MirrorWalls m;
+  m.any = true;
+  m.noSlip = noSlip;
+  m.reach = 0.03;
+  m.lo[0] = m.hi[0] = true;
+  m.lo[2] = true;  // open top
+  m.loAt[0] = 0, m.hiAt[0] = 1, m.loAt[2] = 0, m.hiAt[2] = 1.2;
+  return m;
+}
+
+// Which walls a point is near, its images and their velocities.
+TEST(SphMirror, ImagesOfAPointNearACornerAndTheirVelocities) {
+  const MirrorWalls m = box2D(true);
+  EXPECT_EQ(m.near({0.5, 0, 0.5}), 0);
+  EXPECT_EQ(m.near({0.01, 0, 0.5}), 1);         // the left wall
+  EXPECT_EQ(m.near({0.99, 0, 0.5}), 8);         // the right wall
+  EXPECT_EQ(m.near({0.5, 0, 1.19}), 0);         // an open top is no wall
+  const int corner = m.near({0.01, 0, 0.02});   // the left wall and the floor
+  EXPECT_EQ(corner, 1 | 4);
+  int images = 0;
+  for (int s = corner; s != 0; s = (s - 1) & corner) ++images;
+  EXPECT_EQ(images, 3);  // across each wall and across both
+  const Vec3d both = m.reflect({0.01, 0, 0.02}, corner);
+  EXPECT_DOUBLE_EQ(both.x, -0.01);
+  EXPECT_DOUBLE_EQ(both.z, -0.02);
+  const Vec3<double> v{1, 0, -2};
+  const auto noSlip = m.imageVelocity(v, 1, true), twice = m.imageVelocity(v, corner, true), slip = m.imageVelocity(v, 4, false);
+  EXPECT_EQ(noSlip.x, -1);  // reversed across one wall
+  EXPECT_EQ(noSlip.z, 2);
+  EXPECT_EQ(twice.x, 1);    // and back across two
+  EXPECT_EQ(slip.x, 1);     // free slip across the floor: only the normal part
+  EXPECT_EQ(slip.z, 2);
+  // A particle past a wall is put back, its normal velocity turned inward.
+  Vec3d x{-0.001, 0, 0.5};
+  Vec3<double> u{-3, 0, 1};
+  EXPECT_TRUE(m.keepInside(x, u));
+  EXPECT_DOUBLE_EQ(x.x, 0.001);
+  EXPECT_EQ(u.x, 3);
+  EXPECT_EQ(u.z, 1);
+  EXPECT_FALSE(m.keepInside(x, u));
+}
+
+// The tank at rest of SphHydrostatic with mirror walls: the same bounds (pressure in layers within 2 % of
+// rho g H of rho g (H - z), max speed under 1 % of sqrt(g H)); with no wall particles there is no gap, so the
+// surface stays at the initial depth within half a spacing.
+TEST(SphMirror, TankAtRestKeepsThePressureProfileAndStaysStill) {
+  const double dp = 0.01, depth = 0.2;
+  RunConfig c = test::withMirrorWalls(test::hydrostaticTank(dp, 0.2, depth, 2.0));
+  auto created = SphSimulation::create(c, {});
+  ASSERT_TRUE(created.isOk()) << created.status().message();
+  SphSimulation& sim = *created.value();
+  ASSERT_TRUE(sim.runUntil(2.0).isOk());
+  const ParticleSnapshot s = sim.snapshot();
+  const auto* x = s.find("position")->as<Vec3d>();
+  const auto* v = s.find("velocity")->as<Vec3d>();
+  const auto* p = s.find("pressure")->as<double>();
+  double top = -1e300, maxSpeed = 0, left = 1e300, bottom = 1e300;
+  for (std::size_t i = 0; i < s.n; ++i) {
+    top = std::max(top, x[i].z);
+    bottom = std::min(bottom, x[i].z);
+    left = std::min(left, x[i].x);
+    maxSpeed = std::max(maxSpeed, norm(v[i]));
+  }
+  const double g = 9.81, rho = 1000, surface = top + 0.5 * dp, scale = rho * g * depth;
+  EXPECT_LT(maxSpeed, 0.01 * std::sqrt(g * depth)) << "max speed " << maxSpeed;
+  EXPECT_NEAR(surface, depth, 0.5 * dp);
+  EXPECT_GT(bottom, 0.0);
+  EXPECT_GT(left, 0.0);
+  std::printf("mirror tank after 2 s: surface %.4f m (initial %.4f), lowest %.4f m, max speed %.2e m/s\n", surface, depth, bottom, maxSpeed);
+  const double h = sim.derived().h;
+  int layers = 0;
+  for (double z = 0; z < surface - 2 * h; z += dp) {
+    double sum = 0, zsum = 0;
+    int count = 0;
+    for (std::size_t i = 0; i < s.n; ++i)
+      if (x[i].z >= z && x[i].z < z + dp) {
+        sum += p[i];
+        zsum += x[i].z;
+        ++count;
+      }
+    if (!count) continue;
+    ++layers;
+    EXPECT_NEAR(sum / count, rho * g * (surface - zsum / count), 0.02 * scale) << "layer at z = " << zsum / count;
+  }
+  EXPECT_GE(layers, 14);
+}
+
+// The dam break of SphDamBreak.SurgeFrontFollowsMartinMoyce (40 x 80, the same parameters) with mirror walls:
+// the same tolerances (times within 8 % after the gate's 0.175, speed within 5 %), and the front reaches the far
+// wall without passing it.
+TEST(SphMirror, DamBreakFollowsMartinMoyce) {
+  const double dp = 0.005, gate = 0.175;
+  RunConfig c = test::withMirrorWalls(test::damBreak2D(dp));
+  auto sim = SphSimulation::create(c, {});
+  ASSERT_TRUE(sim.isOk()) << sim.status().message();
+  const std::vector<double>& zs = test::kFrontZ;
+  const std::vector<double>& experiment = test::kMartinMoyceT;
+  const std::vector<double> t = test::frontTimes(*sim.value(), dp, zs);
+  for (std::size_t k = 0; k < zs.size(); ++k) {
+    ASSERT_TRUE(std::isfinite(t[k])) << "the front never reached Z = " << zs[k];
+    EXPECT_NEAR(t[k] + gate, experiment[k], 0.08 * experiment[k]) << "Z = " << zs[k];
+    std::printf("mirror Z %.1f: T %.3f (experiment %.3f, %+.1f%%; with the gate's %.3f, %+.1f%%)\n", zs[k], t[k], experiment[k],
+                100 * (t[k] / experiment[k] - 1), gate, 100 * ((t[k] + gate) / experiment[k] - 1));
+  }
+  const double speed = (zs[4] - zs[1]) / (t[4] - t[1]), measured = (zs[4] - zs[1]) / (experiment[4] - experiment[1]);
+  EXPECT_NEAR(speed, measured, 0.05 * measured);
+  ASSERT_TRUE(sim.value()->runUntil(0.8).isOk());
+  EXPECT_LE(sim.value()->fluidReach({1, 0, 0}), 1.0);  // at the far wall, not through it
+  EXPECT_GT(sim.value()->fluidReach({1, 0, 0}), 0.98);
+}
+
+}  // namespace
