@@ -236,12 +236,16 @@ if has sphmirror; then
   timeout 300 "$B/pflow-sph-bench" --scene "$OUT/dam_break_3d_mirror.yaml" --executor cuda --precision float \
     --spacing "${SPH_MIRROR_SPACINGS:-0.01,0.0064,0.0055}" --warmup 10 --steps 50 --copy-bandwidth "$bw" --device "$dev" --commit "$commit" \
     >> "$OUT/sph_bench_mirror.jsonl" 2>> "$OUT/sph_bench_mirror.log"
-  summary+=("pflow-sph-bench mirror rc=$?" "$(python3 -c '
+  summary+=("pflow-sph-bench mirror rc=$?")
+  # The same machine's baseline: the tank's walls of particles at the middle spacing.
+  timeout 300 "$B/pflow-sph-bench" --executor cuda --precision float --spacing 0.0064 --warmup 10 --steps 50 --copy-bandwidth "$bw" \
+    --device "$dev" --commit "$commit" >> "$OUT/sph_bench_mirror.jsonl" 2>> "$OUT/sph_bench_mirror.log"
+  summary+=("pflow-sph-bench dynamic rc=$?" "$(python3 -c '
 import json, sys
 for line in open(sys.argv[1]):
     j = json.loads(line)
-    print(j["precision"], "n=%d" % j["n"], "%.2f ms/step" % j["ms_per_step"], "%.3g p-s/s" % j["particle_steps_per_s"],
-          "%.0f B/p" % j["device_bytes_per_particle"])
+    print(j.get("case", ""), j["precision"], "n=%d" % j["n"], "%.2f ms/step" % j["ms_per_step"], "%.3g p-s/s" % j["particle_steps_per_s"],
+          "%.0f B/p" % j["device_bytes_per_particle"], j.get("phases_s", ""))
 ' "$OUT/sph_bench_mirror.jsonl" 2>&1)")
   sed -i 's/spacing: 0.02$/spacing: 0.01/' "$OUT/dam_break_3d_mirror.yaml"
   start=$SECONDS

@@ -48,7 +48,7 @@ struct Interact {
   // Boundary particles with no fluid listed in their 27 cells (MarkWet: wet[a] == 0) have no rates until the
   // next sort: they are skipped (most of a tank's walls and lid, most of the time).
   const std::uint8_t* wet = nullptr;
-  // Mirror walls (SphPhysics.h); mirror.any false: none.
+  // Mirror walls (SphPhysics.h; mirror.any false: none): used by MirrorImages, the pass after this one.
   MirrorWalls mirror;
 
   PFLOW_HOSTDEVICE void operator()(Index a) const {
@@ -67,40 +67,9 @@ struct Interact {
     R sumDrho = R(0), maxVisc = R(0);
     // The cells around the one the particle is listed in (where it was at the sort): every neighbour within 2h
     // now is listed in one of them, since no particle has moved half the skin since (cells are 2h + skin).
-    // Mirror images reach a only through a wall a is near itself (an image is at least as far as a's distance
-    // to the wall plus b's).
-    const int nearA = mirror.any ? mirror.near(xa) : 0;
-    auto images = [&](Index b) {
-      const int shared = nearA & mirror.near(pos[b]);  // walls both are near
-      // Every non-empty subset of those walls: one image per subset.
-      for (int m = shared; m != 0; m = (m - 1) & shared) {
-        const Vec3d xi = mirror.reflect(pos[b], m);
-        const Vec3d d = xa - xi;
-        const double r2 = norm2(d);
-        if (r2 >= cut2) continue;
-        const R r = R(std::sqrt(r2));
-        const R pI = p[b] + rho[b] * dot(gravity, vcast<R>(xi - pos[b]));  // hydrostatic across the wall
-        const R fab = kernel.f(r);
-        // Continuity sees the wall as impermeable only (the free-slip image: no tangential divergence at the
-        // wall); the momentum's viscous terms see the wall's condition (no-slip: the reversed velocity).
-        const Vec3<R> vSlip = va - mirror.imageVelocity(vel[b], m, false);
-        const PairRates<R> out = pairRates(params, vcast<R>(d), vSlip, R(r2), fab, rhoA, rho[b], pA, pI, mass[b], params.c0, params.c0, false);
-        sumDrho += out.densityRate;
-        if (mirror.noSlip) {
-          const PairRates<R> wall = pairRates(params, vcast<R>(d), va - mirror.imageVelocity(vel[b], m, true), R(r2), fab, rhoA, rho[b], pA,
-                                              pI, mass[b], params.c0, params.c0, false);
-          sumAcc += wall.acceleration;
-          maxVisc = wall.viscousRate > maxVisc ? wall.viscousRate : maxVisc;
-        } else {
-          sumAcc += out.acceleration;
-          maxVisc = out.viscousRate > maxVisc ? out.viscousRate : maxVisc;
-        }
-      }
-    };
     auto consider = [&](Index b) {
       const bool fluidB = kind[b] == kFluid;
       if (!fluidA && !fluidB) return;
-      if (nearA && fluidB) images(b);
       const Vec3d d = xa - pos[b];
       const double r2 = norm2(d);
       if (r2 >= cut2 || b == a) return;
@@ -111,6 +80,15 @@ struct Interact {
       sumDrho += out.densityRate;
       maxVisc = out.viscousRate > maxVisc ? out.viscousRate : maxVisc;
     };
+    forCandidates(a, consider);
+    acc[a] = fluidA ? sumAcc + gravity : Vec3<R>{R(0), R(0), R(0)};
+    drho[a] = sumDrho;
+    visc[a] = maxVisc;
+  }
+
+  // Every owned row and ghost listed in the 27 cells around a's (in global-id order when gid is set).
+  template <class F>
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void forCandidates(Index a, F&& consider) const {
     grid.forNeighbourCells(home[a], [&](std::uint32_t c) {
       if (ghostCellStart && gid) {  // merged by id
         Index b = cellStart[c], k = ghostCellStart[c];
@@ -125,9 +103,59 @@ struct Interact {
       if (ghostCellStart)
         for (Index k = ghostCellStart[c]; k < ghostCellStart[c + 1]; ++k) consider(ghostBase + ghostItems[k]);
     });
-    acc[a] = fluidA ? sumAcc + gravity : Vec3<R>{R(0), R(0), R(0)};
-    drho[a] = sumDrho;
-    visc[a] = maxVisc;
+  }
+};
+
+// Mirror walls (SphPhysics.h, MirrorWalls): after Interact, each particle within the kernel's support of a mirror
+// wall adds the terms of the images of its fluid neighbours near the same walls. A pass of its own, over the
+// particles near a wall only, so the pair loop of every other particle stays as lean as without mirrors.
+template <class R>
+struct MirrorImages {
+  static constexpr bool kVariableCost = true;
+  Interact<R> k;  // the arrays, parameters, ghosts and order of the rates pass just run
+
+  PFLOW_HOSTDEVICE void operator()(Index a) const {
+    const MirrorWalls& mirror = k.mirror;
+    const Vec3d xa = k.pos[a];
+    // An image reaches a only through a wall a is near itself (it is at least as far as a's distance to the
+    // wall plus b's).
+    const int nearA = mirror.near(xa);
+    if (!nearA) return;
+    const bool fluidA = k.kind[a] == kFluid;
+    if (!fluidA && k.wet && !k.wet[a]) return;
+    const Vec3<R> va = k.vel[a];
+    const R rhoA = k.rho[a], pA = k.p[a];
+    const double cut2 = double(k.kernel.support()) * double(k.kernel.support());
+    Vec3<R> sumAcc{R(0), R(0), R(0)};
+    R sumDrho = R(0), maxVisc = k.visc[a];
+    k.forCandidates(a, [&](Index b) {
+      if (k.kind[b] != kFluid) return;
+      const int shared = nearA & mirror.near(k.pos[b]);  // walls both are near
+      // Every non-empty subset of those walls: one image per subset.
+      for (int m = shared; m != 0; m = (m - 1) & shared) {
+        const Vec3d xi = mirror.reflect(k.pos[b], m);
+        const Vec3d d = xa - xi;
+        const double r2 = norm2(d);
+        if (r2 >= cut2) continue;
+        const R r = R(std::sqrt(r2));
+        const R rhoB = k.rho[b];
+        const R pI = k.p[b] + rhoB * dot(k.gravity, vcast<R>(xi - k.pos[b]));  // hydrostatic across the wall
+        const R fab = k.kernel.f(r);
+        // Continuity sees the wall as impermeable only (the free-slip image: no tangential divergence at the
+        // wall); the momentum's viscous terms see the wall's condition (no-slip: the reversed velocity).
+        const PairRates<R> slip = pairRates(k.params, vcast<R>(d), va - mirror.imageVelocity(k.vel[b], m, false), R(r2), fab, rhoA, rhoB,
+                                            pA, pI, k.mass[b], k.params.c0, k.params.c0, false);
+        sumDrho += slip.densityRate;
+        const PairRates<R> wall = mirror.noSlip ? pairRates(k.params, vcast<R>(d), va - mirror.imageVelocity(k.vel[b], m, true), R(r2), fab,
+                                                            rhoA, rhoB, pA, pI, k.mass[b], k.params.c0, k.params.c0, false)
+                                                : slip;
+        sumAcc += wall.acceleration;
+        maxVisc = wall.viscousRate > maxVisc ? wall.viscousRate : maxVisc;
+      }
+    });
+    if (fluidA) k.acc[a] += sumAcc;
+    k.drho[a] += sumDrho;
+    k.visc[a] = maxVisc;
   }
 };
 
