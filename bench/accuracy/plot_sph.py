@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Charts of the SPH dam-break study (docs/sph.md, "Convergence") from pflow-accuracy --solver sph output:
   dam_break_2d.png     surge front Z = x/a against T = t sqrt(2g/a) for every resolution, with Martin & Moyce
-                       (1952, both column widths) and Koshizuka & Oka's replot;
+                       (1952, both column widths) and Koshizuka & Oka's replot; dashed: mirror walls
+                       (DIR/dam_break_2d_mirror.csv, when there);
   convergence.png      left: RMS relative error of the front times against cost (wall s per simulated s), one
                        point per run, by sweep; right: |T - T_finest| at Z = 2.5 against dp, with the observed order.
 Usage: plot_sph.py DIR [VALIDATION_DIR]  (reads DIR/dam_break_2d.csv and DIR/convergence.csv, writes the PNGs
@@ -47,8 +48,17 @@ def main():
     for r in rows(os.path.join(out, "dam_break_2d.csv")):
         curves[r["resolution"]].append((fnum(r["T"]), fnum(r["Z"])))
     fig, ax = plt.subplots(figsize=(7, 5))
+    colours = {}
     for name, pts in sorted(curves.items(), key=lambda kv: int(kv[0].split("x")[0])):
-        ax.plot([p[0] for p in pts], [p[1] for p in pts], label="pflow SPH " + name, lw=1.4)
+        line = ax.plot([p[0] for p in pts], [p[1] for p in pts], label="pflow SPH " + name, lw=1.4)[0]
+        colours[name] = line.get_color()
+    mirror_path = os.path.join(out, "dam_break_2d_mirror.csv")
+    if os.path.exists(mirror_path):
+        mirror = defaultdict(list)
+        for r in rows(mirror_path):
+            mirror[r["resolution"]].append((fnum(r["T"]), fnum(r["Z"])))
+        for name, pts in sorted(mirror.items(), key=lambda kv: int(kv[0].split("x")[0])):
+            ax.plot([p[0] for p in pts], [p[1] for p in pts], "--", color=colours.get(name), label="mirror walls " + name, lw=1.1)
     for (name, pts), marker in zip(sorted(experiment(vdir).items()), "os^"):
         ax.plot([p[0] for p in pts], [p[1] for p in pts], marker, mfc="none", color="k", label=name)
     ax.set_xlim(0, 3.5)
