@@ -1,4 +1,4 @@
-// pflow-model-bench: what the least model (simulation.model: auto, compute/sim/ModelChoice.h) saves against
+// pflow-model-bench: what the least model (simulation.model: auto, compute/dem/ModelChoice.h) saves against
 // the full model, on beds where each simplification applies. One JSON line per run on stdout.
 //   frictionless  the standard settled bed (bench/BedScene.h) with friction 0: no tangential history
 //   norolling     the standard bed as it is (friction 0.5, no rolling friction): no rolling torque
@@ -18,8 +18,8 @@
 
 #include "bench/BedScene.h"
 #include "common/Log.h"
-#include "compute/sim/ModelChoice.h"
-#include "compute/sim/Simulation.h"
+#include "compute/dem/ModelChoice.h"
+#include "compute/dem/Simulation.h"
 
 namespace {
 

@@ -25,7 +25,7 @@
 #include "bench/BenchUtil.h"
 #include "common/Log.h"
 #include "compute/mpi/MpiDomain.h"
-#include "compute/sim/Simulation.h"
+#include "compute/dem/Simulation.h"
 
 namespace {
 

@@ -19,7 +19,7 @@
 #include "bench/BenchUtil.h"
 #include "bench/LammpsRunner.h"
 #include "common/Log.h"
-#include "compute/sim/Simulation.h"
+#include "compute/dem/Simulation.h"
 
 namespace {
 

@@ -12,7 +12,7 @@
 
 #include "backend/store/SnapshotFile.h"
 #include "common/Log.h"
-#include "compute/sim/Simulation.h"
+#include "compute/dem/Simulation.h"
 #include "frontend/SceneLoader.h"
 #include "frontend/SceneSummary.h"
 #include "frontend/service/InitialState.h"

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "common/Status.h"
-#include "compute/sim/AccuracyTable.h"
+#include "compute/dem/AccuracyTable.h"
 #include "compute/sim/RunConfig.h"
 
 namespace pflow::frontend {

@@ -4,9 +4,9 @@
 #include <nlohmann/json.hpp>
 #include <numbers>
 
-#include "compute/particles/ParticleFields.h"
-#include "compute/sim/Simulation.h"
-#include "compute/sim/TimeStep.h"
+#include "compute/dem/ParticleFields.h"
+#include "compute/dem/Simulation.h"
+#include "compute/dem/TimeStep.h"
 
 namespace pflow::frontend {
 

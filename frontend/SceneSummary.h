@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "common/Status.h"
-#include "compute/sim/ModelChoice.h"
+#include "compute/dem/ModelChoice.h"
 #include "frontend/SceneLoader.h"
 
 namespace pflow::frontend {

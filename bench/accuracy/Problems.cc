@@ -8,7 +8,7 @@
 #include <numbers>
 #include <utility>
 
-#include "compute/sim/TimeStep.h"
+#include "compute/dem/TimeStep.h"
 #include "tests/support/TestScenes.h"
 
 namespace pflow::bench::accuracy {

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "compute/sim/RunConfig.h"
-#include "compute/sim/Simulation.h"
+#include "compute/dem/Simulation.h"
 
 namespace pflow::bench::accuracy {
 

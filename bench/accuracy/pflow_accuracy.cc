@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "bench/accuracy/Problems.h"
-#include "compute/sim/AccuracyTable.h"
+#include "compute/dem/AccuracyTable.h"
 #include "common/Log.h"
 
 namespace pflow::bench::accuracy {

@@ -1,5 +1,5 @@
 // This pflow was built without nvcc: the CUDA executor is absent and says so.
-#include "compute/sim/Engine.h"
+#include "compute/dem/Engine.h"
 #include "compute/sph/SphEngine.h"
 
 namespace pflow::compute {

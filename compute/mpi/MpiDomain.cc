@@ -7,8 +7,8 @@
 #include <stdexcept>
 
 #include "common/Log.h"
-#include "compute/particles/ParticleFields.h"
-#include "compute/sim/Engine.h"
+#include "compute/dem/ParticleFields.h"
+#include "compute/dem/Engine.h"
 
 namespace pflow::compute {
 

@@ -17,7 +17,7 @@
 #include "compute/decomp/Decomposition.h"
 #include "compute/neighbor/CellGrid.h"
 #include "compute/sim/Domain.h"
-#include "compute/sim/Engine.h"
+#include "compute/dem/Engine.h"
 #include "compute/sim/RunConfig.h"
 
 namespace pflow::compute {

@@ -1,6 +1,6 @@
 // What every solver's field table is made of: the flags that decide where a field travels (snapshots,
 // migration, halo), its multiplicity and one row of description per field. The DEM table is
-// compute/particles/ParticleFields.h, the SPH table compute/sph/SphFields.h; FieldStore and FieldRows
+// compute/dem/ParticleFields.h, the SPH table compute/sph/SphFields.h; FieldStore and FieldRows
 // work on either.
 #pragma once
 #include <cstddef>

@@ -1,7 +1,7 @@
 // What every solver does with the rows of its field table, on any executor: reorder them (the cell sort),
 // pack some of them for another rank (migration, halo) and copy packed rows back in, and copy them to the
 // host as a snapshot. Driven by the table's flags (kSnapshot, kMigrate, kGhost, kRefresh), so a field
-// added to a table travels wherever its flags say. The DEM engine (compute/sim/EngineImpl.h) and the SPH
+// added to a table travels wherever its flags say. The DEM engine (compute/dem/EngineImpl.h) and the SPH
 // engine (compute/sph/SphEngineImpl.h) both hold one.
 #pragma once
 #include <algorithm>

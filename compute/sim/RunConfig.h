@@ -81,11 +81,11 @@ enum class DecompositionKind { kSfc, kMultiSection };
 // What a run does when a detector finds it unstable (docs/physics.md, "Instability detectors"): stop with
 // the error, or go back to the last checkpoint and halve the time step.
 enum class OnInstability { kStop, kReduceDt };
-// simulation.model: kAuto computes the least model the scene needs (compute/sim/ModelChoice.h); kFull
+// simulation.model: kAuto computes the least model the scene needs (compute/dem/ModelChoice.h); kFull
 // computes everything (tangential history, rolling torque, wall phases, 3D) whatever the scene.
 enum class ModelMode { kAuto, kFull };
 // simulation.accuracy: the relative error the scene tolerates on a named reference quantity (a key of the
-// accuracy study's table, compute/sim/AccuracyTable.h).
+// accuracy study's table, compute/dem/AccuracyTable.h).
 struct AccuracyTarget {
   std::string quantity;
   double tolerance = 0;  // relative, > 0

@@ -2,7 +2,7 @@
 // same kernels on the GPU.
 #include "compute/cuda/CudaCheck.h"
 #include "compute/cuda/CudaExecutor.cuh"
-#include "compute/sim/Engine.h"
+#include "compute/dem/Engine.h"
 #include "compute/sph/SphEngineImpl.h"
 
 namespace pflow::compute::sph {

@@ -1,5 +1,5 @@
 // THE list of the SPH solver's per-particle fields, in the same form as the DEM table
-// (compute/particles/ParticleFields.h): reorder, snapshots, migration and halo exchange iterate over it
+// (compute/dem/ParticleFields.h): reorder, snapshots, migration and halo exchange iterate over it
 // through the shared FieldStore and FieldRows, so adding a field is one line here.
 //
 // Columns: enum name, output name, element type, SI unit, flags. `Real` and `Real3` are the run's

@@ -29,7 +29,7 @@
 #include "common/Log.h"
 #include "common/rpc/Rpc.h"
 #include "compute/mpi/MpiDomain.h"
-#include "compute/sim/Simulation.h"
+#include "compute/dem/Simulation.h"
 #include "compute/worker/SnapshotSinks.h"
 #include "compute/worker/WorkerOptions.h"
 #include "compute/worker/WorkerRun.h"

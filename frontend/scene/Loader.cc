@@ -4,7 +4,7 @@
 #include <charconv>
 #include <filesystem>
 
-#include "compute/particles/ParticleFields.h"
+#include "compute/dem/ParticleFields.h"
 #include <new>
 
 #include <algorithm>
@@ -314,7 +314,7 @@ void Loader::parseSimulation(const Fields& top) {
     }
   }
   // Physics switches: model no more than the scene needs. Off = the coefficient is zero for every material and
-  // pair, so the least model (compute/sim/ModelChoice.h) leaves that part out.
+  // pair, so the least model (compute/dem/ModelChoice.h) leaves that part out.
   if (const Entry* p = f->find("physics")) {
     if (const auto pf = mapping(p->value, "simulation.physics", p->loc, kPhysicsKeys)) {
       if (const Entry* fr = pf->find("friction")) read(fr->value, pf->child("friction"), fr->loc, m_friction);

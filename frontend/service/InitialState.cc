@@ -4,7 +4,7 @@
 #include <filesystem>
 
 #include "backend/store/SnapshotFile.h"
-#include "compute/sim/Simulation.h"
+#include "compute/dem/Simulation.h"
 #include "compute/sph/SphSimulation.h"
 
 namespace pflow::frontend {

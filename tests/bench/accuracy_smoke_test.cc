@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "compute/sim/AccuracyTable.h"
+#include "compute/dem/AccuracyTable.h"
 
 namespace pflow {
 namespace {

@@ -1,4 +1,4 @@
-// RunConfig::validate() and the time-step functions (compute/sim/TimeStep.h).
+// RunConfig::validate() and the time-step functions (compute/dem/TimeStep.h).
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -8,8 +8,8 @@
 #include <string>
 
 #include "compute/sim/RunConfig.h"
-#include "compute/sim/Simulation.h"
-#include "compute/sim/TimeStep.h"
+#include "compute/dem/Simulation.h"
+#include "compute/dem/TimeStep.h"
 
 namespace pflow::compute {
 namespace {

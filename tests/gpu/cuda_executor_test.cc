@@ -11,7 +11,7 @@
 #include <random>
 
 #include "bench/BedScene.h"
-#include "compute/sim/Simulation.h"
+#include "compute/dem/Simulation.h"
 #include "tests/support/TestScenes.h"
 
 namespace pflow::test {

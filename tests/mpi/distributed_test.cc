@@ -14,7 +14,7 @@
 #include <random>
 
 #include "compute/mpi/MpiDomain.h"
-#include "compute/sim/Simulation.h"
+#include "compute/dem/Simulation.h"
 #include "tests/support/TestScenes.h"
 
 namespace pflow::test {

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <limits>
 
-#include "compute/integrate/VelocityVerlet.h"
-#include "compute/sim/Simulation.h"
+#include "compute/dem/integrate/VelocityVerlet.h"
+#include "compute/dem/Simulation.h"
 #include "tests/support/TestScenes.h"
 
 namespace pflow::test {

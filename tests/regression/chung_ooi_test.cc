@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "compute/sim/Simulation.h"
+#include "compute/dem/Simulation.h"
 #include "tests/support/TestScenes.h"
 
 namespace pflow::test {

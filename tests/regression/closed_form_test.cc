@@ -13,8 +13,8 @@
 #include <numbers>
 #include <vector>
 
-#include "compute/contact/ContactParams.h"
-#include "compute/sim/Simulation.h"
+#include "compute/dem/contact/ContactParams.h"
+#include "compute/dem/Simulation.h"
 #include "tests/support/TestScenes.h"
 
 namespace pflow::test {

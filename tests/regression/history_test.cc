@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "compute/sim/Simulation.h"
+#include "compute/dem/Simulation.h"
 #include "tests/support/TestScenes.h"
 
 namespace pflow::test {

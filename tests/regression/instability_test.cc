@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "compute/sim/Simulation.h"
-#include "compute/sim/TimeStep.h"
+#include "compute/dem/Simulation.h"
+#include "compute/dem/TimeStep.h"
 #include "tests/support/TestScenes.h"
 
 namespace pflow::test {

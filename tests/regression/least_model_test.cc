@@ -1,4 +1,4 @@
-// The least model (simulation.model: auto, compute/sim/ModelChoice.h) gives the full model's answer where
+// The least model (simulation.model: auto, compute/dem/ModelChoice.h) gives the full model's answer where
 // it applies: each simplification run against simulation.model: full on a scene where it holds.
 #include <gtest/gtest.h>
 
@@ -8,8 +8,8 @@
 #include <string>
 #include <map>
 
-#include "compute/sim/ModelChoice.h"
-#include "compute/sim/Simulation.h"
+#include "compute/dem/ModelChoice.h"
+#include "compute/dem/Simulation.h"
 #include "tests/support/TestScenes.h"
 
 namespace pflow::test {

@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "bench/BedScene.h"
-#include "compute/sim/Simulation.h"
+#include "compute/dem/Simulation.h"
 
 namespace pflow::test {
 namespace {

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <numbers>
 
-#include "compute/geometry/MeshKernels.h"
-#include "compute/sim/Simulation.h"
+#include "compute/dem/geometry/MeshKernels.h"
+#include "compute/dem/Simulation.h"
 #include "tests/support/TestScenes.h"
 
 namespace pflow::test {

@@ -4,7 +4,7 @@
 #include <numbers>
 
 #include "compute/sim/RunConfig.h"
-#include "compute/sim/TimeStep.h"
+#include "compute/dem/TimeStep.h"
 
 namespace pflow::test {
 

@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "compute/contact/ContactModels.h"
+#include "compute/dem/contact/ContactModels.h"
 
 namespace pflow::compute::contact {
 namespace {

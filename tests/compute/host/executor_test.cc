@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "compute/core/Memory.h"
-#include "compute/integrate/VelocityVerlet.h"
+#include "compute/dem/integrate/VelocityVerlet.h"
 
 // The skin accumulator rounds each sum away from zero by at most one unit in the last place, the way
 // nextafterf would, and never below the exact sum: a slow creep still reaches the skin.

@@ -1,12 +1,12 @@
-// deriveModel (compute/sim/ModelChoice.h): each rule of the least model on small configurations, and
+// deriveModel (compute/dem/ModelChoice.h): each rule of the least model on small configurations, and
 // simulation.model: full; AccuracyTable parsing and proposals on a fixture (tests/data/accuracy_study_fixture.csv).
 #include <gtest/gtest.h>
 
 #include <fstream>
 #include <sstream>
 
-#include "compute/sim/ModelChoice.h"
-#include "compute/sim/Simulation.h"
+#include "compute/dem/ModelChoice.h"
+#include "compute/dem/Simulation.h"
 #include "tests/support/TestScenes.h"
 
 namespace pflow::test {

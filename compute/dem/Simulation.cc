@@ -1,4 +1,4 @@
-#include "compute/sim/Simulation.h"
+#include "compute/dem/Simulation.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 
 #include "common/Log.h"
 #include "compute/core/Memory.h"
-#include "compute/sim/ModelChoice.h"
+#include "compute/dem/ModelChoice.h"
 
 namespace pflow::compute {
 

@@ -1,5 +1,5 @@
 #include "compute/core/CpuExecutor.h"
-#include "compute/sim/EngineImpl.h"
+#include "compute/dem/EngineImpl.h"
 
 namespace pflow::compute {
 

@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "compute/sim/AccuracyTable.h"
-#include "compute/sim/ModelFlags.h"
+#include "compute/dem/AccuracyTable.h"
+#include "compute/dem/ModelFlags.h"
 #include "compute/sim/RunConfig.h"
 
 namespace pflow::compute {

@@ -8,7 +8,7 @@
 #pragma once
 #include <cmath>
 
-#include "compute/contact/ContactParams.h"
+#include "compute/dem/contact/ContactParams.h"
 #include "compute/core/VectorMath.h"
 
 namespace pflow::compute::contact {

@@ -4,7 +4,7 @@
 // Included at the end of EngineImpl.h: these are its member templates.
 #pragma once
 
-#include "compute/sim/EngineImpl.h"
+#include "compute/dem/EngineImpl.h"
 
 namespace pflow::compute {
 

@@ -1,4 +1,4 @@
-#include "compute/sim/TimeStep.h"
+#include "compute/dem/TimeStep.h"
 
 #include <algorithm>
 #include <cmath>

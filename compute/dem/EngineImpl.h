@@ -11,14 +11,14 @@
 #include <type_traits>
 #include <vector>
 
-#include "compute/contact/ForceKernel.h"
-#include "compute/geometry/MeshKernels.h"
-#include "compute/integrate/VelocityVerlet.h"
+#include "compute/dem/contact/ForceKernel.h"
+#include "compute/dem/geometry/MeshKernels.h"
+#include "compute/dem/integrate/VelocityVerlet.h"
 #include "compute/neighbor/NeighborKernels.h"
 #include "compute/particles/FieldRows.h"
-#include "compute/particles/ParticleData.h"
-#include "compute/sim/Engine.h"
-#include "compute/sim/TimeStep.h"
+#include "compute/dem/ParticleData.h"
+#include "compute/dem/Engine.h"
+#include "compute/dem/TimeStep.h"
 
 namespace pflow::compute {
 
@@ -580,4 +580,4 @@ void EngineImpl<Exec, R>::binTriangles() {
 }  // namespace pflow::compute
 
 // The error path and diagnostics (host copies, never on the step path).
-#include "compute/sim/EngineDiagnostics.h"
+#include "compute/dem/EngineDiagnostics.h"

@@ -1,4 +1,4 @@
-#include "compute/contact/ContactParams.h"
+#include "compute/dem/contact/ContactParams.h"
 
 #include <cmath>
 #include <map>

@@ -9,10 +9,10 @@
 #include "common/Status.h"
 #include "compute/core/ExecutorKind.h"
 #include "compute/sim/Domain.h"
-#include "compute/sim/Engine.h"
+#include "compute/dem/Engine.h"
 #include "compute/sim/PhaseTimers.h"
 #include "compute/sim/RunConfig.h"
-#include "compute/sim/TimeStep.h"
+#include "compute/dem/TimeStep.h"
 
 namespace pflow::compute {
 

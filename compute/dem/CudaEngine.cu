@@ -1,7 +1,7 @@
 // The engine on the CUDA executor: the same EngineImpl as the OpenMP path, instantiated with
 // CudaExecutor, so every phase runs the same kernel functors on the GPU.
 #include "compute/cuda/CudaExecutor.cuh"
-#include "compute/sim/EngineImpl.h"
+#include "compute/dem/EngineImpl.h"
 
 namespace pflow::compute {
 

@@ -1,7 +1,7 @@
 // The DEM solver's particle state: the generic field store (FieldStore.h) over the DEM field table.
 #pragma once
 #include "compute/particles/FieldStore.h"
-#include "compute/particles/ParticleFields.h"
+#include "compute/dem/ParticleFields.h"
 
 namespace pflow::compute {
 

@@ -1,4 +1,4 @@
-#include "compute/sim/AccuracyTable.h"
+#include "compute/dem/AccuracyTable.h"
 #include "compute/core/Format.h"
 
 #include <algorithm>

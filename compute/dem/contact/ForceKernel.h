@@ -11,10 +11,10 @@
 #include <utility>
 #include <vector>
 
-#include "compute/contact/ContactModels.h"
+#include "compute/dem/contact/ContactModels.h"
 #include "compute/core/Atomics.h"
 #include "compute/core/Conditions.h"
-#include "compute/geometry/MeshKernels.h"
+#include "compute/dem/geometry/MeshKernels.h"
 #include "compute/neighbor/NeighborKernels.h"
 
 namespace pflow::compute {

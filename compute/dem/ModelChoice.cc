@@ -1,12 +1,12 @@
-#include "compute/sim/ModelChoice.h"
+#include "compute/dem/ModelChoice.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <set>
 
-#include "compute/contact/ContactParams.h"
-#include "compute/sim/TimeStep.h"
+#include "compute/dem/contact/ContactParams.h"
+#include "compute/dem/TimeStep.h"
 
 namespace pflow::compute {
 

@@ -10,12 +10,12 @@
 
 #include "common/Status.h"
 #include "compute/core/ExecutorKind.h"
-#include "compute/contact/ContactParams.h"
-#include "compute/contact/ForceKernel.h"
+#include "compute/dem/contact/ContactParams.h"
+#include "compute/dem/contact/ForceKernel.h"
 #include "compute/neighbor/CellGrid.h"
 #include "compute/particles/DistributedRows.h"
 #include "compute/particles/ParticleSnapshot.h"
-#include "compute/sim/ModelFlags.h"
+#include "compute/dem/ModelFlags.h"
 
 namespace pflow::compute {
 
@@ -176,7 +176,7 @@ class Engine : public DistributedRows {
 // `singlePrecision`: float physics (simulation.precision: float); positions stay double.
 std::unique_ptr<Engine> makeCpuEngine(EngineSetup setup, bool singlePrecision = false);
 
-// The CUDA engine on `device` (compute/cuda/CudaEngine.cu). An error, never a fall-back, where this pflow
+// The CUDA engine on `device` (compute/dem/CudaEngine.cu). An error, never a fall-back, where this pflow
 // was built without CUDA or the device is missing.
 Result<std::unique_ptr<Engine>> makeCudaEngine(EngineSetup setup, int device, bool singlePrecision = false);
 

@@ -1,4 +1,4 @@
-#include "compute/particles/ParticleData.h"
+#include "compute/dem/ParticleData.h"
 
 namespace pflow::compute {
 
