@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string>
 
+#include "compute/core/Format.h"
 #include "compute/sph/SphFields.h"
 #include "compute/sph/SphSimulation.h"
 #include "frontend/SceneSummary.h"
@@ -11,12 +12,6 @@
 namespace pflow::frontend {
 
 namespace {
-
-std::string g4(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.4g", v);
-  return b;
-}
 
 // Device bytes per particle: every field of the SPH table at the run's precision, the reorder scratch (one column
 // of the widest field), and the cell sort (key and permutation). No neighbour lists: the rates walk the cells.
@@ -71,16 +66,16 @@ Result<SceneSummary> summarizeSph(const LoadedScene& scene) {
   // the flow stays within the expected speed, so the step count is an estimate to within about 10 %.
   s.dt = sph.dt ? *sph.dt
                : compute::sph::stableDt(sph.cfl, d.h, sph.kinematicViscosity, compute::sph::inverseStep(d.h, d.c0, 0, 0, false));
-  s.dtReason = sph.dt ? "sph.dt, fixed" : "CFL " + g4(sph.cfl) + " x h / c0 at rest (h " + g4(d.h) + " m, c0 " + g4(d.c0) + " m/s), adapted every step";
+  s.dtReason = sph.dt ? "sph.dt, fixed" : "CFL " + format::num4(sph.cfl) + " x h / c0 at rest (h " + format::num4(d.h) + " m, c0 " + format::num4(d.c0) + " m/s), adapted every step";
   s.steps = std::llround(c.sim.duration / s.dt);
 
   s.model.precision = c.sim.precision;
   s.model.decisions = {
       {"solver", "sph", "solver: sph (weakly compressible SPH, docs/sph.md)"},
       {"particles", std::to_string(fluid) + " fluid, " + std::to_string(n - fluid) + " boundary",
-       std::to_string(sph.dimension) + "D lattice of spacing " + g4(dp) + " m, " + std::to_string(d.boundaryLayers) + " wall layers"},
-      {"kernel", compute::sph::kernelName(sph.kernel), "h = " + g4(d.h) + " m (h/dp " + g4(sph.smoothingRatio) + ")"},
-      {"sound speed", g4(d.c0) + " m/s", d.soundSpeedReason},
+       std::to_string(sph.dimension) + "D lattice of spacing " + format::num4(dp) + " m, " + std::to_string(d.boundaryLayers) + " wall layers"},
+      {"kernel", compute::sph::kernelName(sph.kernel), "h = " + format::num4(d.h) + " m (h/dp " + format::num4(sph.smoothingRatio) + ")"},
+      {"sound speed", format::num4(d.c0) + " m/s", d.soundSpeedReason},
       {"precision", c.sim.precision == compute::Precision::kFloat ? "float" : "double", "simulation.precision"}};
   s.bytesPerParticle = c.sim.precision == compute::Precision::kFloat ? sphBytesPerParticle<float>() : sphBytesPerParticle<double>();
   s.memoryBytes = s.bytesPerParticle * double(n) + 4.0 * (double(g.nx) * g.ny * g.nz + 1);

@@ -13,6 +13,12 @@ inline std::string num(double v) {
   std::snprintf(buf, sizeof buf, "%.6g", v);
   return buf;
 }
+// 4 significant digits, e.g. 39.62, 7.572e-05: the model's decisions and summaries.
+inline std::string num4(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.4g", v);
+  return buf;
+}
 // [x, y, z]. Built by appending: GCC 12 warns falsely (-Wrestrict, PR105329) on "[" + std::string chains.
 inline std::string vec(const Vec3d& v) {
   std::string out = "[";

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <set>
 
+#include "compute/core/Format.h"
 #include "compute/dem/contact/ContactParams.h"
 #include "compute/dem/TimeStep.h"
 
@@ -12,11 +13,7 @@ namespace pflow::compute {
 
 namespace {
 
-std::string g(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.4g", x);
-  return buf;
-}
+std::string g(double x) { return format::num4(x); }
 
 double component(const Vec3d& v, int axis) { return axis == 0 ? v.x : axis == 1 ? v.y : v.z; }
 

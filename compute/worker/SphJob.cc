@@ -39,14 +39,11 @@ int runSphRank(const WorkerOptions& o, int rank, int ranks, const frontend::Load
   compute::RunConfig cfg = scene.config;
   if (o.threads > 0) cfg.sim.threads = o.threads;
   const LeasedDevice& device = o.devices[std::size_t(rank)];
+  const RankPlacement place = placeRank(o, rank, ranks, cfg);
   compute::sph::SphOptions so;
-  if (device.kind == "gpu") {  // a GPU lease runs on that GPU or fails: never silently on the CPU
-    so.executor = compute::ExecutorKind::kCuda;
-    so.device = device.index;
-  }
-  compute::MpiDomainOptions split;
-  split.strategy = cfg.sim.decomposition;
-  auto domain = ranks > 1 ? std::make_shared<compute::MpiDomain>(MPI_COMM_WORLD, split) : nullptr;
+  so.executor = place.executor;
+  so.device = place.device;
+  const auto& domain = place.domain;
   so.domain = domain;
   compute::Domain single;
   compute::Domain& all = domain ? static_cast<compute::Domain&>(*domain) : single;

@@ -1,10 +1,25 @@
 #include "compute/worker/WorkerRun.h"
 
+#include <mpi.h>
+
 #include <cstdio>
 
 namespace pflow::worker {
 
 volatile std::sig_atomic_t g_stopSignal = 0;
+
+RankPlacement placeRank(const WorkerOptions& o, int rank, int ranks, const compute::RunConfig& config) {
+  RankPlacement p;
+  const LeasedDevice& device = o.devices[std::size_t(rank)];
+  if (device.kind == "gpu") {
+    p.executor = compute::ExecutorKind::kCuda;
+    p.device = device.index;
+  }
+  compute::MpiDomainOptions split;
+  split.strategy = config.sim.decomposition;
+  if (ranks > 1) p.domain = std::make_shared<compute::MpiDomain>(MPI_COMM_WORLD, split);
+  return p;
+}
 
 int fail(int code, const std::string& message) {
   spdlog::error("{}", message);

@@ -11,6 +11,8 @@
 
 #include "common/Log.h"
 #include "common/rpc/Rpc.h"
+#include "compute/mpi/MpiDomain.h"
+#include "compute/sim/RunConfig.h"
 #include "compute/worker/WorkerOptions.h"
 #include "frontend/SceneLoader.h"
 #include "pflow/manager/v1/node_registry.grpc.pb.h"
@@ -92,6 +94,15 @@ class ProgressReporter {
   std::atomic<bool> m_cancel{false};
   std::thread m_thread;
 };
+
+// Where this rank runs: the leased device (a GPU lease runs on that GPU or fails, never silently on the CPU) and,
+// with several ranks, the MPI domain over MPI_COMM_WORLD (the scene's decomposition).
+struct RankPlacement {
+  compute::ExecutorKind executor = compute::ExecutorKind::kCpu;
+  int device = 0;
+  std::shared_ptr<compute::MpiDomain> domain;  // null: one rank
+};
+RankPlacement placeRank(const WorkerOptions& o, int rank, int ranks, const compute::RunConfig& config);
 
 // Logs the message, prints it as the last stderr line (the agent reports it) and returns code.
 int fail(int code, const std::string& message);

@@ -66,14 +66,11 @@ int runRank(const worker::WorkerOptions& o, int rank, int ranks) {
   compute::RunConfig cfg = scene.value().config;
   if (o.threads > 0) cfg.sim.threads = o.threads;
   const worker::LeasedDevice& device = o.devices[std::size_t(rank)];
+  const worker::RankPlacement place = worker::placeRank(o, rank, ranks, cfg);
   compute::SimulationOptions so;
-  if (device.kind == "gpu") {  // a GPU lease runs on that GPU or fails: never silently on the CPU
-    so.executor = compute::ExecutorKind::kCuda;
-    so.device = device.index;
-  }
-  compute::MpiDomainOptions split;
-  split.strategy = cfg.sim.decomposition;
-  auto domain = ranks > 1 ? std::make_shared<compute::MpiDomain>(MPI_COMM_WORLD, split) : nullptr;
+  so.executor = place.executor;
+  so.device = place.device;
+  const auto& domain = place.domain;
   so.domain = domain;
   compute::Domain single;
   compute::Domain& all = domain ? static_cast<compute::Domain&>(*domain) : single;
