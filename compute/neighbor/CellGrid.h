@@ -48,16 +48,6 @@ struct CellGrid {
       for (int y = cy > 0 ? cy - 1 : 0; y <= (cy + 1 < ny ? cy + 1 : ny - 1); ++y)
         for (int x = cx > 0 ? cx - 1 : 0; x <= (cx + 1 < nx ? cx + 1 : nx - 1); ++x) f(index(x, y, z));
   }
-  // The same cells as rows along x: f(first, last) for each (z, y), the cells first..last being consecutive
-  // indices (so the particles sorted by cell in them are one range). At most 9 rows, 3 in a grid one cell thick.
-  template <class F>
-  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void forNeighbourRows(Vec3d p, const F& f) const {
-    int cx, cy, cz;
-    coords(p, cx, cy, cz);
-    const int x0 = cx > 0 ? cx - 1 : 0, x1 = cx + 1 < nx ? cx + 1 : nx - 1;
-    for (int z = cz > 0 ? cz - 1 : 0; z <= (cz + 1 < nz ? cz + 1 : nz - 1); ++z)
-      for (int y = cy > 0 ? cy - 1 : 0; y <= (cy + 1 < ny ? cy + 1 : ny - 1); ++y) f(index(x0, y, z), index(x1, y, z));
-  }
 };
 
 }  // namespace pflow::compute

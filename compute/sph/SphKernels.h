@@ -86,16 +86,9 @@ struct Interact {
     visc[a] = maxVisc;
   }
 
-  // Every owned row and ghost listed in the 27 cells around a's (in global-id order when gid is set). Without
-  // ghosts the cells of a row along x hold one range of rows: 9 loops instead of 27, in the same order.
+  // Every owned row and ghost listed in the 27 cells around a's (in global-id order when gid is set).
   template <class F>
   PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void forCandidates(Index a, F&& consider) const {
-    if (!ghostCellStart) {
-      grid.forNeighbourRows(home[a], [&](std::uint32_t first, std::uint32_t last) {
-        for (Index b = cellStart[first]; b < cellStart[last + 1]; ++b) consider(b);
-      });
-      return;
-    }
     grid.forNeighbourCells(home[a], [&](std::uint32_t c) {
       if (ghostCellStart && gid) {  // merged by id
         Index b = cellStart[c], k = ghostCellStart[c];

@@ -3,9 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <vector>
 
-#include "compute/neighbor/CellGrid.h"
 #include "compute/sph/SphPhysics.h"
 
 using namespace pflow;
@@ -137,28 +135,6 @@ TEST(StableDt, SmallestLimit) {
   EXPECT_DOUBLE_EQ(stableDt(0.2, h, 0, inverseStep(h, c0, 1e6 * 1e6, 0, false)), 0.2 * h / c0);  // walls do not move
   EXPECT_NEAR(stableDt(0.2, h, 0, inverseStep(h, c0, 0, 500, true)), 0.2 * h / (c0 + h * 500), 1e-15);
   EXPECT_DOUBLE_EQ(stableDt(0.2, h, 1.0, inverseStep(h, c0, 0, 0, true)), 0.125 * 1e-4);
-}
-
-// The pair loop's rows (CellGrid::forNeighbourRows) cover exactly the 27 cells of forNeighbourCells, in the same
-// order, at the grid's corners, edges and inside, and in a grid one cell thick (2D).
-TEST(SphCells, RowsCoverTheNeighbourCellsInOrder) {
-  for (int ny : {1, 4}) {
-    compute::CellGrid g;
-    g.lo = {0, 0, 0};
-    g.cellSize = 1;
-    g.invCellSize = 1;
-    g.nx = 5, g.ny = ny, g.nz = 3;
-    for (double x : {0.5, 2.5, 4.5})
-      for (double y : {0.5, 2.5})
-        for (double z : {0.5, 1.5, 2.5}) {
-          std::vector<std::uint32_t> cells, rows;
-          g.forNeighbourCells(Vec3d{x, y, z}, [&](std::uint32_t c) { cells.push_back(c); });
-          g.forNeighbourRows(Vec3d{x, y, z}, [&](std::uint32_t first, std::uint32_t last) {
-            for (std::uint32_t c = first; c <= last; ++c) rows.push_back(c);
-          });
-          EXPECT_EQ(rows, cells) << "at " << x << ", " << y << ", " << z << " (ny " << ny << ")";
-        }
-  }
 }
 
 }  // namespace
