@@ -108,9 +108,7 @@ int runSphRank(const WorkerOptions& o, int rank, int ranks, const frontend::Load
     }
     if (s.outputDue())
       if (Status st = write(); !st.isOk()) return st;
-    int stop = (g_stopSignal || progress.cancelRequested()) ? 1 : 0;
-    if (domain) MPI_Allreduce(MPI_IN_PLACE, &stop, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);  // every rank stops together
-    if (stop) {
+    if (stopAgreed(progress.cancelRequested(), domain)) {
       cancelled = true;
       return Status(StatusCode::kCancelled, "cancelled at step " + std::to_string(s.stepCount()));
     }

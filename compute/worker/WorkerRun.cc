@@ -21,6 +21,12 @@ RankPlacement placeRank(const WorkerOptions& o, int rank, int ranks, const compu
   return p;
 }
 
+bool stopAgreed(bool cancelRequested, const std::shared_ptr<compute::MpiDomain>& domain) {
+  int stop = (g_stopSignal || cancelRequested) ? 1 : 0;
+  if (domain) MPI_Allreduce(MPI_IN_PLACE, &stop, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);  // every rank stops together
+  return stop != 0;
+}
+
 int fail(int code, const std::string& message) {
   spdlog::error("{}", message);
   std::fprintf(stderr, "%s\n", message.c_str());  // the agent reports the last stderr line

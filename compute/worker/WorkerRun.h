@@ -104,6 +104,9 @@ struct RankPlacement {
 };
 RankPlacement placeRank(const WorkerOptions& o, int rank, int ranks, const compute::RunConfig& config);
 
+// Collective with several ranks: true on every rank when any rank saw SIGTERM/SIGINT or the manager's cancel.
+bool stopAgreed(bool cancelRequested, const std::shared_ptr<compute::MpiDomain>& domain);
+
 // Logs the message, prints it as the last stderr line (the agent reports it) and returns code.
 int fail(int code, const std::string& message);
 

@@ -114,9 +114,7 @@ int runRank(const worker::WorkerOptions& o, int rank, int ranks) {
   auto observer = [&](const compute::Simulation& s) -> Status {
     if (s.outputDue())
       if (Status st = write(); !st.isOk()) return st;
-    int stop = (worker::g_stopSignal || progress.cancelRequested()) ? 1 : 0;
-    if (domain) MPI_Allreduce(MPI_IN_PLACE, &stop, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);  // every rank stops together
-    if (stop) {
+    if (worker::stopAgreed(progress.cancelRequested(), domain)) {
       cancelled = true;
       return Status(StatusCode::kCancelled, "cancelled at step " + std::to_string(s.stepCount()));
     }

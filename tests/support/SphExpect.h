@@ -30,4 +30,29 @@ inline void expectFrontFollowsMartinMoyce(compute::sph::SphSimulation& sim, doub
   std::printf("%sfront speed dZ/dT from Z = 2 to 3.5: %.3f (experiment %.3f)\n", label.c_str(), speed, measured);
 }
 
+// Fluid particles (kind 0) in horizontal layers one spacing thick, from the floor (z = 0) to the kernel's reach
+// (2h) under the free surface: each layer's mean pressure within `tolerance` of rho g (surface - its mean z).
+// Returns the layers checked.
+inline int expectHydrostaticLayers(const compute::ParticleSnapshot& s, double surface, double dp, double h, double rho, double g,
+                                   double tolerance) {
+  const auto* x = s.find("position")->as<Vec3d>();
+  const auto* p = s.find("pressure")->as<double>();
+  const auto* kind = s.find("kind")->as<std::int32_t>();
+  int layers = 0;
+  for (double z = 0; z < surface - 2 * h; z += dp) {
+    double sum = 0, zsum = 0;
+    int count = 0;
+    for (std::size_t i = 0; i < s.n; ++i)
+      if (kind[i] == 0 && x[i].z >= z && x[i].z < z + dp) {
+        sum += p[i];
+        zsum += x[i].z;
+        ++count;
+      }
+    if (!count) continue;
+    ++layers;
+    EXPECT_NEAR(sum / count, rho * g * (surface - zsum / count), tolerance) << "layer at z = " << zsum / count;
+  }
+  return layers;
+}
+
 }  // namespace pflow::test
