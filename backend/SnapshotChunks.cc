@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <fstream>
 
 namespace pflow::backend {
 namespace {
@@ -336,11 +335,6 @@ Status snapshotChunks(const std::string& jobId, const compute::ParticleSnapshot&
   return Status::ok();
 }
 
-std::string probesCsvPathFor(const std::string& h5Path) {
-  const std::string stem = h5Path.size() > 3 && h5Path.compare(h5Path.size() - 3, 3, ".h5") == 0 ? h5Path.substr(0, h5Path.size() - 3) : h5Path;
-  return stem + ".probes.csv";
-}
-
 std::string SnapshotFileSink::probesCsvPath() const { return probesCsvPathFor(m_output); }
 
 // "time" then one array per probe, each in row order (FileCursor in SnapshotStore.cc sends them so).
@@ -393,11 +387,7 @@ Status SnapshotFileSink::finish() {
   if (m_probes.names.empty()) return Status::ok();
   for (const auto& v : m_probes.values)
     if (v.size() != m_probes.time.size()) return invalidArgument(m_output + ": the probe series arrived incomplete");
-  if (Status st = writeProbeSeries(m_output, m_probes); !st) return st;
-  std::ofstream csv(probesCsvPath());
-  csv << probeSeriesCsv(m_probes);
-  if (!csv) return ioError("cannot write " + probesCsvPath());
-  return Status::ok();
+  return writeProbeFiles(m_output, m_probes);
 }
 
 }  // namespace pflow::backend

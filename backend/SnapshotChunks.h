@@ -61,7 +61,7 @@ struct Chunk {
   Section section = Section::kParticles;
   ArrayPiece array;
   std::optional<GridSpec> grid;  // kGrid only
-  std::optional<Vec3d> point;    // kProbes, a probe's array: where it samples [m]
+  std::optional<Vec3d> point = std::nullopt;  // kProbes, a probe's array: where it samples [m]
 };
 
 using PieceSink = std::function<Status(ArrayPiece&&)>;
@@ -133,7 +133,6 @@ class SnapshotFileSink {
   // chunks came, its /probes and the same series as CSV in probesCsvPath().
   Status finish();
   std::string probesCsvPath() const;  // <output without .h5>.probes.csv
-  std::size_t probeSamples() const { return m_probes.time.size(); }
 
  private:
   Status addProbes(const Chunk& chunk);
@@ -142,7 +141,5 @@ class SnapshotFileSink {
   ProbeSeries m_probes;
 };
 
-// The CSV beside a snapshot file: out.h5 -> out.probes.csv.
-std::string probesCsvPathFor(const std::string& h5Path);
 
 }  // namespace pflow::backend

@@ -507,12 +507,7 @@ Result<std::uint64_t> SnapshotStore::appendProbes(const std::string& jobId, cons
   std::unique_lock<std::mutex> lock;
   auto j = job(jobId, JobMode::kCreate, lock);
   if (!j) return j.status();
-  if (Status st = j.value()->writer->appendProbes(samples); !st) return st;
-  auto reader = SnapshotReader::open(jobFile(jobId));
-  if (!reader) return reader.status();
-  auto stored = reader.value()->readProbes();
-  if (!stored) return stored.status();
-  return std::uint64_t(stored->time.size());
+  return j.value()->writer->appendProbes(samples);
 }
 
 Status SnapshotStore::readChunks(const std::string& jobId, const ReadRequest& request,

@@ -3,19 +3,16 @@
 // progress line go by simulated time).
 #include <chrono>
 #include <cmath>
-#include <filesystem>
 #include <nlohmann/json.hpp>
 
 #include "backend/store/ProbeSeries.h"
 #include "backend/store/SnapshotFile.h"
-#include <fstream>
 #include "cli/SphRunCommand.h"
 #include "common/Log.h"
 #include "compute/sph/SphSimulation.h"
 
 namespace pflow::cli {
 
-namespace fs = std::filesystem;
 using compute::sph::SphSimulation;
 
 Result<RunSummary> runSphScene(const RunOptions& o, const frontend::LoadedScene& scene, const std::string& outputPath) {
@@ -56,16 +53,7 @@ Result<RunSummary> runSphScene(const RunOptions& o, const frontend::LoadedScene&
   }
   const double duration = cfg.sim.duration;
   sim.scheduleOutput(cfg.sim.snapshotInterval, duration);
-  // Probes and gauges: every output.probe_interval (at the first step past each multiple), else at the snapshots.
-  backend::ProbeSeries series;
-  for (const auto& p : sim.probes()) {
-    series.names.push_back(p.name);
-    series.units.push_back(p.gauge ? "m" : "Pa");
-    series.points.push_back(p.point);
-  }
-  const double probeInterval = cfg.sph.probeInterval;
-  double nextProbe = probeInterval;
-  if (!series.names.empty()) series.add(sim.time(), sim.probeValues());
+  backend::ProbeRecorder probes(sim, cfg.sph.probeInterval);
   spdlog::info("running to t = {} s, a snapshot every {} s, output {}", duration,
                cfg.sim.snapshotInterval > 0 ? cfg.sim.snapshotInterval : duration, sum.outputPath);
   const auto wallStart = std::chrono::steady_clock::now();
@@ -73,10 +61,7 @@ Result<RunSummary> runSphScene(const RunOptions& o, const frontend::LoadedScene&
   auto observer = [&](const SphSimulation& s) -> Status {
     if (s.outputDue())
       if (Status st = writeSnapshot(); !st.isOk()) return st;
-    if (!series.names.empty() && ((probeInterval > 0 && s.time() >= nextProbe * (1 - 1e-12)) || (probeInterval <= 0 && s.outputDue()))) {
-      series.add(s.time(), s.probeValues());
-      while (probeInterval > 0 && nextProbe <= s.time() * (1 + 1e-12)) nextProbe += probeInterval;
-    }
+    probes.sample(s);
     if (o.maxSteps >= 0 && s.stepCount() >= o.maxSteps) return Status(StatusCode::kCancelled, "step limit");
     const auto now = std::chrono::steady_clock::now();
     if (o.progressSeconds > 0 && std::chrono::duration<double>(now - lastReport).count() >= o.progressSeconds) {
@@ -100,13 +85,10 @@ Result<RunSummary> runSphScene(const RunOptions& o, const frontend::LoadedScene&
   sum.simulatedTime = sim.time();
   sum.particleStepsPerSecond = sum.wallSeconds > 0 ? double(sum.particles) * double(sum.steps) / sum.wallSeconds : 0;
   if (Status s = writer.value()->close(); !s.isOk() && run.isOk()) run = s;
-  if (!series.names.empty()) {  // what was measured, also when the run failed
-    if (Status s = backend::writeProbeSeries(sum.outputPath, series); !s.isOk() && run.isOk()) run = s;
-    const std::string csv = (fs::path(sum.outputPath).parent_path() / (fs::path(sum.outputPath).stem().string() + ".probes.csv")).string();
-    std::ofstream f(csv);
-    f << backend::probeSeriesCsv(series);
-    if (!f && run.isOk()) run = ioError("cannot write " + csv);
-    spdlog::info("{} probe samples of {} probes in {} (/probes) and {}", series.time.size(), series.names.size(), sum.outputPath, csv);
+  if (!probes.empty()) {  // what was measured, also when the run failed
+    if (Status s = backend::writeProbeFiles(sum.outputPath, probes.series()); !s.isOk() && run.isOk()) run = s;
+    spdlog::info("{} probe samples of {} probes in {} (/probes) and {}", probes.series().time.size(), probes.series().names.size(),
+                 sum.outputPath, backend::probesCsvPathFor(sum.outputPath));
   }
   spdlog::info("{}", sim.timers().report());
   if (!run.isOk()) {

@@ -13,8 +13,11 @@ namespace pflow::frontend {
 
 namespace {
 
-// Device bytes per particle: every field of the SPH table at the run's precision, the reorder scratch (one column
-// of the widest field), and the cell sort (key and permutation). No neighbour lists: the rates walk the cells.
+// Device bytes per particle, as SphEngineImpl allocates them: every field of the SPH table at the run's precision,
+// the reorder scratch (one column of the widest field), the cell sort (key and permutation), the positions at the
+// last sort (the skin's reference), the boundary/interior split list and the wet flags. No neighbour lists: the
+// rates walk the cells. 181 B in float and 241 in double, against 204 and 254 measured by pflow-sph-bench on
+// SPHERIC (bench/RESULTS.md): the buffers grow with a quarter of slack.
 template <class R>
 double sphBytesPerParticle() {
   double bytes = 0, widest = 0;
@@ -23,7 +26,7 @@ double sphBytesPerParticle() {
     bytes += double(table[k].elementBytes);
     widest = std::max(widest, double(table[k].elementBytes));
   }
-  return bytes + widest + 4 + 4;
+  return bytes + widest + 4 + 4 + double(sizeof(Vec3d)) + double(sizeof(Index)) + 1;
 }
 
 }  // namespace

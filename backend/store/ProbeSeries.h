@@ -28,16 +28,52 @@ struct ProbeSeries {
   }
 };
 
+// An SPH run's probes as they are sampled (`pflow run` and the worker): the series' names, units and points from
+// the scene's probes (SphSimulation::probes(): name, point, gauge), a sample at the start, then every `interval`
+// seconds of simulated time at the first step at or past each multiple, or, with interval 0, at every snapshot
+// (the simulation's outputDue()). `Sim` is compute::sph::SphSimulation (a template: no link dependency); sampling is
+// collective in a distributed run, so every rank calls sample() after every step.
+class ProbeRecorder {
+ public:
+  template <class Sim>
+  ProbeRecorder(const Sim& sim, double interval) : m_interval(interval), m_next(interval) {
+    for (const auto& p : sim.probes()) {
+      m_series.names.push_back(p.name);
+      m_series.units.push_back(p.gauge ? "m" : "Pa");
+      m_series.points.push_back(p.point);
+    }
+    if (!empty()) m_series.add(sim.time(), sim.probeValues());
+  }
+  template <class Sim>
+  void sample(const Sim& s) {
+    if (empty()) return;
+    if (m_interval > 0 ? s.time() < m_next * (1 - 1e-12) : !s.outputDue()) return;
+    m_series.add(s.time(), s.probeValues());
+    while (m_interval > 0 && m_next <= s.time() * (1 + 1e-12)) m_next += m_interval;
+  }
+  bool empty() const { return m_series.names.empty(); }
+  const ProbeSeries& series() const { return m_series; }
+
+ private:
+  ProbeSeries m_series;
+  double m_interval, m_next;
+};
+
 // Adds /probes to an existing, closed HDF5 file (SnapshotWriter's); replaces a /probes already there.
 Status writeProbeSeries(const std::string& h5Path, const ProbeSeries& series);
 Result<ProbeSeries> readProbeSeries(const std::string& h5Path);
 // The same on an open file (hid_t), the caller holding hdf5Mutex(): /probes holds extendible (chunked) datasets,
-// and appendProbeSeries adds `samples` at their end, creating them on the first call. The names must be the ones
-// stored, in their order (INVALID_ARGUMENT otherwise); units and points are taken from the first call.
-Status appendProbeSeries(std::int64_t file, const ProbeSeries& samples, const std::string& pathForMessages);
+// and appendProbeSeries adds `samples` at their end, creating them on the first call, and returns the samples now
+// stored. The names must be the ones stored, in their order (INVALID_ARGUMENT otherwise); units and points are
+// taken from the first call.
+Result<std::uint64_t> appendProbeSeries(std::int64_t file, const ProbeSeries& samples, const std::string& pathForMessages);
 Result<ProbeSeries> readProbeSeries(std::int64_t file, const std::string& pathForMessages);
 // Samples [first, end) of a series (the part a worker has not sent yet).
 ProbeSeries probeSamples(const ProbeSeries& series, std::size_t first);
+// The CSV beside a snapshot file: out.h5 -> out.probes.csv.
+std::string probesCsvPathFor(const std::string& h5Path);
+// /probes into the closed snapshot file (writeProbeSeries) and the same series as CSV beside it.
+Status writeProbeFiles(const std::string& h5Path, const ProbeSeries& series);
 // "time,P1 [Pa],H1 [m]\n0,...": the CSV form.
 std::string probeSeriesCsv(const ProbeSeries& series);
 

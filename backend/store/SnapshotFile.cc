@@ -271,13 +271,15 @@ Status SnapshotWriter::flush() {
   return d.writeXdmf();
 }
 
-Status SnapshotWriter::appendProbes(const ProbeSeries& samples) {
+Result<std::uint64_t> SnapshotWriter::appendProbes(const ProbeSeries& samples) {
   std::lock_guard lock(hdf5Mutex());
   quietHdf5();
   Impl& d = *m_impl;
   if (Status st = d.checkOpen(); !st) return st;
-  if (Status st = appendProbeSeries(d.file.get(), samples, d.path); !st) return st;
-  return d.flushFile();
+  auto stored = appendProbeSeries(d.file.get(), samples, d.path);
+  if (!stored) return stored.status();
+  if (Status st = d.flushFile(); !st) return st;
+  return stored.value();
 }
 
 Status SnapshotWriter::close() {

@@ -158,7 +158,7 @@ class SnapshotWriter {
   Status commit(const SnapshotStaging& staged, const GridFields* grid);
   // Appends samples to /probes (ProbeSeries.h), creating it on the first call; the probes' names must be the
   // ones already there, in the same order (INVALID_ARGUMENT otherwise).
-  Status appendProbes(const ProbeSeries& samples);
+  Result<std::uint64_t> appendProbes(const ProbeSeries& samples);  // the samples now stored
   // Flushes HDF5 buffers and rewrites the sidecar (writes already do both; cheap to call again).
   Status flush();
   // Closes the file and reports any error; later writes are FAILED_PRECONDITION. The destructor does the same.

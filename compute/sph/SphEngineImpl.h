@@ -85,18 +85,17 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     }
     if (m_wetStale) markWet();
     k.wet = m_wet.as<std::uint8_t>();
-    k.mirror = m_setup.mirror;
     const bool mirror = m_setup.mirror.any;
     if (set == RateSet::kAll || (m_numBoundary == 0 && set == RateSet::kInterior)) {
       m_exec.forEach(m_owned, k);
-      if (mirror) m_exec.forEach(m_owned, kernels::MirrorImages<R>{k});
+      if (mirror) m_exec.forEach(m_owned, kernels::MirrorImages<R>{k, m_setup.mirror});
       return;
     }
     // The list splitBoundary made: boundary rows first, then interior ones.
     const Index* list = m_split.as<Index>() + (set == RateSet::kBoundary ? 0 : m_numBoundary);
     const Index count = set == RateSet::kBoundary ? m_numBoundary : m_owned - m_numBoundary;
     m_exec.forEach(count, compute::kernels::OverList<kernels::Interact<R>>{k, list});
-    if (mirror) m_exec.forEach(count, compute::kernels::OverList<kernels::MirrorImages<R>>{kernels::MirrorImages<R>{k}, list});
+    if (mirror) m_exec.forEach(count, compute::kernels::OverList<kernels::MirrorImages<R>>{kernels::MirrorImages<R>{k, m_setup.mirror}, list});
   }
 
   double maxInverseStep() const override {

@@ -48,8 +48,6 @@ struct Interact {
   // Boundary particles with no fluid listed in their 27 cells (MarkWet: wet[a] == 0) have no rates until the
   // next sort: they are skipped (most of a tank's walls and lid, most of the time).
   const std::uint8_t* wet = nullptr;
-  // Mirror walls (SphPhysics.h; mirror.any false: none): used by MirrorImages, the pass after this one.
-  MirrorWalls mirror;
 
   PFLOW_HOSTDEVICE void operator()(Index a) const {
     const Vec3d xa = pos[a];
@@ -112,10 +110,10 @@ struct Interact {
 template <class R>
 struct MirrorImages {
   static constexpr bool kVariableCost = true;
-  Interact<R> k;  // the arrays, parameters, ghosts and order of the rates pass just run
+  Interact<R> k;        // the arrays, parameters, ghosts and order of the rates pass just run
+  MirrorWalls mirror;
 
   PFLOW_HOSTDEVICE void operator()(Index a) const {
-    const MirrorWalls& mirror = k.mirror;
     const Vec3d xa = k.pos[a];
     // An image reaches a only through a wall a is near itself (it is at least as far as a's distance to the
     // wall plus b's).

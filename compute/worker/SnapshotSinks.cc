@@ -12,7 +12,7 @@ class FileSink final : public SnapshotSink {
   explicit FileSink(std::unique_ptr<backend::SnapshotWriter> w) : m_writer(std::move(w)) {}
   Status writeGeometry(compute::GeometrySnapshot g) override { return m_writer->writeGeometry(g); }
   Status write(const compute::ParticleSnapshot& s) override { return m_writer->writeSnapshot(s); }
-  Status writeProbes(const backend::ProbeSeries& samples) override { return m_writer->appendProbes(samples); }
+  Status writeProbes(const backend::ProbeSeries& samples) override { return m_writer->appendProbes(samples).status(); }
   Status close() override { return m_writer->close(); }
 
  private:

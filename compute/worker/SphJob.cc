@@ -68,17 +68,11 @@ int runSphRank(const WorkerOptions& o, int rank, int ranks, const frontend::Load
   const auto& fields = scene.outputFields;
 
   // Probes: sampled on every rank (a collective), kept and sent by rank 0.
-  backend::ProbeSeries series;
-  for (const auto& p : sim.probes()) {
-    series.names.push_back(p.name);
-    series.units.push_back(p.gauge ? "m" : "Pa");
-    series.points.push_back(p.point);
-  }
+  backend::ProbeRecorder probes(sim, cfg.sph.probeInterval);
   std::size_t sent = 0;  // samples already with the sink
-  const double probeInterval = cfg.sph.probeInterval;
-  double nextProbe = probeInterval;
   auto sendProbes = [&]() -> Status {  // rank 0's samples since the last send
-    if (!lead || series.names.empty() || sent == series.time.size()) return Status::ok();
+    const backend::ProbeSeries& series = probes.series();
+    if (!lead || probes.empty() || sent == series.time.size()) return Status::ok();
     Status s = sink->writeProbes(backend::probeSamples(series, sent));
     if (s.isOk()) sent = series.time.size();
     return s;
@@ -90,7 +84,6 @@ int runSphRank(const WorkerOptions& o, int rank, int ranks, const frontend::Load
     if (s.isOk()) s = sendProbes();
     return all.agree(s);
   };
-  if (!series.names.empty()) series.add(sim.time(), sim.probeValues());
   if (Status s = write(); !s.isOk()) return fail(2, s.message());
 
   const double duration = cfg.sim.duration;
@@ -102,10 +95,7 @@ int runSphRank(const WorkerOptions& o, int rank, int ranks, const frontend::Load
   auto seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
   auto rate = [&](const SphSimulation& s, double wall) { return wall > 0 ? particles * double(s.stepCount()) / wall : 0; };
   auto observer = [&](const SphSimulation& s) -> Status {
-    if (!series.names.empty() && ((probeInterval > 0 && s.time() >= nextProbe * (1 - 1e-12)) || (probeInterval <= 0 && s.outputDue()))) {
-      series.add(s.time(), s.probeValues());  // collective
-      while (probeInterval > 0 && nextProbe <= s.time() * (1 + 1e-12)) nextProbe += probeInterval;
-    }
+    probes.sample(s);  // collective
     if (s.outputDue())
       if (Status st = write(); !st.isOk()) return st;
     if (stopAgreed(progress.cancelRequested(), domain)) {
