@@ -350,24 +350,18 @@ Result<std::optional<GridFields>> SnapshotStore::computeGrid(SnapshotStaging& st
   std::vector<double> x, v, r, w, p, rho, k;
   std::vector<std::uint8_t> excluded;
   // A planar (2D) fluid: every fluid particle at one y (GridFields.h); found in a pass of its own.
-  bool planar = false;
-  if (fluid) {
-    bool any = false, same = true;
-    double y0 = 0;
-    for (std::uint64_t first = 0; first < m.n && same; first += kGridBlockRows) {
-      const std::uint64_t rows = std::min(kGridBlockRows, m.n - first);
-      if (Status st = staging.readParticleRowsF64("position", first, rows, x); !st) return st;
-      if (withKind)
-        if (Status st = staging.readParticleRowsF64("kind", first, rows, k); !st) return st;
-      for (std::uint64_t i = 0; i < rows && same; ++i) {
-        if ((withKind && k[i] != 0) || !std::isfinite(x[3 * i + 1])) continue;
-        if (any && x[3 * i + 1] != y0) same = false;
-        y0 = x[3 * i + 1];
-        any = true;
-      }
+  PlaneCheck plane;
+  for (std::uint64_t first = 0; fluid && first < m.n && plane.same; first += kGridBlockRows) {
+    const std::uint64_t rows = std::min(kGridBlockRows, m.n - first);
+    if (Status st = staging.readParticleRowsF64("position", first, rows, x); !st) return st;
+    excluded.assign(rows, 0);
+    if (withKind) {
+      if (Status st = staging.readParticleRowsF64("kind", first, rows, k); !st) return st;
+      for (std::uint64_t i = 0; i < rows; ++i) excluded[i] = k[i] != 0;
     }
-    planar = any && same;
+    plane.add(rows, x.data(), excluded.data());
   }
+  const bool planar = fluid && plane.planar();
   auto load = [&](std::uint64_t first, std::uint64_t rows, bool velocities) -> Result<ParticleBlock> {
     if (Status st = staging.readParticleRowsF64("position", first, rows, x); !st) return st;
     if (fluid) {
@@ -406,14 +400,13 @@ Result<std::optional<GridFields>> SnapshotStore::computeGrid(SnapshotStaging& st
     bounds.add(b->n, b->position, b->radius);
   }
   if (bounds.count == 0) return std::optional<GridFields>();  // no fluid particle (or none usable)
-  const double plane = 0.5 * (bounds.lo.y + bounds.hi.y);
   if (planar) bounds.flattenY();
   auto spec = gridCovering(bounds, m_options.gridCellSize);
   if (!spec) {
     spdlog::warn("step {}: no grid fields: {}", m.step, spec.status().message());
     return std::optional<GridFields>();
   }
-  if (planar) spec->origin.y = plane - 0.5 * spec->cellSize;  // the one layer of cells centred on the plane
+  if (planar) spec->origin.y = plane.y - 0.5 * spec->cellSize;  // the one layer of cells centred on the plane
   GridAccumulator acc(spec.value(), withPressure, fluid, planar);
   for (int pass = 0; pass < (fluid ? 1 : 2); ++pass) {
     for (std::uint64_t first = 0; first < m.n; first += kGridBlockRows) {

@@ -288,25 +288,24 @@ Result<Prepared> prepare(const ParticleSnapshot& snapshot, bool needVelocity) {
   if (kind != nullptr && (kind->type != ScalarType::kI32 || kind->components != 1 || kind->data.size() != 4 * snapshot.n))
     return invalidArgument("grid fields need 'kind' as one i32 per particle");
   for (std::size_t i = 0; i < snapshot.n; ++i) p.excluded[i] = kind != nullptr && kind->as<std::int32_t>()[i] != 0;
-  p.planar = planarFluid(snapshot.n, p.position.data(), p.excluded.data());
+  PlaneCheck plane;
+  plane.add(snapshot.n, p.position.data(), p.excluded.data());
+  p.planar = plane.planar();
   for (std::size_t i = 0; i < snapshot.n; ++i) p.radius[i] = p.excluded[i] ? 0.0 : fluidRadius(p.mass[i], density.value()[i], p.planar);
   return p;
 }
 
 }  // namespace
 
-bool planarFluid(std::size_t n, const double* position, const std::uint8_t* excluded) {
-  bool any = false;
-  double y = 0;
-  for (std::size_t i = 0; i < n; ++i) {
+void PlaneCheck::add(std::size_t n, const double* position, const std::uint8_t* excluded) {
+  for (std::size_t i = 0; i < n && same; ++i) {
     if (excluded != nullptr && excluded[i]) continue;
     const double yi = position[3 * i + 1];
     if (!std::isfinite(yi)) continue;
-    if (any && yi != y) return false;
+    if (any && yi != y) same = false;
     y = yi;
     any = true;
   }
-  return any;
 }
 
 double fluidRadius(double mass, double density, bool planar) {

@@ -126,8 +126,13 @@ class GridAccumulator {
 // The radius of the sphere of a fluid particle's volume m / rho (planar: of the disc of area m / rho); 0 (left
 // out) when either is not > 0.
 double fluidRadius(double mass, double density, bool planar = false);
-// True when every row not excluded (with a finite y) has the same y: a planar (2D) fluid.
-bool planarFluid(std::size_t n, const double* position, const std::uint8_t* excluded);
+// Whether every row not excluded (with a finite y) has the same y, a planar (2D) fluid; accumulated block by block.
+struct PlaneCheck {
+  bool any = false, same = true;
+  double y = 0;
+  void add(std::size_t n, const double* position, const std::uint8_t* excluded);
+  bool planar() const { return any && same; }
+};
 
 // Side of the cube with the volume of a sphere of radius r: (4 pi / 3)^(1/3) r.
 double equalVolumeCubeSide(double r);
