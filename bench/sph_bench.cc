@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <regex>
 #include <sstream>
 
@@ -34,7 +35,9 @@ int main(int argc, char** argv) {
   std::vector<double> spacings = {0.02};
   int warmup = 20, steps = 100, threads = 0;
   double bandwidth = 0;
-  std::string overlap = "on";
+  std::string overlap = "on", integrator = "scene";
+  double advance = 0;
+  std::optional<double> skin;
   app.add_option("--scene", scene, "an SPH scene file")->capture_default_str();
   app.add_option("--spacing", spacings, "particle spacings dp [m], one run each (the scene's sph.spacing replaced)")->delimiter(',');
   app.add_option("--executor", executor, "cpu | cuda")->check(CLI::IsMember({"cpu", "cuda"}))->capture_default_str();
@@ -47,6 +50,11 @@ int main(int argc, char** argv) {
   app.add_option("--commit", commit, "commit for the record");
   app.add_option("--overlap", overlap, "distributed runs: the halo overlapped with the interior rates (on) or not")
       ->check(CLI::IsMember({"on", "off"}))->capture_default_str();
+  app.add_option("--integrator", integrator, "the scene's time integration, or symplectic | verlet instead")
+      ->check(CLI::IsMember({"scene", "symplectic", "verlet"}))->capture_default_str();
+  app.add_option("--advance", advance, "simulated seconds run before the warm-up (time the flow, not the start at rest)")
+      ->capture_default_str();
+  app.add_option("--skin", skin, "the neighbour skin as a fraction of h instead of the scene's sph.skin");
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::warn);
   std::ifstream in(scene);
@@ -70,6 +78,10 @@ int main(int argc, char** argv) {
     compute::RunConfig cfg = loaded.value().config;
     cfg.sim.precision = precision == "float" ? compute::Precision::kFloat : compute::Precision::kDouble;
     cfg.sim.threads = threads;
+    if (integrator != "scene")
+      cfg.sph.integrator = integrator == "verlet" ? compute::sph::Integrator::kVerlet : compute::sph::Integrator::kSymplectic;
+    const bool verlet = cfg.sph.integrator == compute::sph::Integrator::kVerlet;
+    if (skin) cfg.sph.skin = *skin;
     compute::sph::SphOptions so;
     so.executor = executor == "cuda" ? compute::ExecutorKind::kCuda : compute::ExecutorKind::kCpu;
     if (ranks > 1) {
@@ -85,6 +97,11 @@ int main(int argc, char** argv) {
     }
     auto& sim = *created.value();
     MPI_Barrier(MPI_COMM_WORLD);
+    if (advance > 0)
+      if (Status s = sim.runUntil(advance); !s.isOk()) {
+        std::fprintf(stderr, "%s\n", s.message().c_str());
+        return 3;
+      }
     if (Status s = sim.runSteps(warmup); !s.isOk()) {
       std::fprintf(stderr, "%s\n", s.message().c_str());
       return 3;
@@ -92,6 +109,7 @@ int main(int argc, char** argv) {
     sim.engine().fence();
     MPI_Barrier(MPI_COMM_WORLD);
     sim.timers().reset();
+    const std::int64_t sortsBefore = sim.rebuilds();
     const auto start = std::chrono::steady_clock::now();
     if (Status s = sim.runSteps(steps); !s.isOk()) {
       std::fprintf(stderr, "%s\n", s.message().c_str());
@@ -101,17 +119,20 @@ int main(int argc, char** argv) {
     MPI_Barrier(MPI_COMM_WORLD);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const double n = double(sim.totalParticles());
-    // Compulsory traffic of one step: two rate passes (each reads position, velocity, density, pressure, mass,
-    // kind and writes acceleration, density rate, viscous rate) and the two halves (each reads and writes the
-    // state and its copy at the start): bytes of the field table at the run's precision.
+    // Compulsory traffic of one step, in bytes of the field table at the run's precision. Symplectic: two rate
+    // passes (each reads position, velocity, density, pressure, mass, kind and writes acceleration, density rate,
+    // viscous rate) and the two halves (each reads and writes the state and its copy at the start). Verlet: one
+    // pass and one update (reads the state, the one before and the rates; writes both states and the pressure).
     const double r = precision == "float" ? 4 : 8;
     const double pass = 8 * 3 + 3 * r + r + r + r + 4 + (3 * r + r + r);
     const double halves = 2 * (2 * (24 + 3 * r + r) + 3 * r + r + r + 4);
-    const double bytesPerStep = 2 * pass + halves;
+    const double update = (24 + 6 * r + 2 * r + 3 * r + r + 4) + (24 + 6 * r + 2 * r + r);
+    const double bytesPerStep = verlet ? pass + update : 2 * pass + halves;
     nlohmann::json j{{"solver", "sph"},
                      {"case", scene},
                      {"executor", executor},
                      {"precision", precision},
+                     {"integrator", verlet ? "verlet" : "symplectic"},
                      {"spacing", dp},
                      {"n", sim.totalParticles()},
                      {"ranks", ranks},
@@ -123,7 +144,9 @@ int main(int argc, char** argv) {
                      {"particle_steps_per_s", n * steps / wall},
                      {"sim_time", sim.time()},
                      {"dt", sim.dt()},
-                     {"cell_sorts", sim.rebuilds()},
+                     {"cell_sorts", sim.rebuilds() - sortsBefore},
+                     {"advance_s", advance},
+                     {"skin", cfg.sph.skin},
                      {"device_bytes_per_particle", double(sim.deviceBytes()) / n},
                      {"compulsory_bytes_per_particle_step", bytesPerStep},
                      {"device", device},

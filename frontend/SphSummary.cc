@@ -6,6 +6,7 @@
 
 #include "compute/core/Format.h"
 #include "compute/sph/SphFields.h"
+#include "compute/sph/SphKernels.h"
 #include "compute/sph/SphSimulation.h"
 #include "frontend/SceneSummary.h"
 
@@ -15,9 +16,9 @@ namespace {
 
 // Device bytes per particle, as SphEngineImpl allocates them: every field of the SPH table at the run's precision,
 // the reorder scratch (one column of the widest field), the cell sort (key and permutation), the positions at the
-// last sort (the skin's reference), the boundary/interior split list and the wet flags. No neighbour lists: the
-// rates walk the cells. 181 B in float and 241 in double, against 204 and 254 measured by pflow-sph-bench on
-// SPHERIC (bench/RESULTS.md): the buffers grow with a quarter of slack.
+// last sort (the skin's reference), the boundary/interior split list, the wet flags and the packed rows the rates
+// pass reads (SphKernels.h, PackRates). No neighbour lists: the rates walk the cells. 229 B in float and 337 in
+// double; pflow-sph-bench measures them on SPHERIC (bench/RESULTS.md): the buffers grow with a quarter of slack.
 template <class R>
 double sphBytesPerParticle() {
   double bytes = 0, widest = 0;
@@ -26,7 +27,9 @@ double sphBytesPerParticle() {
     bytes += double(table[k].elementBytes);
     widest = std::max(widest, double(table[k].elementBytes));
   }
-  return bytes + widest + 4 + 4 + double(sizeof(Vec3d)) + double(sizeof(Index)) + 1;
+  const double packed = double(sizeof(compute::sph::kernels::RateRow<R>) + sizeof(compute::sph::kernels::RateState<R>) +
+                               sizeof(compute::sph::kernels::RatePm<R>));
+  return bytes + widest + 4 + 4 + double(sizeof(Vec3d)) + double(sizeof(Index)) + 1 + packed;
 }
 
 }  // namespace

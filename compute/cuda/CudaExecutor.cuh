@@ -45,6 +45,14 @@ __global__ void forEachKernel(Index n, F f) {
   if (i < n) f(i);
 }
 
+// The same with at most 64 registers a thread (F::kRegisterCap64 true): half the SM's threads resident instead of
+// the 37 % the compiler's choice allows the SPH rates pass in float, whose loads then hide behind more warps.
+template <class F>
+__global__ void __maxnreg__(64) forEachKernelCap64(Index n, F f) {
+  const Index i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i < n) f(i);
+}
+
 // The block's reduction of v by `op` (warp shuffles, then one warp over the warps' results in shared
 // memory); valid in thread 0 only.
 template <class Op>
@@ -128,6 +136,13 @@ class CudaExecutor {
   template <class F>
   void forEach(Index n, const F& f) const {
     if (n == 0) return;
+    if constexpr (requires { F::kRegisterCap64; }) {
+      if (F::kRegisterCap64) {
+        launch(reinterpret_cast<const void*>(&forEachKernelCap64<F>), typeid(F).name(), n,
+               [&](unsigned grid, int block) { forEachKernelCap64<F><<<grid, block>>>(n, f); });
+        return;
+      }
+    }
     launch(reinterpret_cast<const void*>(&forEachKernel<F>), typeid(F).name(), n,
            [&](unsigned grid, int block) { forEachKernel<F><<<grid, block>>>(n, f); });
   }

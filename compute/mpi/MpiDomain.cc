@@ -268,7 +268,7 @@ Status MpiDomain::migrate(DistributedRows& engine, double cost) {
 
 Status MpiDomain::exchangeGhosts(DistributedRows& engine) {
   if (m_size == 1) return Status::ok();
-  // Each owned particle goes to every other rank that owns one of the 27 cells around its own. The set
+  // Each owned particle goes to every other rank that owns a cell within the grid's reach of its own. The set
   // depends on the cell only: worked out once per decomposition, when a cell is first met (most cells are
   // interior, with no other rank around them).
   const std::vector<Vec3d> pos = positions(engine);

@@ -12,6 +12,10 @@ struct CellGrid {
   double cellSize = 1;
   double invCellSize = 1;
   int nx = 1, ny = 1, nz = 1;
+  // How many cells around a particle's own hold its neighbours: 1 where cells are as wide as the cut-off
+  // (DEM), 2 where they are half of it (SPH: fewer candidates per neighbour). forNeighbourCells walks them,
+  // and the MPI halo sends every particle to the ranks owning a cell within reach of its own.
+  int reach = 1;
 
   std::uint32_t numCells() const { return std::uint32_t(nx) * std::uint32_t(ny) * std::uint32_t(nz); }
 
@@ -34,8 +38,8 @@ struct CellGrid {
     coords(p, cx, cy, cz);
     return index(cx, cy, cz);
   }
-  // f(c) for the cells that share a face, edge or corner with the cell holding `p`, itself included, in index
-  // order (z, then y, then x): at most 27, 9 in a grid one cell thick.
+  // f(c) for the cells within `reach` cells of the one holding `p` along every axis, itself included, in index
+  // order (z, then y, then x): at most (2 reach + 1)^3 (27 at reach 1), (2 reach + 1)^2 in a grid one cell thick.
   template <class F>
   PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void forNeighbourCells(Vec3d p, const F& f) const {
     int cx, cy, cz;
@@ -44,9 +48,9 @@ struct CellGrid {
   }
   template <class F>
   PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void forNeighbourCells(int cx, int cy, int cz, const F& f) const {
-    for (int z = cz > 0 ? cz - 1 : 0; z <= (cz + 1 < nz ? cz + 1 : nz - 1); ++z)
-      for (int y = cy > 0 ? cy - 1 : 0; y <= (cy + 1 < ny ? cy + 1 : ny - 1); ++y)
-        for (int x = cx > 0 ? cx - 1 : 0; x <= (cx + 1 < nx ? cx + 1 : nx - 1); ++x) f(index(x, y, z));
+    for (int z = cz > reach ? cz - reach : 0; z <= (cz + reach < nz ? cz + reach : nz - 1); ++z)
+      for (int y = cy > reach ? cy - reach : 0; y <= (cy + reach < ny ? cy + reach : ny - 1); ++y)
+        for (int x = cx > reach ? cx - reach : 0; x <= (cx + reach < nx ? cx + reach : nx - 1); ++x) f(index(x, y, z));
   }
 };
 

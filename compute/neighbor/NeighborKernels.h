@@ -58,11 +58,26 @@ struct SplitByFlag {
 // Runs kernel `f` over the rows in `list` (item k is row list[k]): a pass over part of the particles.
 // Only the force kernels use it, whose work per particle varies.
 template <class F>
+constexpr bool registerCap64() {
+  if constexpr (requires { F::kRegisterCap64; }) return F::kRegisterCap64;
+  else return false;
+}
+
+template <class F>
 struct OverList {
   static constexpr bool kVariableCost = true;  // CpuExecutor::forEach: dynamic chunks
+  static constexpr bool kRegisterCap64 = registerCap64<F>();  // CudaExecutor: as f's
   F f;
   const Index* list;
   PFLOW_HOSTDEVICE void operator()(Index k) const { f(list[k]); }
+};
+
+// f over [first, first + count): a forEach over part of the rows.
+template <class F>
+struct Offset {
+  F f;
+  Index first;
+  PFLOW_HOSTDEVICE void operator()(Index k) const { f(first + k); }
 };
 
 struct CellKey {

@@ -232,6 +232,8 @@ class LocalRows : public FieldRows<Exec, Store> {
   }
   const Index* ghostCellStart() const { return m_ghostCellStart.template as<Index>(); }
   const Index* ghostItems() const { return m_ghostItems.template as<Index>(); }
+  // The cell each ghost is listed in, by ghost row (row owned + k), as setGhosts binned it.
+  const std::uint32_t* ghostKeys() const { return m_ghostKey.template as<std::uint32_t>(); }
 
  private:
   using Base::m_exec;

@@ -85,6 +85,8 @@ ErrorList SphConfig::validate(const SimulationSettings& sim) const {
   within(e, "sph.cfl", cfl, 1e-3, 0.5, "explicit WCSPH is stable to a Courant number of about 0.3-0.4");
   if (dt) positive(e, "sph.dt", *dt);
   within(e, "sph.skin", skin, 0.0, 2.0, "a fraction of h");
+  if (verletSteps < 1) e.add("sph.verlet_steps", std::to_string(verletSteps) + " must be >= 1");
+  if (integrator != Integrator::kVerlet && verletSteps != 40) e.add("sph.verlet_steps", "applies to sph.integrator: verlet");
   if (boundaryLayers < 0) e.add("sph.boundary_layers", std::to_string(boundaryLayers) + " must be >= 0 (0: automatic)");
   if (boundary == BoundaryKind::kMirror && !tank)
     e.add("sph.boundary", "mirror walls are the tank's walls: give a tank (or use sph.boundary: dynamic)");

@@ -24,6 +24,11 @@ enum class ParticleKind : std::int32_t { kFluid = 0, kBoundary = 1 };
 // boundary particles either way.
 enum class BoundaryKind { kDynamic, kMirror };
 
+// The time integration (sph.integrator): the symplectic position-Verlet predictor-corrector (two evaluations of
+// the rates per step), or Verlet (Monaghan 1989; one evaluation per step, an Euler step every sph.verlet_steps
+// to keep the two interleaved solutions together): docs/sph.md, "Time integration".
+enum class Integrator { kSymplectic, kVerlet };
+
 // A named region the frontend filled (fluid block, tank, obstacle): for messages and checks.
 struct SphRegion {
   std::string name;  // "fluid.blocks[0]" style path or the entry's name
@@ -52,6 +57,8 @@ struct SphConfig {
   double densityDiffusion = 0.1;      // delta of Molteni & Colagrossi (2009); 0: off
   bool hydrostaticDiffusion = true;   // Fourtakas et al. (2019) correction of the density diffusion
   double cfl = 0.2;
+  Integrator integrator = Integrator::kSymplectic;
+  int verletSteps = 40;        // Verlet: every verletSteps-th step is an Euler step (DualSPHysics's default)
   std::optional<double> dt;    // fixed step [s] (the convergence study); unset: CFL limits each step
   BoundaryKind boundary = BoundaryKind::kDynamic;  // the tank's walls
   bool freeSlip = false;       // mirror walls: the image keeps the tangential velocity (sph.wall_slip: free_slip)

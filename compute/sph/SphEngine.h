@@ -61,7 +61,7 @@ class SphEngine : public DistributedRows {
   // Acceleration, density rate and viscous rate of every owned particle at the current state (ghosts are
   // neighbours).
   // Between rebuilds of a distributed run the rates go in two passes so the halo can travel during the first:
-  // kInterior (particles with no ghost in their 27 cells; only queued) then kBoundary (the rest, once the
+  // kInterior (particles with no ghost in the cells within reach; only queued) then kBoundary (the rest, once the
   // ghosts are refreshed). Without ghosts every particle is interior.
   enum class RateSet { kAll, kInterior, kBoundary };
   virtual void computeRates(RateSet set) = 0;
@@ -71,6 +71,9 @@ class SphEngine : public DistributedRows {
   // The two halves of the symplectic step; each returns the largest squared displacement since the sort.
   virtual double predictor(double dt) = 0;
   virtual Status corrector(double dt, double& moved2) = 0;
+  // One Verlet step (sph.integrator: verlet) of dt after one of dtBefore (0: an Euler step), checked as the
+  // corrector is.
+  virtual Status verlet(double dt, double dtBefore, double& moved2) = 0;
   // The furthest a fluid particle reaches along the unit vector `direction`: max of x.direction [m] (one
   // device reduction; the surge front of a dam break is this along +x).
   virtual double fluidReach(Vec3d direction) const = 0;

@@ -73,29 +73,40 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
   }
 
   void computeRates(RateSet set) override {
-    kernels::Interact<R> k{m_setup.grid, m_cellStart.as<Index>(), m_ref.as<Vec3d>(), ptr<SphField::Position>(), ptr<SphField::Velocity>(),
-                           ptr<SphField::Density>(), ptr<SphField::Pressure>(), ptr<SphField::Mass>(), ptr<SphField::Kind>(),
-                           m_kernel, m_pair, vcast<R>(m_setup.gravity), ptr<SphField::Acceleration>(),
-                           ptr<SphField::DensityRate>(), ptr<SphField::ViscousRate>()};
-    if (m_n > m_owned) {
-      k.ghostCellStart = m_rows.ghostCellStart();
-      k.ghostItems = m_rows.ghostItems();
-      k.ghostBase = m_owned;
-      if (m_setup.canonicalOrder) k.gid = cptr<SphField::Gid>();
-    }
+    const bool ghosts = m_n > m_owned;
     if (m_wetStale) markWet();
+    // The packed rows the pass reads: the owned ones before the interior pass (the ghosts are still travelling),
+    // the ghosts before the boundary one.
+    const Index packFrom = set == RateSet::kBoundary ? m_owned : 0;
+    const Index packTo = set == RateSet::kInterior && ghosts ? m_owned : m_n;
+    packRates(packFrom, packTo);
+    kernels::Interact<R> k{m_setup.grid, m_cellStart.as<Index>(), m_ref.as<Vec3d>(), m_packRow.as<kernels::RateRow<R>>(),
+                           m_packState.as<kernels::RateState<R>>(), m_packPm.as<kernels::RatePm<R>>(), m_kernel, m_pair,
+                           vcast<R>(m_setup.gravity), ptr<SphField::Acceleration>(), ptr<SphField::DensityRate>(),
+                           ptr<SphField::ViscousRate>()};
+    kernels::RateFields<R> f{m_setup.grid, m_cellStart.as<Index>(), m_ref.as<Vec3d>(), cptr<SphField::Position>(), cptr<SphField::Velocity>(),
+                             cptr<SphField::Density>(), cptr<SphField::Pressure>(), cptr<SphField::Mass>(), cptr<SphField::Kind>()};
+    if (ghosts) {
+      k.ghostCellStart = f.ghostCellStart = m_rows.ghostCellStart();
+      k.ghostItems = f.ghostItems = m_rows.ghostItems();
+      k.ghostBase = f.ghostBase = m_owned;
+      // Ghosts are merged with the rows by id (CandidateWalk): in the canonical order of distributed runs, each
+      // cell's rows and ghosts are sorted by it (SortCellByGid).
+      k.gid = cptr<SphField::Gid>();
+      if (m_setup.canonicalOrder) f.gid = k.gid;
+    }
     k.wet = m_wet.as<std::uint8_t>();
     const bool mirror = m_setup.mirror.any;
     if (set == RateSet::kAll || (m_numBoundary == 0 && set == RateSet::kInterior)) {
       m_exec.forEach(m_owned, k);
-      if (mirror) m_exec.forEach(m_owned, kernels::MirrorImages<R>{k, m_setup.mirror});
+      if (mirror) m_exec.forEach(m_owned, kernels::MirrorImages<R>{k, f, m_setup.mirror});
       return;
     }
     // The list splitBoundary made: boundary rows first, then interior ones.
     const Index* list = m_split.as<Index>() + (set == RateSet::kBoundary ? 0 : m_numBoundary);
     const Index count = set == RateSet::kBoundary ? m_numBoundary : m_owned - m_numBoundary;
     m_exec.forEach(count, compute::kernels::OverList<kernels::Interact<R>>{k, list});
-    if (mirror) m_exec.forEach(count, compute::kernels::OverList<kernels::MirrorImages<R>>{kernels::MirrorImages<R>{k, m_setup.mirror}, list});
+    if (mirror) m_exec.forEach(count, compute::kernels::OverList<kernels::MirrorImages<R>>{kernels::MirrorImages<R>{k, f, m_setup.mirror}, list});
   }
 
   double maxInverseStep() const override {
@@ -108,18 +119,13 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
   Status corrector(double dt, double& moved2) override {
     m_exec.forEach(1, compute::kernels::ResetConditions{m_cond.as<Conditions>()});
     moved2 = m_exec.maxOf(m_owned, kernels::Corrector<R>{stepArgs(dt)});
-    Conditions c;
-    m_mem.copyToHost(&c, m_cond.data(), sizeof c);
-    if (c.flags & kNonFinite) return failure("non-finite", c.badParticle, "has a non-finite position, velocity or density");
-    if (c.flags & kDensityOutOfRange)
-      return failure("density out of range", c.densityParticle,
-                     "left the density bounds [" + std::to_string(m_setup.minDensity) + ", " + std::to_string(m_setup.maxDensity) +
-                         "] kg/m^3 (sph.density_bounds)");
-    if (c.flags & kLeftDomain)
-      return failure("leak", c.outsideParticle,
-                     "is outside the tank's walls below their top: it passed through a wall (dt too large, or too few "
-                     "wall layers), or spilled over an open top (the tank is too low for this flow)");
-    return Status::ok();
+    return checked();
+  }
+
+  Status verlet(double dt, double dtBefore, double& moved2) override {
+    m_exec.forEach(1, compute::kernels::ResetConditions{m_cond.as<Conditions>()});
+    moved2 = m_exec.maxOf(m_owned, kernels::VerletStep<R>{stepArgs(dt), dtBefore});
+    return checked();
   }
 
   double fluidReach(Vec3d direction) const override {
@@ -175,7 +181,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
   template <SphField F> typename Store::template Type<F>* ptr() { return m_fields.template ptr<F>(); }
   template <SphField F> const typename Store::template Type<F>* cptr() const { return m_fields.template ptr<F>(); }
 
-  // After the ghosts arrive: which owned particles have a ghost in their 27 cells (their rates wait for the halo),
+  // After the ghosts arrive: which owned particles have a ghost in the cells within reach (their rates wait for the halo),
   // as one list with those first (m_split, m_numBoundary).
   void splitBoundary() {
     m_numBoundary = 0;
@@ -188,6 +194,24 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     m_exec.forEach(m_owned, kernels::MarkNearGhosts{m_setup.grid, ptr<SphField::Position>(), m_rows.ghostCellStart(), flag});
     m_numBoundary = Index(m_exec.exclusiveScan(flag, scan, m_owned));
     m_exec.forEach(m_owned, compute::kernels::SplitByFlag{flag, scan, m_numBoundary, m_split.as<Index>()});
+  }
+
+  // Rows [from, to) of the packed arrays the rates pass reads (PackRates), sized for every local row.
+  void packRates(Index from, Index to) {
+    if (to <= from) return;
+    const std::size_t n = std::max<Index>(1, m_n);
+    auto atLeast = [](Buffer& b, std::size_t bytes) {
+      if (b.bytes() < bytes) b.resize(bytes + bytes / 4);
+    };
+    atLeast(m_packRow, n * sizeof(kernels::RateRow<R>));
+    atLeast(m_packState, n * sizeof(kernels::RateState<R>));
+    atLeast(m_packPm, n * sizeof(kernels::RatePm<R>));
+    kernels::PackRates<R> pack{m_setup.grid, m_ref.as<Vec3d>(), m_n > m_owned ? m_rows.ghostKeys() : nullptr, m_owned,
+                               cptr<SphField::Position>(), cptr<SphField::Velocity>(), cptr<SphField::Density>(),
+                               cptr<SphField::Pressure>(), cptr<SphField::Mass>(), cptr<SphField::Kind>(),
+                               m_packRow.as<kernels::RateRow<R>>(), m_packState.as<kernels::RateState<R>>(),
+                               m_packPm.as<kernels::RatePm<R>>()};
+    m_exec.forEach(to - from, compute::kernels::Offset<kernels::PackRates<R>>{pack, from});
   }
 
   // Which boundary particles can have fluid neighbours until the next sort (MarkWet), after each sort and halo.
@@ -275,6 +299,22 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     return a;
   }
 
+  // What the step's checks (checkState) flagged, as an error naming the first particle of each kind.
+  Status checked() const {
+    Conditions c;
+    m_mem.copyToHost(&c, m_cond.data(), sizeof c);
+    if (c.flags & kNonFinite) return failure("non-finite", c.badParticle, "has a non-finite position, velocity or density");
+    if (c.flags & kDensityOutOfRange)
+      return failure("density out of range", c.densityParticle,
+                     "left the density bounds [" + std::to_string(m_setup.minDensity) + ", " + std::to_string(m_setup.maxDensity) +
+                         "] kg/m^3 (sph.density_bounds)");
+    if (c.flags & kLeftDomain)
+      return failure("leak", c.outsideParticle,
+                     "is outside the tank's walls below their top: it passed through a wall (dt too large, or too few "
+                     "wall layers), or spilled over an open top (the tank is too low for this flow)");
+    return Status::ok();
+  }
+
   // "<what>: fluid particle G at (x, y, z) m, speed v m/s, density rho kg/m^3 <why>" (the step and time are
   // added by the simulation).
   Status failure(const char* what, Index i, const std::string& why) const {
@@ -301,6 +341,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
   mutable Buffer m_samples{m_mem, 0};  // sample(): points, then fractions and pressures
   Buffer m_split{m_mem, 0}, m_splitFlag{m_mem, 0};  // boundary rows, then interior ones (splitBoundary)
   Buffer m_wet{m_mem, 0};  // MarkWet, per owned particle
+  Buffer m_packRow{m_mem, 0}, m_packState{m_mem, 0}, m_packPm{m_mem, 0};  // PackRates, per local row
   bool m_wetStale = true;
   Index m_numBoundary = 0;
 };

@@ -1,6 +1,6 @@
 // The SPH engine's kernels: one particle per call, PFLOW_HOSTDEVICE, run by either executor. The pair loop
-// walks the 27 (2D: 9) cells around a particle, so there are no neighbour lists to store: the cells are
-// 2h + skin wide and re-sorted when a particle may have moved half the skin (docs/sph.md, "Neighbours").
+// walks the cells within two of a particle's (125; 25 in 2D), so there are no neighbour lists to store: the
+// cells are h + skin/2 wide and re-sorted when a particle may have moved half the skin (docs/sph.md, "Neighbours").
 // Each kernel writes only the particle it owns: no atomics on the rates.
 #pragma once
 #include <cmath>
@@ -15,76 +15,184 @@ namespace pflow::compute::sph::kernels {
 
 inline constexpr std::int32_t kFluid = 0;
 
-// Rates of particle a at the current state: acceleration (fluid only: boundary particles do not move),
-// density rate and the largest viscous rate over its neighbours (for the time step). Fluid particles
-// interact with every neighbour; boundary particles only with fluid ones (their continuity equation:
-// boundary-boundary pairs have no relative velocity).
+// The rates pass reads its neighbours from three packed arrays (PackRates writes them from the field table
+// before each pass), so a candidate costs one 16-byte load (float) and a neighbour two more:
+//  - RateRow: the position as an offset from the corner of the cell the row is listed in, in the run's
+//    precision (a few cells' width, so float keeps 1e-7 of a cell: positions themselves are double), and a tag,
+//    the cell's x index times 2 plus 1 for a boundary particle. y and z of the cell are the walk's own row.
+//  - RateState: velocity and density. RatePm: p/rho^2, mass and m/rho (the pair terms' quotients, once per
+//    particle instead of once per pair).
 template <class R>
-struct Interact {
-  static constexpr bool kVariableCost = true;  // work per particle varies (CpuExecutor::forEach)
+struct alignas(4 * sizeof(R)) RateRow {
+  R x, y, z;
+  std::int32_t tag;
+};
+template <class R>
+struct alignas(4 * sizeof(R)) RateState {
+  Vec3<R> v;
+  R rho;
+};
+template <class R>
+struct alignas(4 * sizeof(R)) RatePm {
+  R pOverRho2, m, mOverRho, unused;
+};
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE bool boundaryTag(std::int32_t tag) { return tag & 1; }
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE std::int32_t cellXOfTag(std::int32_t tag) { return tag >> 1; }
+
+// Row i of the packed arrays: owned rows are listed in the cell of their position at the sort (`home`), ghosts
+// in the cell their key names (LocalRows::setGhosts).
+template <class R>
+struct PackRates {
   CellGrid grid;
-  const Index* cellStart;  // numCells + 1
-  const Vec3d* home;       // positions at the last sort: the cell a particle is listed in
+  const Vec3d* home;
+  const std::uint32_t* ghostKey;  // null without ghosts
+  Index owned;
   const Vec3d* pos;
   const Vec3<R>* vel;
   const R* rho;
   const R* p;
   const R* mass;
   const std::int32_t* kind;
+  RateRow<R>* row;
+  RateState<R>* state;
+  RatePm<R>* pm;
+  PFLOW_HOSTDEVICE void operator()(Index i) const {
+    int cx, cy, cz;
+    if (i < owned) {
+      grid.coords(home[i], cx, cy, cz);
+    } else {
+      const std::uint32_t key = ghostKey[i - owned];
+      cx = int(key % std::uint32_t(grid.nx));
+      cy = int((key / std::uint32_t(grid.nx)) % std::uint32_t(grid.ny));
+      cz = int(key / (std::uint32_t(grid.nx) * std::uint32_t(grid.ny)));
+    }
+    const Vec3d corner = grid.lo + grid.cellSize * Vec3d{double(cx), double(cy), double(cz)};
+    const Vec3d o = pos[i] - corner;
+    row[i] = RateRow<R>{R(o.x), R(o.y), R(o.z), cx * 2 + (kind[i] == kFluid ? 0 : 1)};
+    state[i] = RateState<R>{vel[i], rho[i]};
+    const R r = rho[i];
+    pm[i] = RatePm<R>{p[i] / (r * r), mass[i], mass[i] / r, R(0)};
+  }
+};
+
+// Rates of particle a at the current state: acceleration (fluid only: boundary particles do not move),
+// density rate and the largest viscous rate over its neighbours (for the time step). Fluid particles
+// interact with every neighbour; boundary particles only with fluid ones (their continuity equation:
+// boundary-boundary pairs have no relative velocity).
+// The walk: the grid's cells are half the support plus half the skin wide (reach 2: 1.7 times fewer candidates
+// than 27 cells of the whole support), and without ghosts each of the 25 rows of 5 cells along x around a's home
+// cell is one contiguous range of rows (cells are numbered x fastest): no per-cell loop.
+template <class R>
+struct Interact {
+  static constexpr bool kVariableCost = true;  // work per particle varies (CpuExecutor::forEach)
+  // CudaExecutor: 64 registers in float, more warps resident (11.9 -> 11.0 ms a step on SPHERIC at 4·10^6); in
+  // double the cap spills (25.5 -> 38.1 ms).
+  static constexpr bool kRegisterCap64 = sizeof(R) == 4;
+  CellGrid grid;
+  const Index* cellStart;  // numCells + 1
+  const Vec3d* home;       // positions at the last sort: the cell a particle is listed in
+  const RateRow<R>* row;   // PackRates
+  const RateState<R>* state;
+  const RatePm<R>* pm;
   Kernel<R> kernel;
   PairParams<R> params;
   Vec3<R> gravity;
   Vec3<R>* acc;
   R* drho;
   R* visc;
-  // Ghosts (distributed runs; null otherwise), as in compute/neighbor's BuildNeighbors.
+  // Ghosts (distributed runs; null otherwise). They are merged with the rows by global id, cell by cell: with
+  // each cell's rows and ghosts in id order (SortCellByGid: the canonical order distributed runs keep) a
+  // particle's sums are taken in the same order whatever the ranks, so a distributed run equals one process
+  // bit for bit (one process walks the same cells in the same order).
   const Index* ghostCellStart = nullptr;
   const Index* ghostItems = nullptr;
   Index ghostBase = 0;
-  // Canonical order: each cell's rows and its ghosts are in global-id order (SortCellByGid), and the two are
-  // merged by id, so a particle's sums are taken in the same order whatever the ranks: a distributed run
-  // equals one process bit for bit.
   const Gid* gid = nullptr;
-  // Boundary particles with no fluid listed in their 27 cells (MarkWet: wet[a] == 0) have no rates until the
-  // next sort: they are skipped (most of a tank's walls and lid, most of the time).
+  // Boundary particles with no fluid listed in the cells within reach (MarkWet: wet[a] == 0) have no rates until
+  // the next sort: they are skipped (most of a tank's walls and lid, most of the time).
   const std::uint8_t* wet = nullptr;
 
   PFLOW_HOSTDEVICE void operator()(Index a) const {
-    const Vec3d xa = pos[a];
-    const Vec3<R> va = vel[a];
-    const R rhoA = rho[a], pA = p[a];
-    const bool fluidA = kind[a] == kFluid;
+    const RateRow<R> ra = row[a];
+    const bool fluidA = !boundaryTag(ra.tag);
     if (!fluidA && wet && !wet[a]) {
       acc[a] = Vec3<R>{R(0), R(0), R(0)};
       drho[a] = R(0);
       visc[a] = R(0);
       return;
     }
-    const double cut2 = double(kernel.support()) * double(kernel.support());
+    const RateState<R> sa = state[a];
+    const PairSide<R> sideA{sa.rho, pm[a].pOverRho2, R(0), R(0)};
+    const R cut2 = kernel.support() * kernel.support();
+    const R cs = R(grid.cellSize);
+    const std::int32_t cxA = cellXOfTag(ra.tag);
     Vec3<R> sumAcc{R(0), R(0), R(0)};
     R sumDrho = R(0), maxVisc = R(0);
-    // The cells around the one the particle is listed in (where it was at the sort): every neighbour within 2h
-    // now is listed in one of them, since no particle has moved half the skin since (cells are 2h + skin).
+    // b listed in a cell of the row being walked (dy, dz cells from a's): x_a - x_b from the offsets.
+    R yRow = R(0), zRow = R(0);
     auto consider = [&](Index b) {
-      const bool fluidB = kind[b] == kFluid;
-      if (!fluidA && !fluidB) return;
-      const Vec3d d = xa - pos[b];
-      const double r2 = norm2(d);
+      const RateRow<R> rb = row[b];
+      const bool fluidB = !boundaryTag(rb.tag);
+      if (!fluidA && !fluidB) return;  // walls: fluid neighbours only
+      const Vec3<R> d{R(cxA - cellXOfTag(rb.tag)) * cs + (ra.x - rb.x), yRow - rb.y, zRow - rb.z};
+      const R r2 = norm2(d);
       if (r2 >= cut2 || b == a) return;
-      const R r = R(std::sqrt(r2));
-      const PairRates<R> out = pairRates(params, vcast<R>(d), va - vel[b], R(r2), kernel.f(r), rhoA, rho[b], pA, p[b], mass[b],
-                                         params.c0, params.c0, fluidA && fluidB);
+      const RateState<R> sb = state[b];
+      const RatePm<R> qb = pm[b];
+      const PairRates<R> out = pairRates(params, d, sa.v - sb.v, r2, kernel.f(std::sqrt(r2)), sideA,
+                                         PairSide<R>{sb.rho, qb.pOverRho2, qb.m, qb.mOverRho}, params.c0, params.c0, fluidA && fluidB);
       sumAcc += out.acceleration;
       sumDrho += out.densityRate;
       maxVisc = out.viscousRate > maxVisc ? out.viscousRate : maxVisc;
     };
-    forCandidates(a, consider);
+    int cx, cy, cz;
+    grid.coords(home[a], cx, cy, cz);
+    const int r = grid.reach;
+    const int x0 = cx > r ? cx - r : 0, x1 = cx + r < grid.nx ? cx + r : grid.nx - 1;
+    for (int z = cz > r ? cz - r : 0; z <= (cz + r < grid.nz ? cz + r : grid.nz - 1); ++z) {
+      zRow = ra.z - R(z - cz) * cs;
+      for (int y = cy > r ? cy - r : 0; y <= (cy + r < grid.ny ? cy + r : grid.ny - 1); ++y) {
+        yRow = ra.y - R(y - cy) * cs;
+        const std::uint32_t c0 = grid.index(x0, y, z), c1 = grid.index(x1, y, z);
+        if (ghostCellStart) {  // merged by id, cell by cell
+          for (std::uint32_t c = c0; c <= c1; ++c) {
+            Index b = cellStart[c], k = ghostCellStart[c];
+            const Index bEnd = cellStart[c + 1], kEnd = ghostCellStart[c + 1];
+            while (b < bEnd || k < kEnd) {
+              if (k >= kEnd || (b < bEnd && gid[b] < gid[ghostBase + ghostItems[k]])) consider(b++);
+              else consider(ghostBase + ghostItems[k++]);
+            }
+          }
+          continue;
+        }
+        const Index end = cellStart[c1 + 1];
+        for (Index b = cellStart[c0]; b < end; ++b) consider(b);
+      }
+    }
     acc[a] = fluidA ? sumAcc + gravity : Vec3<R>{R(0), R(0), R(0)};
     drho[a] = sumDrho;
     visc[a] = maxVisc;
   }
+};
 
-  // Every owned row and ghost listed in the 27 cells around a's (in global-id order when gid is set).
+// The field table's arrays of a rates pass, for the passes that read it directly (MirrorImages).
+template <class R>
+struct RateFields {
+  CellGrid grid;
+  const Index* cellStart;
+  const Vec3d* home;
+  const Vec3d* pos;
+  const Vec3<R>* vel;
+  const R* rho;
+  const R* p;
+  const R* mass;
+  const std::int32_t* kind;
+  const Index* ghostCellStart = nullptr;
+  const Index* ghostItems = nullptr;
+  Index ghostBase = 0;
+  const Gid* gid = nullptr;
+
+  // Every owned row and ghost listed in the cells within reach of a's (in global-id order when gid is set).
   template <class F>
   PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void forCandidates(Index a, F&& consider) const {
     grid.forNeighbourCells(home[a], [&](std::uint32_t c) {
@@ -110,42 +218,43 @@ struct Interact {
 template <class R>
 struct MirrorImages {
   static constexpr bool kVariableCost = true;
-  Interact<R> k;        // the arrays, parameters, ghosts and order of the rates pass just run
+  Interact<R> k;        // the parameters, outputs and wet flags of the rates pass just run
+  RateFields<R> f;      // its arrays, ghosts and order
   MirrorWalls mirror;
 
   PFLOW_HOSTDEVICE void operator()(Index a) const {
-    const Vec3d xa = k.pos[a];
+    const Vec3d xa = f.pos[a];
     // An image reaches a only through a wall a is near itself (it is at least as far as a's distance to the
     // wall plus b's).
     const int nearA = mirror.near(xa);
     if (!nearA) return;
-    const bool fluidA = k.kind[a] == kFluid;
+    const bool fluidA = f.kind[a] == kFluid;
     if (!fluidA && k.wet && !k.wet[a]) return;
-    const Vec3<R> va = k.vel[a];
-    const R rhoA = k.rho[a], pA = k.p[a];
+    const Vec3<R> va = f.vel[a];
+    const R rhoA = f.rho[a], pA = f.p[a];
     const double cut2 = double(k.kernel.support()) * double(k.kernel.support());
     Vec3<R> sumAcc{R(0), R(0), R(0)};
     R sumDrho = R(0), maxVisc = k.visc[a];
-    k.forCandidates(a, [&](Index b) {
-      if (k.kind[b] != kFluid) return;
-      const int shared = nearA & mirror.near(k.pos[b]);  // walls both are near
+    f.forCandidates(a, [&](Index b) {
+      if (f.kind[b] != kFluid) return;
+      const int shared = nearA & mirror.near(f.pos[b]);  // walls both are near
       // Every non-empty subset of those walls: one image per subset.
       for (int m = shared; m != 0; m = (m - 1) & shared) {
-        const Vec3d xi = mirror.reflect(k.pos[b], m);
+        const Vec3d xi = mirror.reflect(f.pos[b], m);
         const Vec3d d = xa - xi;
         const double r2 = norm2(d);
         if (r2 >= cut2) continue;
         const R r = R(std::sqrt(r2));
-        const R rhoB = k.rho[b];
-        const R pI = k.p[b] + rhoB * dot(k.gravity, vcast<R>(xi - k.pos[b]));  // hydrostatic across the wall
+        const R rhoB = f.rho[b];
+        const R pI = f.p[b] + rhoB * dot(k.gravity, vcast<R>(xi - f.pos[b]));  // hydrostatic across the wall
         const R fab = k.kernel.f(r);
         // Continuity sees the wall as impermeable only (the free-slip image: no tangential divergence at the
         // wall); the momentum's viscous terms see the wall's condition (no-slip: the reversed velocity).
-        const PairRates<R> slip = pairRates(k.params, vcast<R>(d), va - mirror.imageVelocity(k.vel[b], m, false), R(r2), fab, rhoA, rhoB,
-                                            pA, pI, k.mass[b], k.params.c0, k.params.c0, false);
+        const PairRates<R> slip = pairRates(k.params, vcast<R>(d), va - mirror.imageVelocity(f.vel[b], m, false), R(r2), fab, rhoA, rhoB,
+                                            pA, pI, f.mass[b], k.params.c0, k.params.c0, false);
         sumDrho += slip.densityRate;
-        const PairRates<R> wall = mirror.noSlip ? pairRates(k.params, vcast<R>(d), va - mirror.imageVelocity(k.vel[b], m, true), R(r2), fab,
-                                                            rhoA, rhoB, pA, pI, k.mass[b], k.params.c0, k.params.c0, false)
+        const PairRates<R> wall = mirror.noSlip ? pairRates(k.params, vcast<R>(d), va - mirror.imageVelocity(f.vel[b], m, true), R(r2), fab,
+                                                            rhoA, rhoB, pA, pI, f.mass[b], k.params.c0, k.params.c0, false)
                                                 : slip;
         sumAcc += wall.acceleration;
         maxVisc = wall.viscousRate > maxVisc ? wall.viscousRate : maxVisc;
@@ -157,8 +266,8 @@ struct MirrorImages {
   }
 };
 
-// wet[i] = 1 for a fluid particle, and for a boundary particle with a fluid particle (owned or ghost) listed in its
-// 27 cells: until the next sort, only those can have a fluid neighbour within 2h (no particle moves half the skin).
+// wet[i] = 1 for a fluid particle, and for a boundary particle with a fluid particle (owned or ghost) listed in the
+// cells within reach of its own: until the next sort, only those can have a fluid neighbour within 2h (no particle moves half the skin).
 struct MarkWet {
   CellGrid grid;
   const Index* cellStart;
@@ -201,7 +310,7 @@ struct SortCellByGid {
   }
 };
 
-// Distributed runs: flag[i] = 1 when a ghost lies in one of the 27 cells around owned particle i (its rates
+// Distributed runs: flag[i] = 1 when a ghost lies in a cell within reach of owned particle i's (its rates
 // need the refreshed halo), 0 when they can be computed while the halo travels.
 struct MarkNearGhosts {
   CellGrid grid;
@@ -272,9 +381,32 @@ struct Predictor {
   }
 };
 
+// The checks at the end of a step: non-finite values, densities out of bounds and leaks are flagged with the
+// lowest offending index.
+template <class R>
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void checkState(const StepArgs<R>& a, Index i, bool fluid, const Vec3d& x, const Vec3<R>& v, R r) {
+  if (fluid) {
+    if (!isFinite(x) || !isFinite(v) || !std::isfinite(r)) {
+      atomicOrU32(&a.cond->flags, kNonFinite);
+      atomicMinU32(&a.cond->badParticle, i);
+    } else if (r < a.minDensity || r > a.maxDensity) {
+      atomicOrU32(&a.cond->flags, kDensityOutOfRange);
+      atomicMinU32(&a.cond->densityParticle, i);
+    }
+    if (a.checkBox && x.z < a.boxHi.z &&
+        (x.x < a.boxLo.x || x.y < a.boxLo.y || x.z < a.boxLo.z || x.x > a.boxHi.x || x.y > a.boxHi.y)) {
+      atomicOrU32(&a.cond->flags, kLeftDomain);
+      atomicMinU32(&a.cond->outsideParticle, i);
+    }
+  } else if (!std::isfinite(r)) {
+    atomicOrU32(&a.cond->flags, kNonFinite);
+    atomicMinU32(&a.cond->badParticle, i);
+  }
+}
+
 // Corrector, with the rates at the half step: rho = rho0 (2 - eps)/(2 + eps), eps = -drho/rho dt;
-// v = v0 + dt a; x = x0 + dt (v + v0)/2. Non-finite values, densities out of bounds and leaks are flagged
-// with the lowest offending index. Returns the squared displacement since the last cell sort.
+// v = v0 + dt a; x = x0 + dt (v + v0)/2. Checked (checkState). Returns the squared displacement since the last
+// cell sort.
 template <class R>
 struct Corrector {
   StepArgs<R> a;
@@ -283,35 +415,58 @@ struct Corrector {
     const R eps = -a.drho[i] / a.rho[i] * dt;
     R r = a.rho0[i] * (R(2) - eps) / (R(2) + eps);
     const bool fluid = a.kind[i] == kFluid;
+    Vec3d x = a.pos[i];
+    Vec3<R> v = a.vel[i];
     if (fluid) {
       const Vec3<R> v0 = a.vel0[i];
-      Vec3<R> v = v0 + dt * a.acc[i];
-      Vec3d x = a.pos0[i] + (0.5 * a.dt) * vcast<double>(v + v0);
+      v = v0 + dt * a.acc[i];
+      x = a.pos0[i] + (0.5 * a.dt) * vcast<double>(v + v0);
       if (a.mirror.any) a.mirror.keepInside(x, v);
       a.vel[i] = v;
       a.pos[i] = x;
-      if (!isFinite(x) || !isFinite(v) || !std::isfinite(r)) {
-        atomicOrU32(&a.cond->flags, kNonFinite);
-        atomicMinU32(&a.cond->badParticle, i);
-      } else if (r < a.minDensity || r > a.maxDensity) {
-        atomicOrU32(&a.cond->flags, kDensityOutOfRange);
-        atomicMinU32(&a.cond->densityParticle, i);
-      }
-      if (a.checkBox && x.z < a.boxHi.z &&
-          (x.x < a.boxLo.x || x.y < a.boxLo.y || x.z < a.boxLo.z || x.x > a.boxHi.x || x.y > a.boxHi.y)) {
-        atomicOrU32(&a.cond->flags, kLeftDomain);
-        atomicMinU32(&a.cond->outsideParticle, i);
-      }
-    } else {
-      if (r < a.boundaryFloor) r = a.boundaryFloor;
-      if (!std::isfinite(r)) {
-        atomicOrU32(&a.cond->flags, kNonFinite);
-        atomicMinU32(&a.cond->badParticle, i);
-      }
+    } else if (r < a.boundaryFloor) {
+      r = a.boundaryFloor;
     }
+    checkState(a, i, fluid, x, v, r);
     a.rho[i] = r;
     a.p[i] = a.eos.pressure(r);
-    return norm2(a.pos[i] - a.ref[i]);
+    return norm2(x - a.ref[i]);
+  }
+};
+
+// One Verlet step with the rates of the state now (n), from the state before it (n - 1, kept in vel0 and rho0):
+// v' = v(n-1) + (dt' + dt) a, rho' = rho(n-1) + (dt' + dt) drho, x' = x + dt v + dt^2/2 a, dt' the step before
+// (Monaghan 1989, Crespo et al. 2015, who write 2 dt: the same at a constant step); an Euler step (`dtBefore` 0:
+// v' = v + dt a, rho' = rho + dt drho) every sph.verlet_steps steps and at the first. The state now becomes the
+// one before. Checked (checkState). Returns the squared displacement since the last sort.
+template <class R>
+struct VerletStep {
+  StepArgs<R> a;
+  double dtBefore;
+  PFLOW_HOSTDEVICE double operator()(Index i) const {
+    const bool euler = dtBefore == 0;
+    const R span = R(euler ? a.dt : a.dt + dtBefore);
+    const R rNow = a.rho[i];
+    R r = (euler ? rNow : a.rho0[i]) + span * a.drho[i];
+    a.rho0[i] = rNow;
+    const bool fluid = a.kind[i] == kFluid;
+    Vec3d x = a.pos[i];
+    Vec3<R> v = a.vel[i];
+    if (fluid) {
+      const Vec3<R> vNow = v, acc = a.acc[i];
+      v = (euler ? vNow : a.vel0[i]) + span * acc;
+      x = x + a.dt * vcast<double>(vNow) + (0.5 * a.dt * a.dt) * vcast<double>(acc);
+      if (a.mirror.any) a.mirror.keepInside(x, v);
+      a.vel0[i] = vNow;
+      a.vel[i] = v;
+      a.pos[i] = x;
+    } else if (r < a.boundaryFloor) {
+      r = a.boundaryFloor;
+    }
+    checkState(a, i, fluid, x, v, r);
+    a.rho[i] = r;
+    a.p[i] = a.eos.pressure(r);
+    return norm2(x - a.ref[i]);
   }
 };
 

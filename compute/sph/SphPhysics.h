@@ -109,34 +109,50 @@ struct PairRates {
   R viscousRate;         // |h v_ab.x_ab / (r^2 + eta^2)| [1/s], for the viscous time-step limit
 };
 
+// One side of a pair as the pair terms use it: the density, p/rho^2, and (b's side) the mass and m/rho. The
+// rates pass packs them once per particle (SphKernels.h, PackRates), not once per pair.
+template <class R>
+struct PairSide {
+  R rho, pOverRho2, m, mOverRho;
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE static PairSide of(R rho, R p, R m) { return {rho, p / (rho * rho), m, m / rho}; }
+};
+
 // One pair's terms (docs/sph.md, equations 4-8). xab = x_a - x_b, vab = v_a - v_b, fab = (1/r) dW/dr at
 // r = |xab| (so grad_a W_ab = fab xab). `diffuse`: both are fluid (density diffusion acts between fluid
-// particles only; walls are driven by continuity alone).
+// particles only; walls are driven by continuity alone). Two divisions per pair: 1/(r^2 + eta^2) and, where
+// the artificial viscosity acts, the mean density.
 template <class R>
 PFLOW_HOSTDEVICE PFLOW_FORCEINLINE PairRates<R> pairRates(const PairParams<R>& p, Vec3<R> xab, Vec3<R> vab, R r2, R fab,
-                                                          R rhoA, R rhoB, R pA, R pB, R mB, R cA, R cB, bool diffuse) {
+                                                          const PairSide<R>& a, const PairSide<R>& b, R cA, R cB, bool diffuse) {
   PairRates<R> out;
   const Vec3<R> gradW = fab * xab;
   const R vdotx = dot(vab, xab);
-  const R denom = r2 + p.eta2;
+  const R invDenom = R(1) / (r2 + p.eta2);
   // Momentum: pressure (symmetric form, conserves linear momentum) and Monaghan's artificial viscosity.
   R pi = R(0);
-  const R mu = p.h * vdotx / denom;
-  if (vdotx < R(0) && p.alpha > R(0)) pi = -p.alpha * R(0.5) * (cA + cB) * mu / (R(0.5) * (rhoA + rhoB));
-  R coef = -mB * (pA / (rhoA * rhoA) + pB / (rhoB * rhoB) + pi);
+  const R mu = p.h * vdotx * invDenom;
+  if (vdotx < R(0) && p.alpha > R(0)) pi = -p.alpha * (cA + cB) * mu / (a.rho + b.rho);
+  const R coef = -b.m * (a.pOverRho2 + b.pOverRho2 + pi);
   out.acceleration = coef * gradW;
   // Laminar viscosity: m_b 4 nu (x_ab . grad W) / ((rho_a + rho_b)(r^2 + eta^2)) v_ab.
-  if (p.nu > R(0)) out.acceleration += (mB * R(4) * p.nu * fab * r2 / ((rhoA + rhoB) * denom)) * vab;
+  if (p.nu > R(0)) out.acceleration += (b.m * R(4) * p.nu * fab * r2 * invDenom / (a.rho + b.rho)) * vab;
   // Continuity: m_b v_ab . grad W.
-  out.densityRate = mB * fab * vdotx;
+  out.densityRate = b.m * fab * vdotx;
   // Density diffusion: 2 delta h c0 sum (rho_b - rho_a - hydrostatic) (x_ba . grad W)/(r^2 + eta^2) m_b/rho_b.
   if (diffuse && p.delta > R(0)) {
-    R drho = rhoB - rhoA;
+    R drho = b.rho - a.rho;
     if (p.hydrostatic) drho -= p.rho0 * dot(p.gOverC2, -xab);  // rho0 g.(x_b - x_a) / c0^2
-    out.densityRate += R(2) * p.delta * p.h * p.c0 * drho * (-fab * r2) / denom * mB / rhoB;
+    out.densityRate += R(2) * p.delta * p.h * p.c0 * drho * (-fab * r2) * invDenom * b.mOverRho;
   }
   out.viscousRate = std::fabs(mu);
   return out;
+}
+
+// The same from the plain values of both particles (tests, the mirror images).
+template <class R>
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE PairRates<R> pairRates(const PairParams<R>& p, Vec3<R> xab, Vec3<R> vab, R r2, R fab,
+                                                          R rhoA, R rhoB, R pA, R pB, R mB, R cA, R cB, bool diffuse) {
+  return pairRates(p, xab, vab, r2, fab, PairSide<R>::of(rhoA, pA, R(0)), PairSide<R>::of(rhoB, pB, mB), cA, cB, diffuse);
 }
 
 // Mirror walls (sph.boundary: mirror; docs/sph.md, "Mirror walls"): the tank's flat walls, normal to the axes.

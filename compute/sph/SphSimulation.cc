@@ -9,13 +9,24 @@
 namespace pflow::compute::sph {
 
 // ---------------------------------------------------------------------------------------------
-// The step loop. One symplectic (position-Verlet predictor-corrector) step, top to bottom, a timer per phase;
-// the rates of the state at the start of the step were computed at the end of the previous one. Errors come
-// back through PFLOW_TRY; step() adds the step and time once.
+// The step loop. One step, top to bottom, a timer per phase: symplectic (position-Verlet predictor-corrector,
+// two evaluations of the rates) or Verlet (one); the rates of the state at the start of the step were computed
+// at the end of the previous one. Errors come back through PFLOW_TRY; step() adds the step and time once.
 Status SphSimulation::stepPhases() {
   const double dt = nextDt();  // the CFL limits of the rates at the start (all ranks), or sph.dt; lands on outputs
   m_dt = dt;                   // the step being taken (errors name it)
   double moved2 = 0;
+  if (m_method.integrator == Integrator::kVerlet) {
+    const double before = m_step % m_method.verletSteps == 0 ? 0.0 : m_dtBefore;  // 0: an Euler step
+    Status s;
+    { auto t = m_timers.time(Phase::kIntegrate2); s = m_engine->verlet(dt, before, moved2); } // x, v, rho to t + dt
+    PFLOW_TRY(m_domain->agree(s));
+    PFLOW_TRY(rates(moved2));                                                         // rates at t + dt
+    m_dtBefore = dt;
+    ++m_step;
+    m_time += dt;
+    return Status::ok();
+  }
   { auto t = m_timers.time(Phase::kIntegrate1); moved2 = m_engine->predictor(dt); }     // x, v, rho to t + dt/2
   PFLOW_TRY(rates(moved2));                                                         // rates at t + dt/2
   Status s;
@@ -326,9 +337,12 @@ Result<SphSetup> prepareSphSetup(const RunConfig& config) {
     }
   }
 
-  // The grid: cells 2h + skin wide over the particles' box plus one cell, one layer across a 2D run's plane.
+  // The grid: cells h + skin/2 wide (two of them hold every neighbour: reach 2) over the particles' box plus
+  // 2h + skin, one layer across a 2D run's plane.
   s.skin = c.skin * d.h;
-  const double cell = 2 * d.h + s.skin;
+  const double reachLength = 2 * d.h + s.skin;
+  const double cell = 0.5 * reachLength;
+  s.grid.reach = 2;
   Vec3d lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
   for (const Vec3d& x : c.position) {
     lo = {std::min(lo.x, x.x), std::min(lo.y, x.y), std::min(lo.z, x.z)};
@@ -339,8 +353,8 @@ Result<SphSetup> prepareSphSetup(const RunConfig& config) {
     lo = {std::min(lo.x, c.tank->lo.x), std::min(lo.y, c.tank->lo.y), std::min(lo.z, c.tank->lo.z)};
     hi = {std::max(hi.x, c.tank->hi.x), std::max(hi.y, c.tank->hi.y), std::max(hi.z, c.tank->hi.z)};
   }
-  lo = lo - Vec3d{cell, cell, cell};
-  hi = hi + Vec3d{cell, cell, cell};
+  lo = lo - Vec3d{reachLength, reachLength, reachLength};
+  hi = hi + Vec3d{reachLength, reachLength, reachLength};
   const Vec3d ext = hi - lo;
   s.grid.lo = lo;
   s.grid.cellSize = cell;
@@ -353,7 +367,7 @@ Result<SphSetup> prepareSphSetup(const RunConfig& config) {
     s.grid.ny = 1;
   }
   const double cells = double(s.grid.nx) * s.grid.ny * s.grid.nz;
-  if (cells > 4.0 * double(n) + 1e6)
+  if (cells > (4.0 * double(n) + 1e6) * (c.dimension == 3 ? 8 : 4))
     return invalidArgument("sph: the particles span " + std::to_string(s.grid.nx) + " x " + std::to_string(s.grid.ny) + " x " +
                            std::to_string(s.grid.nz) + " cells of " + std::to_string(cell) +
                            " m, far more than particles: a particle is far from the others");

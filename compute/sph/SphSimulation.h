@@ -90,6 +90,7 @@ class SphSimulation {
   double m_costMark = 0;  // rate seconds at the last rebuild (the domain's cost measure)
   SphDerived m_derived;
   SphConfig m_method;  // the configuration, without its particles
+  double m_dtBefore = 0;  // Verlet: the last step taken
   CellGrid m_grid;
   double m_skin = 0;
   PhaseTimers m_timers;

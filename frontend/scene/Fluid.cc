@@ -57,6 +57,20 @@ void Loader::parseSphScene(const Fields& top) {
         }
       }
       get(*f, "cfl", c.cfl);
+      if (const Entry* k = f->find("integrator")) {
+        std::string name;
+        if (read(k->value, f->child("integrator"), k->loc, name)) {
+          if (name == "symplectic" || name == "verlet") c.integrator = name == "verlet" ? compute::sph::Integrator::kVerlet : compute::sph::Integrator::kSymplectic;
+          else badValue(f->child("integrator"), unknownName("integrator", name, kSphIntegrators, "Choices"), k->loc);
+        }
+      }
+      if (const Entry* k = f->find("verlet_steps")) {
+        const auto v = autoOrNumber(*k, "sph.verlet_steps", "");
+        if (v) {
+          if (*v != std::floor(*v) || *v < 1 || *v > 1e6) badValue("sph.verlet_steps", format::num(*v) + " is not a whole number in [1, 1e6]", k->loc);
+          else c.verletSteps = int(*v);
+        }
+      }
       if (const Entry* dt = f->find("dt")) c.dt = autoOrNumber(*dt, "sph.dt", "s");
       if (const Entry* k = f->find("boundary")) {
         std::string name;

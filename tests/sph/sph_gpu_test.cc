@@ -75,6 +75,14 @@ TEST(SphCudaVsCpu, FloatFrontWithinOnePercentOfDouble) {
   for (std::size_t k = 0; k < zs.size(); ++k) EXPECT_NEAR(t32[k], t64[k], 0.01 * t64[k]) << "Z = " << zs[k];
 }
 
+// Verlet on both executors (double): the dam break to 0.1 s, every particle within 1e-6 m of its CPU position.
+TEST(SphCudaVsCpu, VerletDamBreakAgrees) {
+  SKIP_WITHOUT_GPU();
+  RunConfig c = test::damBreak2D(0.01, 0.1);
+  c.sph.integrator = Integrator::kVerlet;
+  EXPECT_LT(largestCpuGpuDifference(c, "verlet: "), 1e-6) << "largest position difference [m]";
+}
+
 // Mirror walls on both executors (double): the dam break to 0.1 s, every particle within 1e-6 m of its CPU
 // position, as with boundary particles.
 TEST(SphCudaVsCpu, MirrorWallsDamBreakAgrees) {

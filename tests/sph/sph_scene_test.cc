@@ -108,18 +108,18 @@ TEST(SphScene, SummaryForTheServices) {
   EXPECT_EQ(s.sets[1].info.count, s.particles - 800u);
   EXPECT_NEAR(s.dt, 7.572e-5, 1e-8);  // CFL 0.2 x h / c0 = 0.2 x 0.015 / 39.62
   EXPECT_NEAR(double(s.steps), 13206, 1);  // 1 s of the first step (the count is an estimate: dt follows the flow)
-  // The engine's buffers in double (SphSummary.cc lists them): 241 B, against 254 measured on SPHERIC with the
-  // buffers' growth slack (bench/RESULTS.md).
-  EXPECT_EQ(s.bytesPerParticle, 241.0);
+  // The engine's buffers in double (SphSummary.cc lists them): 337 B (pflow-sph-bench measures them with the
+  // buffers' growth slack: bench/RESULTS.md).
+  EXPECT_EQ(s.bytesPerParticle, 337.0);
   EXPECT_EQ(s.memoryBytes, s.bytesPerParticle * double(s.particles) + 4.0 * (s.cells[0] * s.cells[1] * s.cells[2] + 1));
   EXPECT_NE(s.model.text().find("solver: sph"), std::string::npos) << s.model.text();
   EXPECT_NE(toJson(s).find("\"solver\":\"sph\""), std::string::npos);
-  // Float: 181 B (204 measured).
+  // Float: 229 B.
   std::string yaml = damBreak();
   yaml.replace(yaml.find("simulation: {"), 13, "simulation: {precision: float, ");
   auto single = load(yaml);
   ASSERT_TRUE(single.isOk()) << single.status().message();
-  EXPECT_EQ(summarize(single.value()).value().bytesPerParticle, 181.0);
+  EXPECT_EQ(summarize(single.value()).value().bytesPerParticle, 229.0);
 }
 
 // Mirror walls: no wall particles, the tank recorded; the keys that do not go with them are named.
@@ -144,6 +144,23 @@ TEST(SphScene, MirrorWallsAndTheirErrors) {
   auto unknown = load(damBreak("{dimension: 2, spacing: 0.01, boundary: ghost}"));
   ASSERT_FALSE(unknown.isOk());
   EXPECT_NE(unknown.status().message().find("dynamic, mirror"), std::string::npos) << unknown.status().message();
+}
+
+// sph.integrator picks the time integration; a bad name and sph.verlet_steps without Verlet are named.
+TEST(SphScene, IntegratorAndItsErrors) {
+  auto r = load(damBreak("{dimension: 2, spacing: 0.01, integrator: verlet, verlet_steps: 50}"));
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r.value().config.sph.integrator, compute::sph::Integrator::kVerlet);
+  EXPECT_EQ(r.value().config.sph.verletSteps, 50);
+  auto unknown = load(damBreak("{dimension: 2, spacing: 0.01, integrator: leapfrog, verlet_steps: 0.5}"));
+  ASSERT_FALSE(unknown.isOk());
+  const std::string m = unknown.status().message();
+  EXPECT_NE(m.find("symplectic, verlet"), std::string::npos) << m;
+  EXPECT_NE(m.find("sph.verlet_steps: 0.5 is not a whole number"), std::string::npos) << m;
+  auto stray = load(damBreak("{dimension: 2, spacing: 0.01, verlet_steps: 20}"));
+  ASSERT_FALSE(stray.isOk());
+  EXPECT_NE(stray.status().message().find("sph.verlet_steps: applies to sph.integrator: verlet"), std::string::npos)
+      << stray.status().message();
 }
 
 TEST(SphScene, UnknownSolverIsNamed) {
