@@ -23,6 +23,13 @@ struct RunOptions {
   bool json = false;           // print the summary as one JSON object on stdout
   std::int64_t maxSteps = -1;  // stop after this many steps (< 0: run the whole duration)
   bool initialOnly = false;    // write the initial state (/snapshots/0 and /geometry) and stop: `pflow build`
+  // Checkpoints (docs/operations.md): one at the first neighbour rebuild after every checkpointEvery steps (0:
+  // none) into checkpointPath (empty: OUT.ckpt.h5 beside the output), the one before kept as PATH.1; resumePath:
+  // go on from a checkpoint (the scene is the one it holds; the output must be named).
+  std::int64_t checkpointEvery = 0;
+  double checkpointWallSeconds = 600;  // and when this much wall-clock time has passed since the last (0: never)
+  std::string checkpointPath;
+  std::string resumePath;
 };
 
 struct RunSummary {

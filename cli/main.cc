@@ -17,7 +17,7 @@ int main(int argc, char** argv) {
 
   pflow::cli::RunOptions run;
   auto* runCmd = app.add_subcommand("run", "run a scene in this process and write snapshots (HDF5 + XDMF)");
-  runCmd->add_option("scene", run.scenePath, "scene file (YAML)")->required()->check(CLI::ExistingFile);
+  runCmd->add_option("scene", run.scenePath, "scene file (YAML; not with --resume)")->check(CLI::ExistingFile);
   runCmd->add_option("-o,--output", run.outputPath, "output HDF5 file (default: the scene's output.file, else SCENE.h5)");
   runCmd->add_option("--executor", run.executor,
                      "auto (the GPU where one is visible), cpu (OpenMP) or cuda (an error without a GPU)")
@@ -26,7 +26,14 @@ int main(int argc, char** argv) {
   runCmd->add_option("--threads", run.threads, "CPU threads (default: all)");
   runCmd->add_option("--progress", run.progressSeconds, "seconds between progress lines (0: none)")->capture_default_str();
   runCmd->add_flag("--json", run.json, "print the summary as JSON on stdout");
-  runCmd->add_option("--steps", run.maxSteps, "stop after this many steps (default: the scene's duration)");
+  runCmd->add_option("--steps", run.maxSteps, "stop at this step, counted from the scene's start (default: the scene's duration)");
+  runCmd->add_option("--checkpoint-every", run.checkpointEvery,
+                     "write a checkpoint at the first neighbour rebuild after every N steps (DEM; docs/operations.md)");
+  runCmd->add_option("--checkpoint-wall", run.checkpointWallSeconds,
+                     "also a checkpoint at the first rebuild after this many wall-clock seconds since the last (0: never)")
+      ->capture_default_str();
+  runCmd->add_option("--checkpoint", run.checkpointPath, "checkpoint file (default: OUT.ckpt.h5; the one before is kept as PATH.1)");
+  runCmd->add_option("--resume", run.resumePath, "go on from this checkpoint (or PATH.1 where PATH is unreadable); needs -o");
 
   pflow::cli::RunOptions build;
   build.initialOnly = true;

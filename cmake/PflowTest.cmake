@@ -9,8 +9,18 @@ function(pflow_add_test)
   if(NOT T_TIMEOUT)
     set(T_TIMEOUT 600)
   endif()
+  list(GET T_LABELS 0 _first)
   gtest_discover_tests(${T_NAME}
-    PROPERTIES LABELS "${T_LABELS}" TIMEOUT ${T_TIMEOUT}
+    PROPERTIES LABELS "${_first}" TIMEOUT ${T_TIMEOUT}
     WORKING_DIRECTORY ${CMAKE_SOURCE_DIR}
     DISCOVERY_TIMEOUT 60)
+  # Several labels (gpu and fault): discovery passes its properties through a command line that splits lists, so
+  # the whole list is set after the discovered tests are included.
+  list(LENGTH T_LABELS _count)
+  if(_count GREATER 1)
+    set(_labels_file "${CMAKE_CURRENT_BINARY_DIR}/${T_NAME}_labels.cmake")
+    file(WRITE "${_labels_file}"
+         "foreach(_t IN LISTS ${T_NAME}_TESTS)\n  set_tests_properties(\"\${_t}\" PROPERTIES LABELS \"${T_LABELS}\")\nendforeach()\n")
+    set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES "${_labels_file}")
+  endif()
 endfunction()

@@ -166,6 +166,11 @@ class Engine : public DistributedRows {
   // forces (they are not saved).
   virtual void save(std::vector<std::byte>& out) const = 0;
   virtual void restore(const std::vector<std::byte>& rows, Index count, int contactSlots, int wallSlots) = 0;
+  // ---- File checkpoints (Simulation::state, resume): the owned rows' kMigrate and kCheckpoint fields (the forces
+  // too: the step after a checkpoint starts from them unrecomputed) in the table's types, row-major whatever the
+  // executor (FieldRows::stateArrays), and their load into an engine of either executor at those slot counts.
+  virtual ParticleSnapshot stateArrays(std::int64_t step, double time) const = 0;
+  virtual Status loadState(const ParticleSnapshot& s, int contactSlots, int wallSlots) = 0;
 
   // Waits for the device's queued work (phase timers call it so each phase is timed whole).
   virtual void fence() const = 0;

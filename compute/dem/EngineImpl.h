@@ -86,6 +86,17 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     m_particles.resize(m_n);
     sizeLocalBuffers();
   }
+  ParticleSnapshot stateArrays(std::int64_t step, double time) const override {
+    return m_rows.stateArrays(step, time, m_owned, kMigrate | kCheckpoint);
+  }
+  Status loadState(const ParticleSnapshot& s, int contactSlots, int wallSlots) override {
+    m_particles.allocate(std::max<Index>(Index(s.n), 1), contactSlots, wallSlots, m_particles.slotMajor());
+    m_n = m_owned = Index(s.n);
+    m_particles.resize(m_n);
+    Status st = m_rows.loadState(s, kMigrate | kCheckpoint);
+    sizeLocalBuffers();
+    return st;
+  }
   void ensureSlots(int contactSlots, int wallSlots) override {
     if (contactSlots > m_particles.contactSlots()) m_particles.resizeSlots(Multiplicity::kContactSlots, contactSlots);
     if (wallSlots > m_particles.wallSlots()) m_particles.resizeSlots(Multiplicity::kWallSlots, wallSlots);

@@ -32,7 +32,7 @@ Status Simulation::stepPhases() {
   const bool due = m_rebuildInterval > 0 ? (m_step + 1) % m_rebuildInterval == 0  // fixed interval: may miss contacts
                                          : 2 * moved > m_skin || moved + meshMoved > m_skin;
   const bool rebuildNow = m_domain->anyRebuild(due);
-  if (rebuildNow) s = rebuild();
+  if (rebuildNow) s = rebuild(), m_rebuiltAt = m_step + 1;
   if (!rebuildNow && m_domain->ranks() > 1) s = haloAndForces(dt, tNext);  // ghosts refreshed (ranks)
   else if (s.isOk()) { auto t = m_timers.time(Phase::kForces);     s = m_engine->computeForces(dt, tNext); }
   if (s.isOk()) { auto t = m_timers.time(Phase::kIntegrate2); s = m_engine->integrateSecondHalf(dt); }
@@ -193,7 +193,9 @@ void Simulation::scheduleOutput(double interval, double end) {
   const double dt = m_timeStep.dt;
   m_endOutput = m_stepBase + std::llround((end - m_timeBase) / dt);
   m_outputSteps = interval > 0 ? std::max<std::int64_t>(1, std::llround(interval / dt)) : 0;
-  m_nextOutput = interval > 0 ? m_step + m_outputSteps : -1;
+  // At whole multiples of the interval from the time base: a resumed run's outputs fall on the steps of the run it
+  // resumes.
+  m_nextOutput = interval > 0 ? m_stepBase + ((m_step - m_stepBase) / m_outputSteps + 1) * m_outputSteps : -1;
   m_outputDue = false;
   if (m_checkpoint.valid && m_checkpoint.step == m_step) {
     m_checkpoint.nextOutput = m_nextOutput;
@@ -262,6 +264,52 @@ Status Simulation::initialise() {
     m_energyScale = kinetic + elastic + m_energyScale;  // m_energyScale held M |g| H (create)
     m_energyAllowance = elastic + kEnergyTolerance * m_energyScale;
   }
+  return Status::ok();
+}
+
+Result<SimulationState> Simulation::state() const {
+  if (m_domain->ranks() > 1) return Status(StatusCode::kFailedPrecondition, "checkpoints of distributed runs are not written yet");
+  if (!justRebuilt())
+    return Status(StatusCode::kFailedPrecondition, "a checkpoint is taken just after a neighbour rebuild (step " +
+                                                       std::to_string(m_rebuiltAt) + " was the last; this is " + std::to_string(m_step) + ")");
+  SimulationState s;
+  s.particles = m_engine->stateArrays(m_step, m_time);
+  s.contactSlots = m_engine->historySlots();
+  s.wallSlots = m_engine->wallHistorySlots();
+  s.step = m_step;
+  s.stepBase = m_stepBase;
+  s.rebuilds = m_rebuilds;
+  s.time = m_time;
+  s.timeBase = m_timeBase;
+  s.dt = m_timeStep.dt;
+  s.reductions = m_reductions;
+  return s;
+}
+
+// The rows as they were after the run's rebuild at s.step: sorting them again keeps their order (the same cells,
+// a stable sort) and the lists come out the same; the forces are the run's (not recomputed), so the next step is
+// the run's own.
+Status Simulation::resume(const SimulationState& s) {
+  if (m_domain->ranks() > 1) return Status(StatusCode::kFailedPrecondition, "resuming a distributed run is not supported yet");
+  try {
+    PFLOW_RETURN_IF_ERROR(m_engine->loadState(s.particles, s.contactSlots, s.wallSlots));
+    m_step = s.step;
+    m_stepBase = s.stepBase;
+    m_time = s.time;
+    m_timeBase = s.timeBase;
+    m_timeStep.dt = s.dt;
+    m_reductions = s.reductions;
+    m_engine->moveMeshes(s.time);
+    PFLOW_RETURN_IF_ERROR(rebuild());
+  } catch (...) {
+    return withStep(fromException());
+  }
+  m_rebuilds = s.rebuilds;
+  m_rebuiltAt = m_step;
+  m_historySlots = m_engine->historySlots();
+  m_wallHistorySlots = m_engine->wallHistorySlots();
+  m_outputDue = false;
+  if (m_onInstability == OnInstability::kReduceDt) takeCheckpoint();
   return Status::ok();
 }
 

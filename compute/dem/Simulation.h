@@ -16,6 +16,18 @@
 
 namespace pflow::compute {
 
+// What a run needs to go on from a step bit for bit (Simulation::state, resume): the particles' state arrays
+// (Engine::stateArrays, forces included) at their slot counts, the step and time and the time step's history.
+// Taken just after a neighbour rebuild (justRebuilt()), where resuming's own rebuild reproduces the run's
+// order and lists. docs/operations.md, "Checkpoints".
+struct SimulationState {
+  ParticleSnapshot particles;
+  int contactSlots = 0, wallSlots = 0;
+  std::int64_t step = 0, stepBase = 0, rebuilds = 0;
+  double time = 0, timeBase = 0, dt = 0;
+  int reductions = 0;
+};
+
 struct SimulationOptions {
   ExecutorKind executor = ExecutorKind::kCpu;
   int device = 0;  // CUDA device index (of the visible ones)
@@ -45,6 +57,13 @@ class Simulation {
   // `observer`, which may stop the run by returning a non-OK status.
   Status runUntil(double time, const std::function<Status(const Simulation&)>& observer = {});
   Status runSteps(std::int64_t steps);
+
+  // File checkpoints. justRebuilt(): the last step ended with a neighbour rebuild, where state() may be taken
+  // (one process; distributed runs are not checkpointed yet). resume(): this run, created from the same scene,
+  // goes on from `s` as the run it came from did; call scheduleOutput afterwards.
+  bool justRebuilt() const { return m_rebuiltAt == m_step; }
+  Result<SimulationState> state() const;
+  Status resume(const SimulationState& s);
 
   // Output schedule (pflow run, pflow-worker): outputDue() is true after the step that reaches each
   // multiple of `interval` (rounded to whole steps of the dt of the moment; 0: none) and after the step
@@ -138,6 +157,7 @@ class Simulation {
   bool m_checkpointDue = false;
   bool m_started = false;  // initialise() done: errors before are the start's (step 0)  // after the step in progress (stepPhases decides)
   std::int64_t m_rebuilds = 0;
+  std::int64_t m_rebuiltAt = 0;  // the step that ended with the last rebuild (0: the start's)
   int m_rebuildInterval = 0;  // SimulationSettings::rebuildInterval (0 = automatic)
   ExecutorKind m_executor = ExecutorKind::kCpu;
   bool m_overlapHalo = true;

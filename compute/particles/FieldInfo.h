@@ -16,6 +16,7 @@ enum FieldFlags : std::uint32_t {
   kMigrate = 1u << 1,   // travels with a particle that changes rank
   kGhost = 1u << 2,     // what a ghost (a copy in a neighbouring rank's halo) holds, sent at each rebuild
   kRefresh = 1u << 3,   // refreshed in the ghosts every step between rebuilds
+  kCheckpoint = 1u << 4,  // in a checkpoint besides the kMigrate fields (what the step after it reads unrecomputed)
 };
 
 enum class Multiplicity : std::uint8_t { kOne, kContactSlots, kWallSlots };

@@ -6,9 +6,11 @@
 #pragma once
 #include <algorithm>
 #include <cstddef>
+#include <cstring>
 #include <string>
 #include <vector>
 
+#include "common/Status.h"
 #include "compute/core/Memory.h"
 #include "compute/neighbor/CellGrid.h"
 #include "compute/neighbor/NeighborKernels.h"
@@ -114,13 +116,64 @@ class FieldRows {
     m_mem.copyToHost(out.data(), m_stage.data(), out.size());
   }
 
+  // The fields flagged with any of `flags` of rows [0, n), copied off the device in the table's own types and
+  // row-major whatever the executor's layout (a slot field: n x slots x components, as `components`): a
+  // checkpoint's arrays, which either executor loads back (loadState).
+  ParticleSnapshot stateArrays(std::int64_t step, double time, Index n, std::uint32_t flags) const {
+    ParticleSnapshot s{step, time, n, {}};
+    for (int k = 0; k < Store::kCount; ++k) {
+      const Info& f = Store::kTable[k];
+      if (!(f.flags & flags)) continue;
+      const std::size_t per = m_store.valuesPerParticle(f);
+      SnapshotArray a{f.name, f.scalar, int(std::size_t(f.components) * per), f.unit, {}};
+      a.data.resize(std::size_t(n) * per * f.elementBytes);
+      const unsigned char* from = m_store.buffer(f.id).template as<unsigned char>();
+      if (m_store.slotMajor() && f.multiplicity != Multiplicity::kOne && per > 1) {
+        std::vector<std::byte> column(std::size_t(n) * f.elementBytes);
+        for (std::size_t slot = 0; slot < per; ++slot) {
+          m_mem.copyToHost(column.data(), from + slot * m_store.columnBytes(f), column.size());
+          for (Index i = 0; i < n; ++i)
+            std::memcpy(a.data.data() + (std::size_t(i) * per + slot) * f.elementBytes, column.data() + std::size_t(i) * f.elementBytes,
+                        f.elementBytes);
+        }
+      } else if (n) {
+        m_mem.copyToHost(a.data.data(), from, a.data.size());
+      }
+      s.arrays.push_back(std::move(a));
+    }
+    return s;
+  }
+
+  // stateArrays' inverse into rows [0, s.n) (the store already holds that many rows at the arrays' slot counts):
+  // every field flagged with any of `flags` must be there, at its size. Returns the first that is not.
+  Status loadState(const ParticleSnapshot& s, std::uint32_t flags) {
+    for (int k = 0; k < Store::kCount; ++k) {
+      const Info& f = Store::kTable[k];
+      if (!(f.flags & flags)) continue;
+      const SnapshotArray* a = s.find(f.name);
+      const std::size_t per = m_store.valuesPerParticle(f);
+      if (!a || a->type != f.scalar || a->data.size() != s.n * per * f.elementBytes)
+        return Status(StatusCode::kInvalidArgument, std::string("checkpoint: the field '") + f.name + "' is " +
+                                                        (a ? "not of this run's type and slot count" : "missing"));
+      unsigned char* to = m_store.buffer(f.id).template as<unsigned char>();
+      if (m_store.slotMajor() && f.multiplicity != Multiplicity::kOne && per > 1) {
+        std::vector<std::byte> column(s.n * f.elementBytes);
+        for (std::size_t slot = 0; slot < per; ++slot) {
+          for (std::size_t i = 0; i < s.n; ++i)
+            std::memcpy(column.data() + i * f.elementBytes, a->data.data() + (i * per + slot) * f.elementBytes, f.elementBytes);
+          m_mem.copyFromHost(to + slot * m_store.columnBytes(f), column.data(), column.size());
+        }
+      } else if (s.n) {
+        m_mem.copyFromHost(to, a->data.data(), a->data.size());
+      }
+    }
+    return Status::ok();
+  }
+
   // The kSnapshot fields named in `fields` (all of them when empty) of rows [0, n), copied off the device.
   // Output is double at both precisions (one file layout): float fields are widened on the host.
   ParticleSnapshot snapshot(std::int64_t step, double time, Index n, const std::vector<std::string>& fields) const {
-    ParticleSnapshot s;
-    s.step = step;
-    s.time = time;
-    s.n = n;
+    ParticleSnapshot s{step, time, n, {}};
     for (int k = 0; k < Store::kCount; ++k) {
       const Info& f = Store::kTable[k];
       if (!(f.flags & kSnapshot)) continue;

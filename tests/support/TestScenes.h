@@ -1,6 +1,7 @@
 // Small builders for run configurations used by the physics tests and the accuracy study (bench/accuracy).
 #pragma once
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 
 #include "compute/sim/RunConfig.h"
@@ -70,6 +71,32 @@ inline compute::RunConfig compressedBlock(double dtInRayleighTimes, double resti
               plane({0, side, 0}, {0, -1, 0}, 0, "y1")};
   c.sim.dt = dtInRayleighTimes * compute::rayleighTime(r, 2800, 4.8e10, 0.2);
   c.sim.duration = 2000 * *c.sim.dt;
+  return c;
+}
+
+// A frictional, rolling-resistant heap of 600 spheres of radius about r poured into a box: contacts start, slide,
+// end and change owner at rebuilds (particles cross cells).
+inline compute::RunConfig pouredHeap(double r, int threads = 0) {
+  compute::RunConfig c;
+  c.materials = {material("m", 1e7, 0.3, 2500, 0.5, 0.5)};
+  c.materials[0].rollingFriction = 0.05;
+  const double gap = 2.1 * r;
+  std::uint64_t seed = 7;
+  auto jitter = [&] {
+    seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+    return (double(seed >> 11) / 9007199254740992.0 - 0.5) * 0.2 * r;
+  };
+  for (int k = 0; k < 600; ++k) {
+    const int x = k % 10, y = (k / 10) % 10, z = k / 100;
+    addParticle(c, {(x + 0.5) * gap + jitter(), (y + 0.5) * gap + jitter(), r + z * gap + jitter()}, r * (0.8 + 0.04 * (k % 6)), 0);
+  }
+  const double side = 10 * gap;
+  c.planes = {plane({0, 0, 0}, {0, 0, 1}, 0, "floor"), plane({0, 0, 0}, {1, 0, 0}, 0, "x0"),
+              plane({side, 0, 0}, {-1, 0, 0}, 0, "x1"), plane({0, 0, 0}, {0, 1, 0}, 0, "y0"),
+              plane({0, side, 0}, {0, -1, 0}, 0, "y1")};
+  c.sim.gravity = {0, 0, -9.81};
+  c.sim.duration = 1;
+  c.sim.threads = threads;
   return c;
 }
 

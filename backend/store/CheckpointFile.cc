@@ -1,0 +1,193 @@
+#include "backend/store/CheckpointFile.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <mutex>
+
+#include "backend/store/Hdf5Detail.h"
+#include "backend/store/ProbeSeries.h"
+
+namespace pflow::backend {
+
+namespace fs = std::filesystem;
+using namespace detail;
+
+namespace {
+
+constexpr const char* kFormat = "pflow-checkpoint";
+constexpr std::int64_t kVersion = 1;
+constexpr const char* kParticles = "particles";
+
+// The file's bytes on the disk before it is renamed into place (and the folder's entry after).
+Status syncPath(const std::string& path, bool directory) {
+  const int fd = ::open(path.c_str(), directory ? O_RDONLY | O_DIRECTORY : O_RDONLY);
+  if (fd < 0) return ioError("cannot open '" + path + "' to flush it to disk");
+  const int rc = ::fsync(fd);
+  ::close(fd);
+  if (rc != 0) return ioError("cannot flush '" + path + "' to disk (fsync)");
+  return Status::ok();
+}
+
+template <class T>
+Status attr(hid_t obj, const char* name, T value, const std::string& file) {
+  if constexpr (std::is_same_v<T, double>) return writeScalarAttr(obj, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, value, file, "/");
+  else return writeScalarAttr<std::int64_t>(obj, name, H5T_STD_I64LE, H5T_NATIVE_INT64, std::int64_t(value), file, "/");
+}
+
+Status writeFile(const std::string& file, const CheckpointData& d) {
+  auto fapl = makeFileAccess(file);
+  if (!fapl) return fapl.status();
+  Hid f = fileHid(H5Fcreate(file.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl->get()));
+  if (!f.valid()) return h5Error(file, "cannot create the checkpoint file");
+  const compute::SimulationState& s = d.state;
+  hid_t root = f.get();
+  for (auto [name, value] : {std::pair<const char*, const std::string*>{"format", nullptr}, {"solver", &d.solver},
+                             {"precision", &d.precision}, {"scene", &d.sceneText}, {"scene_dir", &d.sceneDir},
+                             {"scene_file", &d.sceneFile}})
+    PFLOW_TRY(writeStringAttr(root, name, value ? *value : std::string(kFormat), file, "/"));
+  PFLOW_TRY(attr(root, "version", kVersion, file));
+  PFLOW_TRY(attr(root, "step", s.step, file));
+  PFLOW_TRY(attr(root, "step_base", s.stepBase, file));
+  PFLOW_TRY(attr(root, "rebuilds", s.rebuilds, file));
+  PFLOW_TRY(attr(root, "reductions", s.reductions, file));
+  PFLOW_TRY(attr(root, "contact_slots", s.contactSlots, file));
+  PFLOW_TRY(attr(root, "wall_slots", s.wallSlots, file));
+  PFLOW_TRY(attr(root, "particles", std::int64_t(s.particles.n), file));
+  PFLOW_TRY(attr(root, "time", s.time, file));
+  PFLOW_TRY(attr(root, "time_base", s.timeBase, file));
+  PFLOW_TRY(attr(root, "dt", s.dt, file));
+  auto group = createGroup(root, kParticles, true, file);
+  if (!group) return group.status();
+  for (const compute::SnapshotArray& a : s.particles.arrays)
+    PFLOW_TRY(writeDataset(group->get(), a.name, fileTypeOf(a.type), memTypeOf(a.type), a.data.data(), s.particles.n,
+                                       a.components, a.unit, file, "/particles"));
+  group->reset();
+  if (f.reset() < 0) return h5Error(file, "cannot close the checkpoint file");
+  return Status::ok();
+}
+
+template <class T>
+Result<T> readAttr(hid_t obj, const char* name, const std::string& file) {
+  if constexpr (std::is_same_v<T, double>) return readScalarAttr<double>(obj, name, H5T_NATIVE_DOUBLE, file, "/");
+  else {
+    auto v = readScalarAttr<std::int64_t>(obj, name, H5T_NATIVE_INT64, file, "/");
+    if (!v) return v.status();
+    return T(v.value());
+  }
+}
+
+}  // namespace
+
+std::string previousCheckpointPath(const std::string& path) { return path + ".1"; }
+
+Status writeCheckpoint(const std::string& path, const CheckpointData& data) {
+  std::lock_guard<std::recursive_mutex> lock(hdf5Mutex());
+  quietHdf5();
+  const std::string tmp = path + ".tmp";
+  if (const fs::path parent = fs::path(path).parent_path(); !parent.empty()) {
+    std::error_code ec;
+    fs::create_directories(parent, ec);
+    if (ec) return ioError("cannot create the checkpoint folder '" + parent.string() + "': " + ec.message());
+  }
+  if (Status s = writeFile(tmp, data); !s.isOk()) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    return s;
+  }
+  PFLOW_TRY(syncPath(tmp, false));
+  std::error_code ec;
+  if (fs::exists(path, ec)) {
+    fs::rename(path, previousCheckpointPath(path), ec);
+    if (ec) return ioError("cannot keep the previous checkpoint as '" + previousCheckpointPath(path) + "': " + ec.message());
+  }
+  fs::rename(tmp, path, ec);
+  if (ec) return ioError("cannot move the checkpoint into place at '" + path + "': " + ec.message());
+  const fs::path dir = fs::path(path).parent_path();
+  return syncPath(dir.empty() ? "." : dir.string(), true);
+}
+
+Result<CheckpointData> readCheckpoint(const std::string& path) {
+  std::lock_guard<std::recursive_mutex> lock(hdf5Mutex());
+  quietHdf5();
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return Status(StatusCode::kNotFound, "no checkpoint at '" + path + "'");
+  auto fapl = makeFileAccess(path);
+  if (!fapl) return fapl.status();
+  Hid f = fileHid(H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl->get()));
+  if (!f.valid()) return h5Error(path, "cannot open the checkpoint (cut off or not an HDF5 file)");
+  hid_t root = f.get();
+  auto format = readStringAttr(root, "format", path, "/");
+  if (!format || format.value() != kFormat) return invalidArgument("'" + path + "' is not a pflow checkpoint (no format attribute \"pflow-checkpoint\")");
+  auto version = readAttr<std::int64_t>(root, "version", path);
+  if (!version) return version.status();
+  if (version.value() != kVersion)
+    return invalidArgument("'" + path + "' is a checkpoint of format version " + std::to_string(version.value()) + "; this pflow reads version " +
+                           std::to_string(kVersion));
+  CheckpointData d;
+  for (auto [name, out] : {std::pair<const char*, std::string*>{"solver", &d.solver}, {"precision", &d.precision}, {"scene", &d.sceneText},
+                           {"scene_dir", &d.sceneDir}, {"scene_file", &d.sceneFile}}) {
+    auto v = readStringAttr(root, name, path, "/");
+    if (!v) return v.status();
+    *out = v.value();
+  }
+  compute::SimulationState& s = d.state;
+#define PFLOW_READ(field, name, T)                 \
+  {                                                \
+    auto v = readAttr<T>(root, name, path);        \
+    if (!v) return v.status();                     \
+    s.field = v.value();                           \
+  }
+  PFLOW_READ(step, "step", std::int64_t)
+  PFLOW_READ(stepBase, "step_base", std::int64_t)
+  PFLOW_READ(rebuilds, "rebuilds", std::int64_t)
+  PFLOW_READ(reductions, "reductions", int)
+  PFLOW_READ(contactSlots, "contact_slots", int)
+  PFLOW_READ(wallSlots, "wall_slots", int)
+  PFLOW_READ(time, "time", double)
+  PFLOW_READ(timeBase, "time_base", double)
+  PFLOW_READ(dt, "dt", double)
+#undef PFLOW_READ
+  auto count = readAttr<std::int64_t>(root, "particles", path);
+  if (!count) return count.status();
+  s.particles.step = s.step;
+  s.particles.time = s.time;
+  s.particles.n = std::size_t(count.value());
+  Hid group = groupHid(H5Gopen2(root, kParticles, H5P_DEFAULT));
+  if (!group.valid()) return h5Error(path, "cannot open '/particles'");
+  auto names = linkNames(group.get(), path, "/particles");
+  if (!names) return names.status();
+  for (const std::string& name : names.value()) {
+    const std::string what = "'/particles/" + name + "'";
+    Hid dset = datasetHid(H5Dopen2(group.get(), name.c_str(), H5P_DEFAULT));
+    if (!dset.valid()) return h5Error(path, "cannot open " + what);
+    Hid type = typeHid(H5Dget_type(dset.get()));
+    const auto scalar = scalarTypeOf(type.get());
+    if (!scalar) return invalidArgument("checkpoint '" + path + "': " + what + " has a type pflow does not write");
+    auto dims = datasetDims(dset.get(), path, what);
+    if (!dims) return dims.status();
+    if (dims->empty() || dims->at(0) != s.particles.n)
+      return invalidArgument("checkpoint '" + path + "': " + what + " does not hold one row per particle");
+    compute::SnapshotArray a{name, scalar.value(), dims->size() > 1 ? int(dims->at(1)) : 1, "", {}};
+    auto unit = readStringAttr(dset.get(), "unit", path, what);
+    if (unit) a.unit = unit.value();
+    a.data.resize(s.particles.n * std::size_t(a.components) * compute::scalarBytesOf(a.type));
+    if (!a.data.empty() && H5Dread(dset.get(), memTypeOf(a.type), H5S_ALL, H5S_ALL, H5P_DEFAULT, a.data.data()) < 0)
+      return h5Error(path, "cannot read " + what);
+    s.particles.arrays.push_back(std::move(a));
+  }
+  return d;
+}
+
+Result<CheckpointData> readLatestCheckpoint(const std::string& path, std::string* skipped) {
+  auto last = readCheckpoint(path);
+  if (last) return last;
+  auto before = readCheckpoint(previousCheckpointPath(path));
+  if (!before) return last.status();  // the newer one's reason
+  if (skipped) *skipped = last.status().message();
+  return before;
+}
+
+}  // namespace pflow::backend

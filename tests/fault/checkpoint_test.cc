@@ -1,0 +1,83 @@
+// Checkpoints (issue 18, label fault): a run resumed from a checkpoint goes on exactly as the run it came from,
+// bit for bit, on the CPU (the state arrays are the executor's own; docs/operations.md, "Checkpoints").
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <map>
+
+#include "compute/dem/Simulation.h"
+#include "tests/support/TestScenes.h"
+
+using namespace pflow;
+using namespace pflow::compute;
+
+namespace {
+
+// Every array of the snapshot by particle id, as bytes.
+std::map<Gid, std::vector<std::byte>> byId(const ParticleSnapshot& s, const std::string& field) {
+  std::map<Gid, std::vector<std::byte>> out;
+  const SnapshotArray* a = s.find(field);
+  EXPECT_NE(a, nullptr) << field;
+  if (!a) return out;
+  const std::size_t each = a->data.size() / std::max<std::size_t>(1, s.n);
+  const Gid* id = s.find("id")->as<Gid>();
+  for (std::size_t i = 0; i < s.n; ++i) out[id[i]].assign(a->data.begin() + i * each, a->data.begin() + (i + 1) * each);
+  return out;
+}
+
+void expectSameState(const Simulation& a, const Simulation& b) {
+  EXPECT_EQ(a.stepCount(), b.stepCount());
+  EXPECT_EQ(a.time(), b.time());
+  const ParticleSnapshot sa = a.snapshot(), sb = b.snapshot();
+  for (const char* f : {"position", "velocity", "angular_velocity", "force"})
+    EXPECT_TRUE(byId(sa, f) == byId(sb, f)) << f << " differs";
+}
+
+std::unique_ptr<Simulation> make(const RunConfig& c, SimulationOptions o = {}) {
+  auto sim = Simulation::create(c, o);
+  EXPECT_TRUE(sim.isOk()) << sim.status().message();
+  return sim.isOk() ? std::move(sim).value() : nullptr;
+}
+
+// The pouring heap (600 frictional spheres with rolling resistance: contacts start, slide and end, particles
+// cross cells): checkpointed at the first rebuild after step 800, resumed in a new run of the same scene, both
+// taken to step 2000: every position, velocity, angular velocity and force is the uninterrupted run's, bit for bit,
+// with the CPU's pairs-once sums (the default) and with the canonical order.
+TEST(Checkpoint, ResumedDemRunIsBitIdentical) {
+  for (bool canonical : {false, true}) {
+    SCOPED_TRACE(canonical ? "canonical order" : "pairs once");
+    SimulationOptions o;
+    o.canonicalOrder = canonical;
+    const RunConfig c = test::pouredHeap(1e-3, 2);
+    auto straight = make(c, o), first = make(c, o), resumed = make(c, o);
+    ASSERT_TRUE(straight && first && resumed);
+    ASSERT_TRUE(straight->runSteps(2000).isOk());
+    ASSERT_TRUE(first->runSteps(800).isOk());
+    while (!first->justRebuilt()) ASSERT_TRUE(first->runSteps(1).isOk());
+    auto state = first->state();
+    ASSERT_TRUE(state.isOk()) << state.status().message();
+    EXPECT_GT(state.value().step, 800);
+    EXPECT_GT(state.value().contactSlots, 0);
+    ASSERT_TRUE(resumed->resume(state.value()).isOk());
+    EXPECT_EQ(resumed->stepCount(), state.value().step);
+    EXPECT_EQ(resumed->rebuilds(), first->rebuilds());
+    ASSERT_TRUE(resumed->runSteps(2000 - resumed->stepCount()).isOk());
+    expectSameState(*straight, *resumed);
+    EXPECT_EQ(straight->rebuilds(), resumed->rebuilds());
+    std::printf("checkpoint at step %lld; to step 2000 (t = %.3g s): %lld rebuilds, %zu histories\n", (long long)state.value().step,
+                straight->time(), (long long)straight->rebuilds(), straight->contactStats().historyEntries);
+  }
+}
+
+// A state is taken just after a rebuild only: elsewhere state() says why.
+TEST(Checkpoint, StateOnlyJustAfterARebuild) {
+  auto sim = make(test::pouredHeap(1e-3, 1));
+  ASSERT_TRUE(sim);
+  ASSERT_TRUE(sim->runSteps(1).isOk());
+  while (sim->justRebuilt()) ASSERT_TRUE(sim->runSteps(1).isOk());
+  auto s = sim->state();
+  ASSERT_FALSE(s.isOk());
+  EXPECT_NE(s.status().message().find("just after a neighbour rebuild"), std::string::npos) << s.status().message();
+}
+
+}  // namespace
