@@ -1,14 +1,13 @@
 #include "cli/RunCommand.h"
 
+#include "cli/RunCheckpoints.h"
 #include "cli/SphRunCommand.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <optional>
-#include <sstream>
 #include <nlohmann/json.hpp>
 #include <map>
 #include <numbers>
@@ -71,54 +70,12 @@ Result<std::unique_ptr<backend::SnapshotWriter>> openOutput(const std::string& p
   return backend::SnapshotWriter::create(path);
 }
 
-namespace {
-
-// The checkpoint file a run writes: --checkpoint, else OUT.ckpt.h5 beside the output.
-std::string checkpointPathFor(const RunOptions& o, const std::string& output) {
-  if (!o.checkpointPath.empty()) return o.checkpointPath;
-  fs::path p(output);
-  return (p.parent_path() / (p.stem().string() + ".ckpt.h5")).string();
-}
-
-// The scene of a run: its file, or the one a checkpoint holds (--resume).
-Result<frontend::LoadedScene> sceneOf(const RunOptions& o, std::optional<backend::CheckpointData>& resume) {
-  if (o.resumePath.empty()) {
-    if (o.scenePath.empty()) return invalidArgument("pflow run: give a scene file, or --resume CHECKPOINT");
-    return frontend::loadScene(o.scenePath);
-  }
-  if (!o.scenePath.empty()) return invalidArgument("pflow run --resume: the scene is the checkpoint's; give no scene file");
-  if (o.outputPath.empty()) return invalidArgument("pflow run --resume: name the output file (-o OUT.h5): the first run's is not overwritten");
-  std::string skipped;
-  auto data = backend::readLatestCheckpoint(o.resumePath, &skipped);
-  if (!data) return data.status();
-  if (!skipped.empty()) spdlog::warn("{}; resuming from the checkpoint before it, {}", skipped, backend::previousCheckpointPath(o.resumePath));
-  if (data.value().solver != "dem") return invalidArgument("pflow run --resume: checkpoints of solver '" + data.value().solver + "' are not resumed yet");
-  frontend::LoadOptions lo;
-  lo.baseDir = data.value().sceneDir;
-  auto scene = frontend::loadSceneFromString(data.value().sceneText, data.value().sceneFile, lo);
-  if (!scene) return Status(scene.status().code(), "the checkpoint's scene: " + scene.status().message());
-  resume = std::move(data).value();
-  return scene;
-}
-
-Result<std::string> readText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return ioError("cannot read '" + path + "'");
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-}  // namespace
-
 Result<RunSummary> runScene(const RunOptions& o) {
   std::optional<backend::CheckpointData> resume;
   auto scene = sceneOf(o, resume);
   if (!scene) return scene.status();
-  if (scene.value().config.solver == compute::Solver::kSph && (o.checkpointEvery > 0 || resume))
-    return invalidArgument("pflow run: checkpoints of solver: sph scenes are not written yet (docs/operations.md)");
   if (scene.value().config.solver == compute::Solver::kSph)
-    return runSphScene(o, scene.value(), o.outputPath.empty() ? defaultOutput(scene.value(), o.scenePath) : o.outputPath);
+    return runSphScene(o, scene.value(), o.outputPath.empty() ? defaultOutput(scene.value(), o.scenePath) : o.outputPath, resume);
   if (o.initialOnly) {  // `pflow build`: the frontend's initial-state writer, the one the model store uses
     RunSummary sum;
     sum.outputPath = o.outputPath.empty() ? defaultOutput(scene.value(), o.scenePath) : o.outputPath;
@@ -141,10 +98,11 @@ Result<RunSummary> runScene(const RunOptions& o) {
   auto created = compute::Simulation::create(cfg, so);
   if (!created) return created.status();
   compute::Simulation& sim = *created.value();
+  auto checkpoints = RunCheckpoints::open(o, o.outputPath.empty() ? defaultOutput(scene.value(), o.scenePath) : o.outputPath, resume, "dem",
+                                         sim.engine().precisionName(), resume ? resume->state.step : 0, resume ? resume->state.time : 0.0,
+                                         scene.value().checkpointInterval);
+  if (!checkpoints) return checkpoints.status();
   if (resume) {
-    if (resume->precision != sim.engine().precisionName())
-      return invalidArgument("pflow run --resume: the checkpoint was taken in " + resume->precision + " precision, this run is " +
-                             sim.engine().precisionName());
     if (Status s = sim.resume(resume->state); !s.isOk()) return s;
     spdlog::info("resumed from {} at step {} (t = {:.6g} s)", o.resumePath, sim.stepCount(), sim.time());
   }
@@ -172,39 +130,6 @@ Result<RunSummary> runScene(const RunOptions& o) {
   if (!resume)
     if (Status s = writeSnapshot(); !s.isOk()) return s;
 
-  // Checkpoints: the scene's text and folder go with the state, so --resume needs nothing else.
-  backend::CheckpointData checkpoint;
-  std::int64_t lastCheckpoint = firstStep;
-  const std::string checkpointPath = checkpointPathFor(o, sum.outputPath);
-  const bool checkpoints = o.checkpointEvery > 0 || o.checkpointWallSeconds > 0;
-  if (checkpoints) {
-    if (resume) {
-      checkpoint = *resume;
-      checkpoint.state = {};
-    } else {
-      auto text = readText(o.scenePath);
-      if (!text) return text.status();
-      checkpoint.sceneText = text.value();
-      checkpoint.sceneDir = fs::absolute(fs::path(o.scenePath)).parent_path().string();
-      checkpoint.sceneFile = o.scenePath;
-    }
-    checkpoint.precision = sim.engine().precisionName();
-    if (o.checkpointEvery > 0)
-      spdlog::info("a checkpoint at the first neighbour rebuild after every {} steps, into {}", o.checkpointEvery, checkpointPath);
-  }
-  auto lastCheckpointWall = std::chrono::steady_clock::now();
-  auto writeCheckpoint = [&](const compute::Simulation& s) -> Status {
-    auto t = sim.timers().time(compute::Phase::kOutput);
-    auto state = s.state();
-    if (!state) return state.status();
-    checkpoint.state = std::move(state).value();
-    PFLOW_TRY(backend::writeCheckpoint(checkpointPath, checkpoint));
-    lastCheckpoint = s.stepCount();
-    lastCheckpointWall = std::chrono::steady_clock::now();
-    spdlog::info("checkpoint at step {} (t = {:.6g} s) in {}", s.stepCount(), s.time(), checkpointPath);
-    return Status::ok();
-  };
-
   const double duration = cfg.sim.duration, interval = cfg.sim.snapshotInterval;
   auto totalSteps = std::int64_t(std::llround(duration / sim.dt()));
   if (o.maxSteps >= 0 && o.maxSteps < totalSteps) totalSteps = o.maxSteps;
@@ -219,12 +144,7 @@ Result<RunSummary> runScene(const RunOptions& o) {
   auto observer = [&](const compute::Simulation& s) -> Status {
     if (s.outputDue())
       if (Status st = writeSnapshot(); !st.isOk()) return st;
-    if (checkpoints && s.justRebuilt()) {
-      const bool bySteps = o.checkpointEvery > 0 && s.stepCount() - lastCheckpoint >= o.checkpointEvery;
-      const bool byWall = o.checkpointWallSeconds > 0 &&
-                          std::chrono::duration<double>(std::chrono::steady_clock::now() - lastCheckpointWall).count() >= o.checkpointWallSeconds;
-      if (bySteps || byWall) PFLOW_TRY(writeCheckpoint(s));
-    }
+    PFLOW_TRY(checkpoints.value().maybeWrite(s, sim.timers()));
     const auto now = std::chrono::steady_clock::now();
     if (o.progressSeconds > 0 && std::chrono::duration<double>(now - lastReport).count() >= o.progressSeconds) {
       lastReport = now;

@@ -7,6 +7,7 @@
 
 #include "backend/store/ProbeSeries.h"
 #include "backend/store/SnapshotFile.h"
+#include "cli/RunCheckpoints.h"
 #include "cli/SphRunCommand.h"
 #include "common/Log.h"
 #include "compute/sph/SphSimulation.h"
@@ -15,7 +16,8 @@ namespace pflow::cli {
 
 using compute::sph::SphSimulation;
 
-Result<RunSummary> runSphScene(const RunOptions& o, const frontend::LoadedScene& scene, const std::string& outputPath) {
+Result<RunSummary> runSphScene(const RunOptions& o, const frontend::LoadedScene& scene, const std::string& outputPath,
+                               const std::optional<backend::CheckpointData>& resume) {
   compute::RunConfig cfg = scene.config;
   if (o.threads > 0) cfg.sim.threads = o.threads;
   compute::sph::SphOptions so;
@@ -26,6 +28,14 @@ Result<RunSummary> runSphScene(const RunOptions& o, const frontend::LoadedScene&
   auto created = SphSimulation::create(cfg, so);
   if (!created) return created.status();
   SphSimulation& sim = *created.value();
+  auto checkpoints = RunCheckpoints::open(o, outputPath, resume, "sph", sim.precisionName(), resume ? resume->state.step : 0,
+                                          resume ? resume->state.time : 0.0, scene.checkpointInterval);
+  if (!checkpoints) return checkpoints.status();
+  if (resume) {
+    if (Status s = sim.resume(resume->state); !s.isOk()) return s;
+    spdlog::info("resumed from {} at step {} (t = {:.6g} s)", o.resumePath, sim.stepCount(), sim.time());
+  }
+  const std::int64_t firstStep = sim.stepCount();
   const auto& d = sim.derived();
   spdlog::info("SPH: {} particles ({} fluid, {} boundary), {}D, dp {:.4g} m, h {:.4g} m, {} kernel; executor: {}, {} precision",
                sim.numParticles(), sim.fluidParticles(), sim.numParticles() - sim.fluidParticles(), cfg.sph.dimension,
@@ -45,7 +55,8 @@ Result<RunSummary> runSphScene(const RunOptions& o, const frontend::LoadedScene&
     ++sum.snapshots;
     return writer.value()->writeSnapshot(sim.snapshot(scene.outputFields));
   };
-  if (Status s = writeSnapshot(); !s.isOk()) return s;
+  if (!resume)
+    if (Status s = writeSnapshot(); !s.isOk()) return s;
   if (o.initialOnly) {  // `pflow build`: the initial state (hydrostatic densities and pressures included)
     if (Status s = writer.value()->close(); !s.isOk()) return s;
     spdlog::info("initial state of {} particles written to {} (open {} in ParaView)", sum.particles, sum.outputPath, sum.xdmfPath);
@@ -62,12 +73,13 @@ Result<RunSummary> runSphScene(const RunOptions& o, const frontend::LoadedScene&
     if (s.outputDue())
       if (Status st = writeSnapshot(); !st.isOk()) return st;
     probes.sample(s);
+    PFLOW_TRY(checkpoints.value().maybeWrite(s, sim.timers()));
     if (o.maxSteps >= 0 && s.stepCount() >= o.maxSteps) return Status(StatusCode::kCancelled, "step limit");
     const auto now = std::chrono::steady_clock::now();
     if (o.progressSeconds > 0 && std::chrono::duration<double>(now - lastReport).count() >= o.progressSeconds) {
       lastReport = now;
       const double wall = std::chrono::duration<double>(now - wallStart).count();
-      const double rate = double(s.numParticles()) * double(s.stepCount()) / wall;
+      const double rate = double(s.numParticles()) * double(std::max<std::int64_t>(1, s.stepCount() - firstStep)) / wall;
       const double eta = s.time() > 0 ? wall / s.time() * (duration - s.time()) : 0;
       spdlog::info("step {} t = {:.5g}/{} s, dt {:.3g} s, {:.3g} particle-steps/s, ETA {}", s.stepCount(), s.time(), duration,
                    s.dt(), rate, humanSeconds(eta));
@@ -81,7 +93,7 @@ Result<RunSummary> runSphScene(const RunOptions& o, const frontend::LoadedScene&
       if (Status st = writeSnapshot(); !st.isOk()) run = st;
   }
   sum.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
-  sum.steps = sim.stepCount();
+  sum.steps = sim.stepCount() - firstStep;
   sum.simulatedTime = sim.time();
   sum.particleStepsPerSecond = sum.wallSeconds > 0 ? double(sum.particles) * double(sum.steps) / sum.wallSeconds : 0;
   if (Status s = writer.value()->close(); !s.isOk() && run.isOk()) run = s;

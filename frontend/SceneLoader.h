@@ -37,6 +37,7 @@ struct LoadedScene {
   compute::RunConfig config;
   std::string sourcePath;  // the file read, or the sourceName given to loadSceneFromString
   std::string outputFile;  // output.file; empty = not given (the CLI's -o decides)
+  double checkpointInterval = 0;  // output.checkpoint_interval [s] of simulated time; 0 = not given (docs/operations.md)
   std::vector<std::string> outputFields;  // output.fields; empty = every snapshot field
   std::vector<SurfaceInfo> surfaces;      // by surface number
   std::vector<ParticleSetInfo> sets;

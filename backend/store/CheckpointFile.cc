@@ -59,6 +59,7 @@ Status writeFile(const std::string& file, const CheckpointData& d) {
   PFLOW_TRY(attr(root, "time", s.time, file));
   PFLOW_TRY(attr(root, "time_base", s.timeBase, file));
   PFLOW_TRY(attr(root, "dt", s.dt, file));
+  PFLOW_TRY(attr(root, "dt_before", s.dtBefore, file));
   auto group = createGroup(root, kParticles, true, file);
   if (!group) return group.status();
   for (const compute::SnapshotArray& a : s.particles.arrays)
@@ -149,6 +150,7 @@ Result<CheckpointData> readCheckpoint(const std::string& path) {
   PFLOW_READ(time, "time", double)
   PFLOW_READ(timeBase, "time_base", double)
   PFLOW_READ(dt, "dt", double)
+  PFLOW_READ(dtBefore, "dt_before", double)
 #undef PFLOW_READ
   auto count = readAttr<std::int64_t>(root, "particles", path);
   if (!count) return count.status();

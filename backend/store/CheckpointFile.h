@@ -1,7 +1,7 @@
 // A run's checkpoint file: everything `pflow run --resume` needs to go on from a step bit for bit (issue 18;
 // docs/operations.md, "Checkpoints"). HDF5, SI units, readable with h5py:
-//   /            attributes format = "pflow-checkpoint", version = 1, solver ("dem"), precision ("float" |
-//                "double"), step, time [s], dt [s], step_base, time_base [s], rebuilds, reductions,
+//   /            attributes format = "pflow-checkpoint", version = 1, solver ("dem" | "sph"), precision ("float" |
+//                "double"), step, time [s], dt [s], dt_before [s], step_base, time_base [s], rebuilds, reductions,
 //                contact_slots, wall_slots, particles, scene (the scene's YAML text), scene_dir (the folder its
 //                relative paths start from), scene_file (its path when written)
 //   /particles/<field>   one dataset per field of the state (n x components, the table's own type; a slot field
@@ -12,7 +12,7 @@
 #include <string>
 
 #include "common/Status.h"
-#include "compute/dem/Simulation.h"
+#include "compute/sim/SimulationState.h"
 
 namespace pflow::backend {
 
@@ -20,7 +20,7 @@ struct CheckpointData {
   std::string solver = "dem";
   std::string precision;  // "float" | "double": a checkpoint resumes at its own precision
   std::string sceneText, sceneDir, sceneFile;
-  compute::SimulationState state;
+  compute::SimulationState state;  // compute/sim/SimulationState.h
 };
 
 Status writeCheckpoint(const std::string& path, const CheckpointData& data);

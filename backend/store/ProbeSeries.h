@@ -43,6 +43,8 @@ class ProbeRecorder {
       m_series.points.push_back(p.point);
     }
     if (!empty()) m_series.add(sim.time(), sim.probeValues());
+    // A resumed run: the next samples where its run's fell (the interval's multiples, summed as sample() does).
+    while (m_interval > 0 && m_next <= sim.time() * (1 + 1e-12)) m_next += m_interval;
   }
   template <class Sim>
   void sample(const Sim& s) {

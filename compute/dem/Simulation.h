@@ -12,21 +12,10 @@
 #include "compute/dem/Engine.h"
 #include "compute/sim/PhaseTimers.h"
 #include "compute/sim/RunConfig.h"
+#include "compute/sim/SimulationState.h"
 #include "compute/dem/TimeStep.h"
 
 namespace pflow::compute {
-
-// What a run needs to go on from a step bit for bit (Simulation::state, resume): the particles' state arrays
-// (Engine::stateArrays, forces included) at their slot counts, the step and time and the time step's history.
-// Taken just after a neighbour rebuild (justRebuilt()), where resuming's own rebuild reproduces the run's
-// order and lists. docs/operations.md, "Checkpoints".
-struct SimulationState {
-  ParticleSnapshot particles;
-  int contactSlots = 0, wallSlots = 0;
-  std::int64_t step = 0, stepBase = 0, rebuilds = 0;
-  double time = 0, timeBase = 0, dt = 0;
-  int reductions = 0;
-};
 
 struct SimulationOptions {
   ExecutorKind executor = ExecutorKind::kCpu;

@@ -82,6 +82,11 @@ class SphEngine : public DistributedRows {
   // run lie in its plane.
   virtual void sample(const std::vector<Vec3d>& points, std::vector<double>& fraction, std::vector<double>& pressure) const = 0;
 
+  // Checkpoints (SphSimulation::state, resume): the owned rows' kMigrate and kCheckpoint fields, row-major
+  // (FieldRows::stateArrays), and their load into an engine of either executor.
+  virtual ParticleSnapshot stateArrays(std::int64_t step, double time) const = 0;
+  virtual Status loadState(const ParticleSnapshot& s) = 0;
+
   virtual SphProbeState probe(Index i) const = 0;
   virtual std::size_t deviceBytes() const = 0;
   virtual void fence() const = 0;

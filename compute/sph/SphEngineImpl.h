@@ -154,6 +154,18 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     m_mem.copyToHost(pressure.data(), pres, n * sizeof(double));
   }
 
+  ParticleSnapshot stateArrays(std::int64_t step, double time) const override {
+    return m_rows.stateArrays(step, time, m_owned, kMigrate | kCheckpoint);
+  }
+  Status loadState(const ParticleSnapshot& s) override {
+    m_fields.allocate(std::max<Index>(Index(s.n), 1), 0, 0, false);
+    m_n = m_owned = Index(s.n);
+    Status st = m_rows.loadState(s, kMigrate | kCheckpoint);
+    sizeLocalBuffers();
+    m_wetStale = true;
+    return st;
+  }
+
   SphProbeState probe(Index i) const override {
     SphProbeState s;
     if (i >= m_owned) return s;

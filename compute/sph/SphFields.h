@@ -22,14 +22,15 @@ namespace pflow::compute::sph {
   X(Gid,          "id",           Gid,          "",         kSnapshot | kMigrate | kGhost)                     \
   X(Acceleration, "acceleration", Real3,        "m/s^2",    kMigrate)                                          \
   X(DensityRate,  "density_rate", Real,         "kg/m^3/s", kMigrate)                                          \
-  X(ViscousRate,  "viscous_rate", Real,         "1/s",      0)                                                 \
+  X(ViscousRate,  "viscous_rate", Real,         "1/s",      kCheckpoint)                                       \
   X(Position0,    "position0",    Vec3d,        "m",        kMigrate)                                          \
   X(Velocity0,    "velocity0",    Real3,        "m/s",      kMigrate)                                          \
   X(Density0,     "density0",     Real,         "kg/m^3",   kMigrate)
 // clang-format on
 // Acceleration and DensityRate migrate: the predictor of the next step starts from them. The state at the start
 // of the step (Position0, Velocity0, Density0) migrates too: a rebuild may fall between the predictor and the
-// corrector, which reads it. ViscousRate lives within one evaluation.
+// corrector, which reads it. ViscousRate lives within one evaluation, but the next step's dt reads it: a checkpoint
+// keeps it (kCheckpoint).
 
 enum class SphField : std::uint8_t {
 #define PFLOW_X(id, name, type, unit, flags) id,

@@ -12,6 +12,7 @@
 #include "compute/sim/Domain.h"
 #include "compute/sim/PhaseTimers.h"
 #include "compute/sim/RunConfig.h"
+#include "compute/sim/SimulationState.h"
 #include "compute/sph/SphConfig.h"
 #include "compute/sph/SphEngine.h"
 
@@ -39,6 +40,13 @@ class SphSimulation {
   // Steps until `time`; after each step calls `observer`, which may stop the run by returning an error.
   Status runUntil(double time, const std::function<Status(const SphSimulation&)>& observer = {});
   Status runSteps(std::int64_t steps);
+
+  // Checkpoints (docs/operations.md), as DEM's Simulation: justRebuilt() after a step that ended with a cell
+  // sort, where state() may be taken (one process); resume() goes on from it in a run created from the same
+  // scene (then scheduleOutput).
+  bool justRebuilt() const { return m_rebuiltAt == m_step; }
+  Result<SimulationState> state() const;
+  Status resume(const SimulationState& s);
 
   // Outputs every `interval` seconds (0: none) and at `end`: steps are shortened to land on those times
   // exactly, and outputDue() is true after each.
@@ -95,6 +103,7 @@ class SphSimulation {
   double m_skin = 0;
   PhaseTimers m_timers;
   std::int64_t m_step = 0, m_rebuilds = 0;
+  std::int64_t m_rebuiltAt = 0;  // the step whose end had the last cell sort (0: the start's)
   double m_time = 0, m_dt = 0, m_stable = 0;
   std::size_t m_fluid = 0;
   double m_outputInterval = 0, m_nextOutput = -1, m_end = -1;

@@ -344,6 +344,11 @@ void Loader::parseOutput(const Fields& top) {
   const auto f = mapping(e->value, "output", e->loc, m_sph ? Keys(kSphOutputKeys) : Keys(kOutputKeys));
   if (!f) return;
   get(*f, "file", m_outputFile);
+  if (const Entry* c = f->find("checkpoint_interval")) {
+    get(*f, "checkpoint_interval", m_checkpointInterval);
+    if (!(m_checkpointInterval > 0) || !std::isfinite(m_checkpointInterval))
+      badValue("output.checkpoint_interval", format::num(m_checkpointInterval) + " must be > 0 (simulated seconds between checkpoints)", c->loc);
+  }
   if (m_sph) get(*f, "probe_interval", m_config.sph.probeInterval);
   const Entry* fields = f->find("fields");
   if (!fields || !isList(fields->value, "output.fields", fields->loc, "field names")) return;
@@ -585,6 +590,7 @@ Result<LoadedScene> Loader::run(const std::string& yaml, const std::string& sour
       scene.config = std::move(m_config);
       scene.sourcePath = sourceName;
       scene.outputFile = std::move(m_outputFile);
+      scene.checkpointInterval = m_checkpointInterval;
       scene.outputFields = std::move(m_outputFields);
       return scene;
     }
@@ -617,6 +623,7 @@ Result<LoadedScene> Loader::run(const std::string& yaml, const std::string& sour
   scene.config = std::move(m_config);
   scene.sourcePath = sourceName;
   scene.outputFile = std::move(m_outputFile);
+  scene.checkpointInterval = m_checkpointInterval;
   scene.outputFields = std::move(m_outputFields);
   scene.surfaces = std::move(m_surfaces);
   scene.sets = std::move(m_setInfo);

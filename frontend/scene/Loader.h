@@ -54,7 +54,7 @@ constexpr std::string_view kSphIntegrators[] = {"symplectic", "verlet"};
 constexpr std::string_view kDiffusionCorrections[] = {"hydrostatic", "none"};
 constexpr std::string_view kProbeKeys[] = {"name", "point", "gauge"};
 constexpr std::string_view kSphSimulationKeys[] = {"gravity", "duration", "snapshot_interval", "precision", "threads"};
-constexpr std::string_view kSphOutputKeys[] = {"file", "fields", "probe_interval"};
+constexpr std::string_view kSphOutputKeys[] = {"file", "fields", "probe_interval", "checkpoint_interval"};
 constexpr std::string_view kMaterialKeys[] = {"name", "youngs_modulus", "poisson_ratio", "density", "restitution", "friction", "rolling_friction"};
 constexpr std::string_view kPairKeys[] = {"materials", "restitution", "friction", "rolling_friction"};
 constexpr std::string_view kParticleSetKeys[] = {"name", "material", "method", "size", "count", "solid_fraction", "region",
@@ -92,7 +92,7 @@ constexpr std::string_view kSimulationKeys[] = {"gravity", "duration", "dt", "dt
 constexpr std::string_view kModelModes[] = {"auto", "full"};
 constexpr std::string_view kAccuracyKeys[] = {"quantity", "tolerance"};
 constexpr std::string_view kPhysicsKeys[] = {"friction", "rolling_resistance"};
-constexpr std::string_view kOutputKeys[] = {"file", "fields"};
+constexpr std::string_view kOutputKeys[] = {"file", "fields", "checkpoint_interval"};
 constexpr std::string_view kPrecisions[] = {"double", "float"};
 constexpr std::string_view kDecompositions[] = {"sfc", "multisection"};
 constexpr std::string_view kInstabilityActions[] = {"stop", "reduce_dt"};
@@ -221,6 +221,7 @@ class Loader {
   ErrorList m_errors;
   RunConfig m_config;
   std::string m_outputFile;
+  double m_checkpointInterval = 0;
   std::vector<std::string> m_outputFields;
   std::vector<SurfaceInfo> m_surfaces;
   std::vector<ParticleSetInfo> m_setInfo;

@@ -1,0 +1,22 @@
+// What a run of either solver needs to go on from a step bit for bit (DEM's Simulation::state and resume, SPH's
+// SphSimulation::state and resume; a checkpoint file holds one: backend/store/CheckpointFile.h). Taken just after
+// a neighbour rebuild, where resuming's own rebuild reproduces the run's order and lists. docs/operations.md.
+#pragma once
+#include <cstdint>
+
+#include "compute/particles/ParticleSnapshot.h"
+
+namespace pflow::compute {
+
+struct SimulationState {
+  // The owned particles' kMigrate and kCheckpoint fields in the table's types, row-major (FieldRows::stateArrays).
+  ParticleSnapshot particles;
+  int contactSlots = 0, wallSlots = 0;  // DEM: the history slots per particle
+  std::int64_t step = 0, stepBase = 0, rebuilds = 0;
+  double time = 0, timeBase = 0;  // [s]; DEM: t = timeBase + (step - stepBase) dt
+  double dt = 0;                  // [s] DEM: the step; SPH: the last step taken
+  double dtBefore = 0;            // [s] SPH Verlet: the step before it
+  int reductions = 0;             // DEM: simulation.on_instability: reduce_dt's so far
+};
+
+}  // namespace pflow::compute
