@@ -404,9 +404,26 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void checkState(const StepArgs<R>& a, Index i
   }
 }
 
+// The end of a step for particle i: a fluid particle's new x and v put back inside the mirrors and stored, a boundary
+// particle's density floored, every value checked (checkState), the density and pressure stored. Returns the
+// squared displacement since the last cell sort.
+template <class R>
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE double finishStep(const StepArgs<R>& a, Index i, bool fluid, Vec3d x, Vec3<R> v, R r) {
+  if (fluid) {
+    if (a.mirror.any) a.mirror.keepInside(x, v);
+    a.vel[i] = v;
+    a.pos[i] = x;
+  } else if (r < a.boundaryFloor) {
+    r = a.boundaryFloor;
+  }
+  checkState(a, i, fluid, x, v, r);
+  a.rho[i] = r;
+  a.p[i] = a.eos.pressure(r);
+  return norm2(x - a.ref[i]);
+}
+
 // Corrector, with the rates at the half step: rho = rho0 (2 - eps)/(2 + eps), eps = -drho/rho dt;
-// v = v0 + dt a; x = x0 + dt (v + v0)/2. Checked (checkState). Returns the squared displacement since the last
-// cell sort.
+// v = v0 + dt a; x = x0 + dt (v + v0)/2; finished by finishStep.
 template <class R>
 struct Corrector {
   StepArgs<R> a;
@@ -421,16 +438,8 @@ struct Corrector {
       const Vec3<R> v0 = a.vel0[i];
       v = v0 + dt * a.acc[i];
       x = a.pos0[i] + (0.5 * a.dt) * vcast<double>(v + v0);
-      if (a.mirror.any) a.mirror.keepInside(x, v);
-      a.vel[i] = v;
-      a.pos[i] = x;
-    } else if (r < a.boundaryFloor) {
-      r = a.boundaryFloor;
     }
-    checkState(a, i, fluid, x, v, r);
-    a.rho[i] = r;
-    a.p[i] = a.eos.pressure(r);
-    return norm2(x - a.ref[i]);
+    return finishStep(a, i, fluid, x, v, r);
   }
 };
 
@@ -438,7 +447,7 @@ struct Corrector {
 // v' = v(n-1) + (dt' + dt) a, rho' = rho(n-1) + (dt' + dt) drho, x' = x + dt v + dt^2/2 a, dt' the step before
 // (Monaghan 1989, Crespo et al. 2015, who write 2 dt: the same at a constant step); an Euler step (`dtBefore` 0:
 // v' = v + dt a, rho' = rho + dt drho) every sph.verlet_steps steps and at the first. The state now becomes the
-// one before. Checked (checkState). Returns the squared displacement since the last sort.
+// one before. Finished by finishStep.
 template <class R>
 struct VerletStep {
   StepArgs<R> a;
@@ -456,17 +465,9 @@ struct VerletStep {
       const Vec3<R> vNow = v, acc = a.acc[i];
       v = (euler ? vNow : a.vel0[i]) + span * acc;
       x = x + a.dt * vcast<double>(vNow) + (0.5 * a.dt * a.dt) * vcast<double>(acc);
-      if (a.mirror.any) a.mirror.keepInside(x, v);
       a.vel0[i] = vNow;
-      a.vel[i] = v;
-      a.pos[i] = x;
-    } else if (r < a.boundaryFloor) {
-      r = a.boundaryFloor;
     }
-    checkState(a, i, fluid, x, v, r);
-    a.rho[i] = r;
-    a.p[i] = a.eos.pressure(r);
-    return norm2(x - a.ref[i]);
+    return finishStep(a, i, fluid, x, v, r);
   }
 };
 
