@@ -75,6 +75,19 @@ struct PackRates {
   }
 };
 
+// The rows and ghosts listed in cell c, merged by global id: in id order where each list is (SortCellByGid, the
+// canonical order of distributed runs), so a particle's sums do not depend on the ranks.
+template <class F>
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void forCellMergedById(std::uint32_t c, const Index* cellStart, const Index* ghostCellStart,
+                                                          const Index* ghostItems, Index ghostBase, const Gid* gid, F&& consider) {
+  Index b = cellStart[c], k = ghostCellStart[c];
+  const Index bEnd = cellStart[c + 1], kEnd = ghostCellStart[c + 1];
+  while (b < bEnd || k < kEnd) {
+    if (k >= kEnd || (b < bEnd && gid[b] < gid[ghostBase + ghostItems[k]])) consider(b++);
+    else consider(ghostBase + ghostItems[k++]);
+  }
+}
+
 // Rates of particle a at the current state: acceleration (fluid only: boundary particles do not move),
 // density rate and the largest viscous rate over its neighbours (for the time step). Fluid particles
 // interact with every neighbour; boundary particles only with fluid ones (their continuity equation:
@@ -155,14 +168,7 @@ struct Interact {
         yRow = ra.y - R(y - cy) * cs;
         const std::uint32_t c0 = grid.index(x0, y, z), c1 = grid.index(x1, y, z);
         if (ghostCellStart) {  // merged by id, cell by cell
-          for (std::uint32_t c = c0; c <= c1; ++c) {
-            Index b = cellStart[c], k = ghostCellStart[c];
-            const Index bEnd = cellStart[c + 1], kEnd = ghostCellStart[c + 1];
-            while (b < bEnd || k < kEnd) {
-              if (k >= kEnd || (b < bEnd && gid[b] < gid[ghostBase + ghostItems[k]])) consider(b++);
-              else consider(ghostBase + ghostItems[k++]);
-            }
-          }
+          for (std::uint32_t c = c0; c <= c1; ++c) forCellMergedById(c, cellStart, ghostCellStart, ghostItems, ghostBase, gid, consider);
           continue;
         }
         const Index end = cellStart[c1 + 1];
@@ -197,12 +203,7 @@ struct RateFields {
   PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void forCandidates(Index a, F&& consider) const {
     grid.forNeighbourCells(home[a], [&](std::uint32_t c) {
       if (ghostCellStart && gid) {  // merged by id
-        Index b = cellStart[c], k = ghostCellStart[c];
-        const Index bEnd = cellStart[c + 1], kEnd = ghostCellStart[c + 1];
-        while (b < bEnd || k < kEnd) {
-          if (k >= kEnd || (b < bEnd && gid[b] < gid[ghostBase + ghostItems[k]])) consider(b++);
-          else consider(ghostBase + ghostItems[k++]);
-        }
+        forCellMergedById(c, cellStart, ghostCellStart, ghostItems, ghostBase, gid, consider);
         return;
       }
       for (Index b = cellStart[c]; b < cellStart[c + 1]; ++b) consider(b);
