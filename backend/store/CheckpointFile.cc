@@ -162,22 +162,16 @@ Result<CheckpointData> readCheckpoint(const std::string& path) {
   auto names = linkNames(group.get(), path, "/particles");
   if (!names) return names.status();
   for (const std::string& name : names.value()) {
+    auto meta = datasetMeta(group.get(), name, path, "/particles");
+    if (!meta) return meta.status();
     const std::string what = "'/particles/" + name + "'";
+    if (meta->shape.empty() || meta->shape[0] != s.particles.n)
+      return invalidArgument("checkpoint '" + path + "': " + what + " does not hold one row per particle");
+    compute::SnapshotArray a{name, meta->type, meta->shape.size() > 1 ? int(meta->shape[1]) : 1, meta->unit, {}};
+    a.data.resize(s.particles.n * std::size_t(a.components) * compute::scalarBytesOf(a.type));
     Hid dset = datasetHid(H5Dopen2(group.get(), name.c_str(), H5P_DEFAULT));
     if (!dset.valid()) return h5Error(path, "cannot open " + what);
-    Hid type = typeHid(H5Dget_type(dset.get()));
-    const auto scalar = scalarTypeOf(type.get());
-    if (!scalar) return invalidArgument("checkpoint '" + path + "': " + what + " has a type pflow does not write");
-    auto dims = datasetDims(dset.get(), path, what);
-    if (!dims) return dims.status();
-    if (dims->empty() || dims->at(0) != s.particles.n)
-      return invalidArgument("checkpoint '" + path + "': " + what + " does not hold one row per particle");
-    compute::SnapshotArray a{name, scalar.value(), dims->size() > 1 ? int(dims->at(1)) : 1, "", {}};
-    auto unit = readStringAttr(dset.get(), "unit", path, what);
-    if (unit) a.unit = unit.value();
-    a.data.resize(s.particles.n * std::size_t(a.components) * compute::scalarBytesOf(a.type));
-    if (!a.data.empty() && H5Dread(dset.get(), memTypeOf(a.type), H5S_ALL, H5S_ALL, H5P_DEFAULT, a.data.data()) < 0)
-      return h5Error(path, "cannot read " + what);
+    PFLOW_TRY(readRowsOf(dset.get(), 0, s.particles.n, memTypeOf(a.type), a.data.data(), path, what));
     s.particles.arrays.push_back(std::move(a));
   }
   return d;

@@ -168,18 +168,13 @@ Status writeDataset(hid_t loc, const std::string& name, hid_t fileType, hid_t me
                     std::size_t rows, int cols, const std::string& unit, const std::string& file,
                     const std::string& where) {
   const std::string what = "'" + where + "/" + name + "'";
-  const hsize_t dims[2] = {static_cast<hsize_t>(rows), static_cast<hsize_t>(cols)};
-  Hid space = spaceHid(H5Screate_simple(cols == 1 ? 1 : 2, dims, nullptr));
-  Hid dcpl = plistHid(H5Pcreate(H5P_DATASET_CREATE));
-  if (!space.valid() || !dcpl.valid() || H5Pset_fill_time(dcpl.get(), H5D_FILL_TIME_NEVER) < 0 ||
-      H5Pset_obj_track_times(dcpl.get(), false) < 0)
-    return h5Error(file, "cannot prepare dataset " + what);
-  Hid dset = datasetHid(H5Dcreate2(loc, name.c_str(), fileType, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT));
-  if (!dset.valid()) return h5Error(file, "cannot create dataset " + what);
-  if (rows > 0 && H5Dwrite(dset.get(), memType, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)
+  std::vector<std::uint64_t> shape{rows};
+  if (cols != 1) shape.push_back(std::uint64_t(cols));
+  auto dset = createNdDataset(loc, name, fileType, shape, unit, file, where);
+  if (!dset) return dset.status();
+  if (rows > 0 && H5Dwrite(dset->get(), memType, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)
     return h5Error(file, "cannot write dataset " + what);
-  if (Status st = writeStringAttr(dset.get(), "unit", unit, file, where + "/" + name); !st) return st;
-  if (dset.reset() < 0) return h5Error(file, "cannot close dataset " + what);
+  if (dset->reset() < 0) return h5Error(file, "cannot close dataset " + what);
   return Status::ok();
 }
 
