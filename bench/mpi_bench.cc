@@ -112,9 +112,8 @@ int main(int argc, char** argv) {
   for (int i = 0; i < argc; ++i) cmdline << (i ? " " : "") << argv[i];
 
   // Ranks on this node share its cores (CPU) or its GPUs (CUDA).
-  const char* lr = std::getenv("OMPI_COMM_WORLD_LOCAL_RANK");
-  const char* ls = std::getenv("OMPI_COMM_WORLD_LOCAL_SIZE");
-  const int localRank = lr ? std::atoi(lr) : rank, localSize = ls ? std::atoi(ls) : ranks;
+  const pflow::compute::NodeRanks node = pflow::compute::nodeRanks(MPI_COMM_WORLD);
+  const int localRank = node.rank, localSize = node.size;
   pflow::compute::SimulationOptions so;
   so.executor = executor == "cuda" ? pflow::compute::ExecutorKind::kCuda : pflow::compute::ExecutorKind::kCpu;
   if (so.executor == pflow::compute::ExecutorKind::kCuda) {

@@ -6,6 +6,7 @@
 // (compute/mpi's MpiDomain, particle-count balance), with the halo overlapped with the interior rates or in
 // sequence (--overlap on|off: seed 003's boundary/centre overlap); rank 0 prints. bench/RESULTS.md records the rows.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -50,8 +51,8 @@ int main(int argc, char** argv) {
   app.add_option("--commit", commit, "commit for the record");
   app.add_option("--overlap", overlap, "distributed runs: the halo overlapped with the interior rates (on) or not")
       ->check(CLI::IsMember({"on", "off"}))->capture_default_str();
-  app.add_option("--integrator", integrator, "the scene's time integration, or symplectic | verlet instead")
-      ->check(CLI::IsMember({"scene", "symplectic", "verlet"}))->capture_default_str();
+  app.add_option("--integrator", integrator, "the scene's time integration, or symplectic | verlet | velocity_verlet instead")
+      ->check(CLI::IsMember({"scene", "symplectic", "verlet", "velocity_verlet"}))->capture_default_str();
   app.add_option("--advance", advance, "simulated seconds run before the warm-up (time the flow, not the start at rest)")
       ->capture_default_str();
   app.add_option("--skin", skin, "the neighbour skin as a fraction of h instead of the scene's sph.skin");
@@ -64,6 +65,8 @@ int main(int argc, char** argv) {
   }
   std::stringstream text;
   text << in.rdbuf();
+  const compute::NodeRanks node = compute::nodeRanks(MPI_COMM_WORLD);
+  const int gpus = executor == "cuda" ? compute::cudaDeviceCount() : 0;
   for (double dp : spacings) {
     char value[64];
     std::snprintf(value, sizeof value, "spacing: %.9g", dp);
@@ -79,11 +82,20 @@ int main(int argc, char** argv) {
     cfg.sim.precision = precision == "float" ? compute::Precision::kFloat : compute::Precision::kDouble;
     cfg.sim.threads = threads;
     if (integrator != "scene")
-      cfg.sph.integrator = integrator == "verlet" ? compute::sph::Integrator::kVerlet : compute::sph::Integrator::kSymplectic;
+      for (auto i : {compute::sph::Integrator::kSymplectic, compute::sph::Integrator::kVerlet, compute::sph::Integrator::kVelocityVerlet})
+        if (integrator == compute::sph::integratorName(i)) cfg.sph.integrator = i;
     const bool verlet = cfg.sph.integrator == compute::sph::Integrator::kVerlet;
+    const bool kdk = cfg.sph.integrator == compute::sph::Integrator::kVelocityVerlet;
     if (skin) cfg.sph.skin = *skin;
     compute::sph::SphOptions so;
     so.executor = executor == "cuda" ? compute::ExecutorKind::kCuda : compute::ExecutorKind::kCpu;
+    if (so.executor == compute::ExecutorKind::kCuda) {  // one GPU a rank: the rank's index on its node
+      if (gpus == 0) {
+        std::fprintf(stderr, "--executor cuda: no GPU visible\n");
+        return 1;
+      }
+      so.device = node.rank % gpus;
+    }
     if (ranks > 1) {
       compute::MpiDomainOptions split;
       split.cost = compute::MpiDomainOptions::Cost::kCount;
@@ -127,15 +139,21 @@ int main(int argc, char** argv) {
     const double pass = 8 * 3 + 3 * r + r + r + r + 4 + (3 * r + r + r);
     const double halves = 2 * (2 * (24 + 3 * r + r) + 3 * r + r + r + 4);
     const double update = (24 + 6 * r + 2 * r + 3 * r + r + 4) + (24 + 6 * r + 2 * r + r);
-    const double bytesPerStep = verlet ? pass + update : 2 * pass + halves;
+    // Velocity Verlet: one pass, the kick and drift (reads x, v, a, rho, drho, kind, the sort's x; writes x, v, the
+    // half-step v and rho, rho, p) and the second kick (reads the half-step v and rho, the rates, kind, x, the sort's
+    // x; writes x, v, rho, p).
+    const double kickDrift = (24 + 3 * r + 3 * r + r + r + 4 + 24) + (24 + 3 * r + 3 * r + r + r + r);
+    const double kick = (r + r + 3 * r + 3 * r + 4 + 24 + 24) + (24 + 3 * r + r + r);
+    const double bytesPerStep = verlet ? pass + update : kdk ? pass + kickDrift + kick : 2 * pass + halves;
     nlohmann::json j{{"solver", "sph"},
                      {"case", scene},
                      {"executor", executor},
                      {"precision", precision},
-                     {"integrator", verlet ? "verlet" : "symplectic"},
+                     {"integrator", compute::sph::integratorName(cfg.sph.integrator)},
                      {"spacing", dp},
                      {"n", sim.totalParticles()},
                      {"ranks", ranks},
+                     {"gpus", executor == "cuda" ? std::min(ranks, gpus) : 0},
                      {"threads", threads},
                      {"overlap", overlap},
                      {"fluid", sim.fluidParticles()},

@@ -2,7 +2,7 @@
 # One call on the lent GPU machine (see bench/README.md): unpack the bundle built here, run the GPU
 # tests, measure the copy bandwidth and the settled-bed throughput, print a short table last.
 # Usage (from the repository root on the device machine):
-#   bash bench/gpu/device_run.sh [tests] [sanitize] [bench] [scaling] [largest] [cpu] [cpuab] [layouts] [mpi] [model] [accuracy] [sph] [sph3d] [sphmirror]
+#   bash bench/gpu/device_run.sh [tests] [sanitize] [bench] [scaling] [largest] [cpu] [cpuab] [layouts] [mpi] [model] [accuracy] [sph] [sph3d] [sphmirror] [sphmpi] [sphflow]
 # Logs and JSON go to $OUT (or ./out).
 set -uo pipefail
 OUT=${OUT:-out}
@@ -252,6 +252,73 @@ for line in open(sys.argv[1]):
   timeout "${SPH3D_TIMEOUT:-400}" "$B/pflow" run "$OUT/dam_break_3d_mirror.yaml" --executor cuda -o "$OUT/spheric_mirror.h5" > "$OUT/sph3d_mirror_run.log" 2>&1
   summary+=("pflow run SPHERIC mirror 0.01 rc=$? $((SECONDS - start))s $(grep -E 'done:|PERFORMANCE' "$OUT/sph3d_mirror_run.log" | tr '\n' ' ')")
   rm -f "$OUT/spheric_mirror.h5" "$OUT/spheric_mirror.xmf"
+fi
+# SPH on several GPUs (one rank a GPU): the distributed tests on the GPUs against one process, then SPHERIC test 2
+# at 1 and 2 ranks (strong: dp 6.4 mm, 4.07e6 particles; weak: dp 5.1 mm, 8.0e6 on 2), symplectic and velocity
+# Verlet, the halo overlapped (and once in sequence).
+if has sphmpi; then
+  export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+  ngpu=$(nvidia-smi -L | wc -l)
+  nvidia-smi topo -m > "$OUT/topo.txt" 2>&1
+  for np in 1 2; do
+    start=$SECONDS
+    PFLOW_TEST_EXECUTOR=cuda OMP_NUM_THREADS=1 timeout 300 mpirun --oversubscribe --bind-to none -np $np "$B/sph_distributed_test" > "$OUT/sph_distributed_gpu_np$np.log" 2>&1
+    summary+=("sph_distributed_test cuda np=$np rc=$? $((SECONDS - start))s $(grep -E '^\[  (PASSED|FAILED)|^ranks:' "$OUT/sph_distributed_gpu_np$np.log" | tr '\n' ' ')")
+  done
+  start=$SECONDS
+  timeout 300 "$B/sph_gpu_test" > "$OUT/sph_gpu_test.log" 2>&1
+  summary+=("sph_gpu_test rc=$? $((SECONDS - start))s $(grep -E '^\[  (PASSED|FAILED)|largest CPU-GPU' "$OUT/sph_gpu_test.log" | tr '\n' ' ')")
+  "$B/pflow-gpu-bandwidth" > "$OUT/bandwidth.json" 2>&1
+  bw=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["memcpy_gb_per_s"])' "$OUT/bandwidth.json" 2>/dev/null || echo 0)
+  sb() {  # ranks, pflow-sph-bench options...
+    local np=$1; shift
+    timeout "${SPHMPI_TIMEOUT:-150}" mpirun --oversubscribe --bind-to none -np "$np" "$B/pflow-sph-bench" --executor cuda --precision float \
+      --warmup 10 --steps 50 --copy-bandwidth "$bw" --device "$((np < ngpu ? np : ngpu)) x $dev" --commit "$commit" "$@" \
+      >> "$OUT/sph_mpi.jsonl" 2>> "$OUT/sph_mpi.log"
+    summary+=("sph-bench np=$np $* rc=$?")
+  }
+  for integ in ${SPHMPI_INTEGRATORS:-velocity_verlet symplectic}; do
+    for np in 1 2; do
+      ((np > ngpu)) && break
+      sb $np --integrator $integ --spacing 0.0064
+    done
+    ((ngpu > 1)) && sb 2 --integrator $integ --spacing 0.0051
+  done
+  ((ngpu > 1)) && sb 2 --integrator velocity_verlet --spacing 0.0064 --overlap off
+  summary+=("$(python3 -c '
+import json, sys
+for line in open(sys.argv[1]):
+    j = json.loads(line)
+    ph = " ".join("%s=%.3f" % (k, v) for k, v in j["phases_s"].items())
+    print(j["integrator"], "ranks=%d gpus=%d" % (j["ranks"], j.get("gpus", 0)), "overlap=" + j["overlap"], "n=%d" % j["n"],
+          "%.2f ms/step" % j["ms_per_step"], "%.3g p-s/s" % j["particle_steps_per_s"], ph)
+' "$OUT/sph_mpi.jsonl" 2>&1)")
+fi
+# SPH in the flow with velocity Verlet (one evaluation a step): pflow-sph-bench timed after 0.32 s (the front on the
+# floor), and SPHERIC test 2 run by `pflow run` at dp 6.4 mm (4.07e6 particles, float) to SPHFLOW_END s with its
+# probes (robustness: Verlet left the density bounds at 0.31 s there).
+if has sphflow; then
+  "$B/pflow-gpu-bandwidth" > "$OUT/bandwidth.json" 2>&1
+  bw=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["memcpy_gb_per_s"])' "$OUT/bandwidth.json" 2>/dev/null || echo 0)
+  for sp in ${SPHFLOW_SPACINGS:-0.0064}; do
+    timeout 200 "$B/pflow-sph-bench" --executor cuda --precision float --integrator velocity_verlet --spacing "$sp" --advance 0.32 \
+      --warmup 10 --steps 100 --copy-bandwidth "$bw" --device "$dev" --commit "$commit" >> "$OUT/sph_flow.jsonl" 2>> "$OUT/sph_flow.log"
+    summary+=("sph-bench flow velocity_verlet $sp rc=$? $(tail -2 "$OUT/sph_flow.log" | tr '\n' ' ')")
+  done
+  sed -e "s/spacing: 0.02$/spacing: ${SPHFLOW_DP:-0.0064}/" -e "s/duration: 1.0$/duration: ${SPHFLOW_END:-0.7}/" \
+      -e 's/snapshot_interval: 0.05$/snapshot_interval: 10/' -e 's/^  cfl: 0.2$/  cfl: 0.2\n  integrator: velocity_verlet/' \
+      -e 's/^  gravity: \[0, 0, -9.81\]$/  gravity: [0, 0, -9.81]\n  precision: float/' examples/dam_break_3d.yaml > "$OUT/spheric_kdk.yaml"
+  start=$SECONDS
+  timeout "${SPHFLOW_TIMEOUT:-330}" "$B/pflow" run "$OUT/spheric_kdk.yaml" --executor cuda -o "$OUT/spheric_kdk.h5" > "$OUT/spheric_kdk_run.log" 2>&1
+  summary+=("pflow run SPHERIC velocity_verlet float rc=$? $((SECONDS - start))s $(grep -E 'done:|PERFORMANCE|error|range' "$OUT/spheric_kdk_run.log" | tail -3 | tr '\n' ' ')")
+  rm -f "$OUT/spheric_kdk.h5" "$OUT/spheric_kdk.xmf"
+  summary+=("$(python3 -c '
+import json, sys
+for line in open(sys.argv[1]):
+    j = json.loads(line)
+    print(j["integrator"], "n=%d" % j["n"], "%.2f ms/step" % j["ms_per_step"], "%.3g p-s/s" % j["particle_steps_per_s"], "sorts=%d" % j["cell_sorts"],
+          "t=%.3f" % j["sim_time"], j["phases_s"])
+' "$OUT/sph_flow.jsonl" 2>&1)")
 fi
 if [[ -s $OUT/bench.jsonl ]]; then
   summary+=("$(python3 - "$OUT/bench.jsonl" <<'PY'

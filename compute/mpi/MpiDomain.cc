@@ -370,4 +370,14 @@ ParticleSnapshot MpiDomain::gather(ParticleSnapshot local) {
   return all;
 }
 
+NodeRanks nodeRanks(MPI_Comm comm) {
+  MPI_Comm node;
+  MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node);
+  NodeRanks r;
+  MPI_Comm_rank(node, &r.rank);
+  MPI_Comm_size(node, &r.size);
+  MPI_Comm_free(&node);
+  return r;
+}
+
 }  // namespace pflow::compute

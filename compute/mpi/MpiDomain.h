@@ -110,4 +110,11 @@ class MpiDomain final : public Domain {
   std::vector<PackedRows> m_arrived;    // awaitRefresh .. finishRefresh
 };
 
+// The ranks of `comm` that share this process's node (MPI_Comm_split_type, shared memory): this process's index
+// among them and their number. Collective over `comm`. A rank's GPU is its index modulo the node's devices.
+struct NodeRanks {
+  int rank = 0, size = 1;
+};
+NodeRanks nodeRanks(MPI_Comm comm);
+
 }  // namespace pflow::compute

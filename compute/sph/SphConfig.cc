@@ -15,6 +15,13 @@ std::size_t SphConfig::fluidCount() const {
 }
 
 const char* kernelName(KernelKind k) { return k == KernelKind::kWendlandC2 ? "wendland" : "cubic_spline"; }
+const char* integratorName(Integrator i) {
+  switch (i) {
+    case Integrator::kVerlet: return "verlet";
+    case Integrator::kVelocityVerlet: return "velocity_verlet";
+    default: return "symplectic";
+  }
+}
 
 SphDerived derive(const SphConfig& c, const SimulationSettings& sim) {
   SphDerived d;

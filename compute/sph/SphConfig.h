@@ -25,9 +25,12 @@ enum class ParticleKind : std::int32_t { kFluid = 0, kBoundary = 1 };
 enum class BoundaryKind { kDynamic, kMirror };
 
 // The time integration (sph.integrator): the symplectic position-Verlet predictor-corrector (two evaluations of
-// the rates per step), or Verlet (Monaghan 1989; one evaluation per step, an Euler step every sph.verlet_steps
-// to keep the two interleaved solutions together): docs/sph.md, "Time integration".
-enum class Integrator { kSymplectic, kVerlet };
+// the rates per step), velocity Verlet (kick-drift-kick: one evaluation per step), or Verlet (Monaghan 1989; one
+// evaluation per step, an Euler step every sph.verlet_steps to keep the two interleaved solutions together):
+// docs/sph.md, "Time integration".
+enum class Integrator { kSymplectic, kVerlet, kVelocityVerlet };
+// The integrator's name in scenes ("symplectic", "verlet", "velocity_verlet").
+const char* integratorName(Integrator i);
 
 // A named region the frontend filled (fluid block, tank, obstacle): for messages and checks.
 struct SphRegion {

@@ -74,6 +74,11 @@ class SphEngine : public DistributedRows {
   // One Verlet step (sph.integrator: verlet) of dt after one of dtBefore (0: an Euler step), checked as the
   // corrector is.
   virtual Status verlet(double dt, double dtBefore, double& moved2) = 0;
+  // Velocity Verlet (sph.integrator: velocity_verlet): the first kick and the drift (x a step on, v and rho predicted
+  // for the rates; returns the largest squared displacement since the sort), then, with the rates at the new
+  // positions, the second kick, checked as the corrector is.
+  virtual double kickDrift(double dt) = 0;
+  virtual Status kick(double dt) = 0;
   // The furthest a fluid particle reaches along the unit vector `direction`: max of x.direction [m] (one
   // device reduction; the surge front of a dam break is this along +x).
   virtual double fluidReach(Vec3d direction) const = 0;

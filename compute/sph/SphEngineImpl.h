@@ -128,6 +128,14 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     return checked();
   }
 
+  double kickDrift(double dt) override { return m_exec.maxOf(m_owned, kernels::KickDrift<R>{stepArgs(dt)}); }
+
+  Status kick(double dt) override {
+    m_exec.forEach(1, compute::kernels::ResetConditions{m_cond.as<Conditions>()});
+    m_exec.maxOf(m_owned, kernels::Kick<R>{stepArgs(dt)});
+    return checked();
+  }
+
   double fluidReach(Vec3d direction) const override {
     // Measured from the grid's far corner against `direction`, so every value is >= 0 (maxOf's floor).
     const CellGrid& g = m_setup.grid;

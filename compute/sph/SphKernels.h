@@ -472,6 +472,52 @@ struct VerletStep {
   }
 };
 
+// Velocity Verlet (kick-drift-kick; sph.integrator: velocity_verlet), one evaluation of the rates per step. The
+// first kick and the drift, with the rates of the state now (n): v(n+1/2) = v + dt/2 a and rho(n+1/2) = rho + dt/2
+// drho are kept (vel0, rho0); x' = x + dt v(n+1/2); the rates of the next step are evaluated at x' with the velocity
+// and density predicted a whole step, v + dt a and rho + dt drho (and their pressure). Returns the squared
+// displacement since the last cell sort.
+template <class R>
+struct KickDrift {
+  StepArgs<R> a;
+  PFLOW_HOSTDEVICE double operator()(Index i) const {
+    const R half = R(0.5 * a.dt);
+    const R r0 = a.rho[i], dr = a.drho[i];
+    R rHalf = r0 + half * dr, r = rHalf + half * dr;
+    if (a.kind[i] == kFluid) {
+      const Vec3<R> acc = a.acc[i];
+      Vec3<R> vHalf = a.vel[i] + half * acc;
+      Vec3d x = a.pos[i] + a.dt * vcast<double>(vHalf);
+      if (a.mirror.any) a.mirror.keepInside(x, vHalf);
+      a.vel0[i] = vHalf;
+      a.vel[i] = vHalf + half * acc;
+      a.pos[i] = x;
+    } else {
+      rHalf = rHalf < a.boundaryFloor ? a.boundaryFloor : rHalf;
+      r = r < a.boundaryFloor ? a.boundaryFloor : r;
+    }
+    a.rho0[i] = rHalf;
+    a.rho[i] = r;
+    a.p[i] = a.eos.pressure(r);
+    return norm2(a.pos[i] - a.ref[i]);
+  }
+};
+
+// The second kick, with the rates at x': v' = v(n+1/2) + dt/2 a', rho' = rho(n+1/2) + dt/2 drho'; finished by
+// finishStep.
+template <class R>
+struct Kick {
+  StepArgs<R> a;
+  PFLOW_HOSTDEVICE double operator()(Index i) const {
+    const R half = R(0.5 * a.dt);
+    const bool fluid = a.kind[i] == kFluid;
+    const R r = a.rho0[i] + half * a.drho[i];
+    Vec3<R> v = a.vel[i];
+    if (fluid) v = a.vel0[i] + half * a.acc[i];
+    return finishStep(a, i, fluid, a.pos[i], v, r);
+  }
+};
+
 // Each particle's inverseStep (SphPhysics.h): their maximum sets the next step, in one reduction.
 template <class R>
 struct InverseStep {

@@ -10,12 +10,24 @@ namespace pflow::compute::sph {
 
 // ---------------------------------------------------------------------------------------------
 // The step loop. One step, top to bottom, a timer per phase: symplectic (position-Verlet predictor-corrector,
-// two evaluations of the rates) or Verlet (one); the rates of the state at the start of the step were computed
+// two evaluations of the rates), velocity Verlet (kick-drift-kick, one) or Verlet (one); the rates of the state at the start of the step were computed
 // at the end of the previous one. Errors come back through PFLOW_TRY; step() adds the step and time once.
 Status SphSimulation::stepPhases() {
   const double dt = nextDt();  // the CFL limits of the rates at the start (all ranks), or sph.dt; lands on outputs
   m_dt = dt;                   // the step being taken (errors name it)
   double moved2 = 0;
+  if (m_method.integrator == Integrator::kVelocityVerlet) {
+    { auto t = m_timers.time(Phase::kIntegrate1); moved2 = m_engine->kickDrift(dt); }  // v, rho half a step, x a step
+    const std::int64_t sorts = m_rebuilds;
+    PFLOW_TRY(rates(moved2));                                                         // rates at t + dt (v, rho predicted)
+    if (m_rebuilds != sorts) m_rebuiltAt = m_step + 1;
+    Status s;
+    { auto t = m_timers.time(Phase::kIntegrate2); s = m_engine->kick(dt); }            // v, rho the second half
+    PFLOW_TRY(m_domain->agree(s));
+    ++m_step;
+    m_time += dt;
+    return Status::ok();
+  }
   if (m_method.integrator == Integrator::kVerlet) {
     const double before = m_step % m_method.verletSteps == 0 ? 0.0 : m_dtBefore;  // 0: an Euler step
     Status s;

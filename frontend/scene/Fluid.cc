@@ -60,8 +60,11 @@ void Loader::parseSphScene(const Fields& top) {
       if (const Entry* k = f->find("integrator")) {
         std::string name;
         if (read(k->value, f->child("integrator"), k->loc, name)) {
-          if (name == "symplectic" || name == "verlet") c.integrator = name == "verlet" ? compute::sph::Integrator::kVerlet : compute::sph::Integrator::kSymplectic;
-          else badValue(f->child("integrator"), unknownName("integrator", name, kSphIntegrators, "Choices"), k->loc);
+          using compute::sph::Integrator;
+          bool known = false;
+          for (Integrator i : {Integrator::kSymplectic, Integrator::kVerlet, Integrator::kVelocityVerlet})
+            if (name == compute::sph::integratorName(i)) c.integrator = i, known = true;
+          if (!known) badValue(f->child("integrator"), unknownName("integrator", name, kSphIntegrators, "Choices"), k->loc);
         }
       }
       if (const Entry* k = f->find("verlet_steps")) {

@@ -81,12 +81,12 @@ TEST(Checkpoint, StateOnlyJustAfterARebuild) {
   EXPECT_NE(s.status().message().find("just after a neighbour rebuild"), std::string::npos) << s.status().message();
 }
 
-// The 2D dam break (20 x 40, both integrators): checkpointed at the first cell sort after step 300, resumed in a new
+// The 2D dam break (20 x 40, each integrator): checkpointed at the first cell sort after step 300, resumed in a new
 // run of the same scene, both taken to step 900: every position, velocity, density and pressure is the
 // uninterrupted run's, bit for bit.
 TEST(Checkpoint, ResumedSphRunIsBitIdentical) {
-  for (auto integrator : {sph::Integrator::kSymplectic, sph::Integrator::kVerlet}) {
-    SCOPED_TRACE(integrator == sph::Integrator::kVerlet ? "verlet" : "symplectic");
+  for (auto integrator : {sph::Integrator::kSymplectic, sph::Integrator::kVerlet, sph::Integrator::kVelocityVerlet}) {
+    SCOPED_TRACE(sph::integratorName(integrator));
     RunConfig c = test::damBreak2D(0.01, 1.0);
     c.sph.integrator = integrator;
     auto make = [&] {

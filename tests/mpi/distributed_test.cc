@@ -15,6 +15,7 @@
 
 #include "compute/mpi/MpiDomain.h"
 #include "compute/dem/Simulation.h"
+#include "tests/support/MpiTest.h"
 #include "tests/support/TestScenes.h"
 
 namespace pflow::test {
@@ -38,13 +39,13 @@ int worldSize() {
   return s;
 }
 
-// PFLOW_TEST_EXECUTOR=cuda runs every simulation of these tests on the GPU (each rank on device 0: the
-// device machine has one), the reference included.
+// PFLOW_TEST_EXECUTOR=cuda runs every simulation of these tests on the GPU, the reference included (each rank on
+// its own device where the node has enough: tests/support/MpiTest.h).
 compute::SimulationOptions options() {
   compute::SimulationOptions o;
   o.canonicalOrder = true;  // one-process references sum forces in the distributed runs' order
-  const char* e = std::getenv("PFLOW_TEST_EXECUTOR");
-  if (e && std::string(e) == "cuda") o.executor = compute::ExecutorKind::kCuda;
+  o.executor = testExecutor();
+  if (o.executor == compute::ExecutorKind::kCuda) o.device = testDevice();
   return o;
 }
 

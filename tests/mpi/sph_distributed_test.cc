@@ -1,4 +1,4 @@
-// SPH across MPI ranks on the CPU executor, at whatever rank count mpirun gives (ctest runs 1, 2 and 4 ranks):
+// SPH across MPI ranks on the CPU executor (PFLOW_TEST_EXECUTOR=cuda: the GPUs), at whatever rank count mpirun gives (ctest runs 1, 2 and 4 ranks):
 // the dam break's particles split by cell (the same MpiDomain as DEM: decomposition, migration, halo). With
 // neighbours summed in global-id order (canonical order, as distributed runs sum them), the run equals one
 // process bit for bit: the surge front's times are equal (the issue asks for 0.5 %), every particle is kept
@@ -11,6 +11,7 @@
 #include <cstdio>
 
 #include "compute/mpi/MpiDomain.h"
+#include "tests/support/MpiTest.h"
 #include "tests/support/SphScenes.h"
 
 namespace pflow::test {
@@ -40,6 +41,8 @@ Result run(bool distributed, bool overlap, bool mirror = false) {
   RunConfig c = damBreak2D(dp, 0.45);
   if (mirror) c = withMirrorWalls(c);
   SphOptions o;
+  o.executor = testExecutor();  // PFLOW_TEST_EXECUTOR=cuda: on the GPUs, one a rank where there are enough
+  if (o.executor == compute::ExecutorKind::kCuda) o.device = testDevice();
   o.overlapHalo = overlap;
   o.canonicalOrder = true;  // the one-process reference sums in the distributed runs' order
   // Balance by particle count: measured costs would make the decomposition, and so the summation order, depend

@@ -83,6 +83,14 @@ TEST(SphCudaVsCpu, VerletDamBreakAgrees) {
   EXPECT_LT(largestCpuGpuDifference(c, "verlet: "), 1e-6) << "largest position difference [m]";
 }
 
+// Velocity Verlet on both executors (double): the dam break to 0.1 s, every particle within 1e-6 m of its CPU position.
+TEST(SphCudaVsCpu, VelocityVerletDamBreakAgrees) {
+  SKIP_WITHOUT_GPU();
+  RunConfig c = test::damBreak2D(0.01, 0.1);
+  c.sph.integrator = Integrator::kVelocityVerlet;
+  EXPECT_LT(largestCpuGpuDifference(c, "velocity verlet: "), 1e-6) << "largest position difference [m]";
+}
+
 // Mirror walls on both executors (double): the dam break to 0.1 s, every particle within 1e-6 m of its CPU
 // position, as with boundary particles.
 TEST(SphCudaVsCpu, MirrorWallsDamBreakAgrees) {

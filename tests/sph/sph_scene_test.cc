@@ -155,8 +155,11 @@ TEST(SphScene, IntegratorAndItsErrors) {
   auto unknown = load(damBreak("{dimension: 2, spacing: 0.01, integrator: leapfrog, verlet_steps: 0.5}"));
   ASSERT_FALSE(unknown.isOk());
   const std::string m = unknown.status().message();
-  EXPECT_NE(m.find("symplectic, verlet"), std::string::npos) << m;
+  EXPECT_NE(m.find("symplectic, verlet, velocity_verlet"), std::string::npos) << m;
   EXPECT_NE(m.find("sph.verlet_steps: 0.5 is not a whole number"), std::string::npos) << m;
+  auto kdk = load(damBreak("{dimension: 2, spacing: 0.01, integrator: velocity_verlet}"));
+  ASSERT_TRUE(kdk.isOk()) << kdk.status().message();
+  EXPECT_EQ(kdk.value().config.sph.integrator, compute::sph::Integrator::kVelocityVerlet);
   auto stray = load(damBreak("{dimension: 2, spacing: 0.01, verlet_steps: 20}"));
   ASSERT_FALSE(stray.isOk());
   EXPECT_NE(stray.status().message().find("sph.verlet_steps: applies to sph.integrator: verlet"), std::string::npos)
