@@ -14,6 +14,7 @@
 #include <optional>
 #include <regex>
 #include <sstream>
+#include <vector>
 
 #include "bench/BenchUtil.h"
 #include "common/Log.h"
@@ -175,6 +176,19 @@ int main(int argc, char** argv) {
     for (int p = 0; p < int(compute::Phase::kCount); ++p)
       if (sim.timers().seconds(compute::Phase(p)) > 0) phases[compute::kPhaseNames[p]] = sim.timers().seconds(compute::Phase(p));
     j["phases_s"] = phases;  // rank 0's
+    if (ranks > 1) {  // each phase's largest over the ranks (the busiest rank sets the pace)
+      std::vector<double> most(std::size_t(compute::Phase::kCount));
+      for (int p = 0; p < int(compute::Phase::kCount); ++p) most[std::size_t(p)] = sim.timers().seconds(compute::Phase(p));
+      MPI_Allreduce(MPI_IN_PLACE, most.data(), int(most.size()), MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+      nlohmann::json busiest;
+      for (int p = 0; p < int(compute::Phase::kCount); ++p)
+        if (most[std::size_t(p)] > 0) busiest[compute::kPhaseNames[p]] = most[std::size_t(p)];
+      j["phases_max_s"] = busiest;
+      const long long owned = (long long)sim.numParticles();
+      std::vector<long long> perRank(std::size_t(ranks), 0);
+      MPI_Allgather(&owned, 1, MPI_LONG_LONG, perRank.data(), 1, MPI_LONG_LONG, MPI_COMM_WORLD);
+      j["owned_per_rank"] = perRank;
+    }
     if (rank == 0) {
       std::printf("%s\n", j.dump().c_str());
       std::fflush(stdout);

@@ -289,9 +289,9 @@ if has sphmpi; then
 import json, sys
 for line in open(sys.argv[1]):
     j = json.loads(line)
-    ph = " ".join("%s=%.3f" % (k, v) for k, v in j["phases_s"].items())
+    ph = " ".join("%s=%.3f" % (k, v) for k, v in j.get("phases_max_s", j["phases_s"]).items())
     print(j["integrator"], "ranks=%d gpus=%d" % (j["ranks"], j.get("gpus", 0)), "overlap=" + j["overlap"], "n=%d" % j["n"],
-          "%.2f ms/step" % j["ms_per_step"], "%.3g p-s/s" % j["particle_steps_per_s"], ph)
+          "%.2f ms/step" % j["ms_per_step"], "%.3g p-s/s" % j["particle_steps_per_s"], "max " + ph, j.get("owned_per_rank", ""))
 ' "$OUT/sph_mpi.jsonl" 2>&1)")
 fi
 # SPH in the flow with velocity Verlet (one evaluation a step): pflow-sph-bench timed after 0.32 s (the front on the

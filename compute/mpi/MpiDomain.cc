@@ -73,7 +73,8 @@ Status MpiDomain::decompose(const std::vector<Vec3d>& pos, const std::vector<dou
   return Status::ok();
 }
 
-Status MpiDomain::partitionPoints(const CellGrid& grid, const std::vector<Vec3d>& position, std::vector<std::size_t>& mine) {
+Status MpiDomain::partitionPoints(const CellGrid& grid, const std::vector<Vec3d>& position, std::vector<std::size_t>& mine,
+                                  const std::vector<double>& weights) {
   // Every rank holds the whole scene here, so the first decomposition needs no reduction of positions:
   // each rank weighs only the particles r, r + size, ... and the sum over ranks counts each once.
   m_grid = grid;
@@ -82,7 +83,7 @@ Status MpiDomain::partitionPoints(const CellGrid& grid, const std::vector<Vec3d>
   std::vector<double> w;
   for (std::size_t i = std::size_t(m_rank); i < n; i += std::size_t(m_size)) {
     pos.push_back(position[i]);
-    w.push_back(1.0);
+    w.push_back(weights.empty() ? 1.0 : weights[i]);
   }
   if (Status st = decompose(pos, w); !st.isOk()) return st;
   mine.clear();
@@ -220,25 +221,31 @@ Status MpiDomain::migrate(DistributedRows& engine, double cost) {
 
   std::vector<Vec3d> pos = positions(engine);
   const std::size_t n = pos.size();
+  // Each particle's share of the rank's work (the engine's weights; all alike when it gives none).
+  std::vector<double> weight = engine.costWeights();
+  if (weight.size() != n) weight.assign(n, 1.0);
+  const double units = std::accumulate(weight.begin(), weight.end(), 0.0);
 
-  // Cost per particle, smoothed over rebuilds; rebalance when the busiest rank is above tolerance.
-  if (m_options.cost == MpiDomainOptions::Cost::kCount) cost = double(n);
-  const double measured = n ? cost / double(n) : 0.0;
-  m_costPerParticle = m_costPerParticle > 0 ? m_options.smoothing * measured + (1 - m_options.smoothing) * m_costPerParticle
+  // Cost per unit of weight (per particle where all weigh 1), smoothed over rebuilds; rebalance when the busiest
+  // rank is above tolerance.
+  if (m_options.cost == MpiDomainOptions::Cost::kCount) cost = units;
+  const double measured = units > 0 ? cost / units : 0.0;
+  m_costPerUnit = m_costPerUnit > 0 ? m_options.smoothing * measured + (1 - m_options.smoothing) * m_costPerUnit
                                             : measured;
   std::vector<double> rankCost(static_cast<std::size_t>(m_size));
-  const double mine = m_costPerParticle * double(n);
+  const double mine = m_costPerUnit * units;
   MPI_Allgather(&mine, 1, MPI_DOUBLE, rankCost.data(), 1, MPI_DOUBLE, m_comm);
   m_lastImbalance = decomp::imbalance(rankCost);
   if (m_options.rebalance && m_lastImbalance > 1 + m_options.tolerance) {
-    // Every rank's particles weighted by its measured cost per particle (a rank with no cost yet by the
-    // mean), so dense, contact-rich regions count for more than loose ones.
-    long long total = 0, owned = (long long)n;
-    MPI_Allreduce(&owned, &total, 1, MPI_LONG_LONG, MPI_SUM, m_comm);
+    // Every rank's particles weighted by its measured cost per unit of weight (a rank with no cost yet by the
+    // mean) times their own weight, so dense, contact-rich regions count for more than loose ones.
+    double total = 0;
+    MPI_Allreduce(&units, &total, 1, MPI_DOUBLE, MPI_SUM, m_comm);
     const double sumCost = std::accumulate(rankCost.begin(), rankCost.end(), 0.0);
-    const double meanPerParticle = total ? sumCost / double(total) : 0.0;
-    const double w = m_costPerParticle > 0 ? m_costPerParticle : (meanPerParticle > 0 ? meanPerParticle : 1.0);
-    if (Status s = decompose(pos, std::vector<double>(n, w)); !s.isOk()) return s;
+    const double meanPerUnit = total > 0 ? sumCost / total : 0.0;
+    const double w = m_costPerUnit > 0 ? m_costPerUnit : (meanPerUnit > 0 ? meanPerUnit : 1.0);
+    for (double& x : weight) x *= w;
+    if (Status s = decompose(pos, weight); !s.isOk()) return s;
     ++m_rebalances;
     spdlog::debug("rank {}: rebalanced ({:.3f} > 1 + {:.3f})", m_rank, m_lastImbalance, m_options.tolerance);
   }

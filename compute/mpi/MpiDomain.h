@@ -30,7 +30,9 @@ struct MpiDomainOptions {
   // Weight of the newest cost measurement in the smoothed cost per particle (1: no smoothing).
   double smoothing = 0.5;
   // What a rank's cost is: the measured seconds of its contact and force phases (the default), or its
-  // particle count (deterministic: tests, and machines whose timings are noise, e.g. oversubscribed).
+  // particle count (deterministic: tests, and machines whose timings are noise, e.g. oversubscribed), each
+  // particle counted by its engine's cost weight (DistributedRows::costWeights; SPH: fluid and wet walls more
+  // than dry walls).
   enum class Cost { kMeasured, kCount } cost = Cost::kMeasured;
   // Candidates in global-id order (EngineSetup::canonicalOrder): the run equals one process bit for bit.
   // Off only to measure what it costs.
@@ -44,7 +46,8 @@ class MpiDomain final : public Domain {
   int rank() const override { return m_rank; }
   int ranks() const override { return m_size; }
   Status partition(EngineSetup& setup) override;
-  Status partitionPoints(const CellGrid& grid, const std::vector<Vec3d>& positions, std::vector<std::size_t>& mine) override;
+  Status partitionPoints(const CellGrid& grid, const std::vector<Vec3d>& positions, std::vector<std::size_t>& mine,
+                         const std::vector<double>& weights = {}) override;
   bool anyRebuild(bool local) override;
   Status migrate(DistributedRows& engine, double cost) override;
   Status exchangeGhosts(DistributedRows& engine) override;
@@ -96,7 +99,7 @@ class MpiDomain final : public Domain {
   // c's count and ranks start in m_haloRanks. Cleared by each decomposition.
   std::vector<std::int32_t> m_haloAt;
   std::vector<std::int32_t> m_haloRanks;
-  double m_costPerParticle = 0;           // smoothed [s per particle between rebuilds]
+  double m_costPerUnit = 0;  // smoothed [s per unit of cost weight between rebuilds; per particle where all weigh 1]
   int m_rebalances = 0;
   long long m_migratedOut = 0;
   double m_lastImbalance = 1;

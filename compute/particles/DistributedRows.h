@@ -30,6 +30,9 @@ class DistributedRows {
   virtual int historySlots() const { return 0; }
   virtual int wallHistorySlots() const { return 0; }
   virtual void ensureSlots(int /*contactSlots*/, int /*wallSlots*/) {}
+  // Each owned particle's share of the work, relative to the others' (the balance's weights: a rank's measured cost
+  // is spread over its particles in these proportions). Empty: all alike (DEM).
+  virtual std::vector<double> costWeights() { return {}; }
 
   // Local rows are the owned particles [0, size()), then the ghosts [size(), size() + ghosts()). A rebuild is:
   // dropGhosts, keepOwned + appendOwned (migration), the engine's cell sort, setGhosts; between rebuilds

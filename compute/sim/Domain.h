@@ -35,9 +35,12 @@ class Domain {
   // global id (its index in the scene).
   virtual Status partition(EngineSetup&) { return Status::ok(); }
   // The same for any solver: which of the scene's particles (at `positions`, binned by `grid`) this rank keeps;
-  // `mine` gets their indices in the scene, ascending (their global ids). One process: all of them.
-  virtual Status partitionPoints(const CellGrid& grid, const std::vector<Vec3d>& positions, std::vector<std::size_t>& mine) {
+  // `mine` gets their indices in the scene, ascending (their global ids). `weights`: each particle's expected share
+  // of the work (empty: all alike), balanced across the ranks. One process: all of them.
+  virtual Status partitionPoints(const CellGrid& grid, const std::vector<Vec3d>& positions, std::vector<std::size_t>& mine,
+                                 const std::vector<double>& weights = {}) {
     (void)grid;
+    (void)weights;
     mine.resize(positions.size());
     for (std::size_t i = 0; i < mine.size(); ++i) mine[i] = i;
     return Status::ok();

@@ -37,7 +37,19 @@ struct SphSetup {
   // Neighbours summed in global-id order (SortCellByGid): forces independent of the rows' order, so a
   // distributed run equals one process with this set, bit for bit. Distributed runs always set it.
   bool canonicalOrder = false;
+  // Distributed runs: each particle's cost weight (sphCostWeight) as the scene's partition used it, the balance's
+  // weights until the engine's first cell sort (then its own wet flags). Empty: one process.
+  std::vector<double> costWeight;
 };
+
+// The balance's weights (DistributedRows::costWeights): a fluid particle 1; a wall particle with fluid listed within
+// reach (wet, MarkWet) walks the same candidates as a fluid one but evaluates its fluid neighbours only, about half
+// the pairs: 0.5; a dry wall particle is skipped by the rates pass, leaving its share of the sort, the packing and
+// the integration: 0.05. Estimates from the pass's structure, not measurements; where a run measures its costs
+// (MpiDomainOptions::Cost::kMeasured) each rebuild rescales them by the rank's measured seconds.
+inline double sphCostWeight(bool fluid, bool wet) { return fluid ? 1.0 : wet ? 0.5 : 0.05; }
+// The weights of a scene's particles before any sort: wet from the grid's cells within reach of a fluid particle's.
+std::vector<double> sphCostWeights(const CellGrid& grid, const std::vector<Vec3d>& position, const std::vector<std::int32_t>& kind);
 
 // One particle as the host sees it, for error messages (copied off the device on the error path only).
 struct SphProbeState {

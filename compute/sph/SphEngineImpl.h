@@ -51,6 +51,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     if (m_ref.bytes() < std::size_t(m_n) * sizeof(Vec3d)) m_ref.resize(std::size_t(m_n) * sizeof(Vec3d) * 5 / 4 + sizeof(Vec3d));
     m_mem.copyWithin(m_ref.data(), ptr<SphField::Position>(), std::size_t(m_n) * sizeof(Vec3d));
     m_wetStale = true;
+    m_sorted = true;
   }
 
   // ---- distributed runs (DistributedRows): LocalRows's operations (ForwardDistributedRows), and these ----
@@ -66,6 +67,21 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     sizeLocalBuffers();
     splitBoundary();
     m_wetStale = true;
+  }
+  std::vector<double> costWeights() override {
+    std::vector<double> w;
+    if (!m_sorted) {  // the scene's partition's weights, until the first sort
+      w = m_setup.costWeight;
+      return w;
+    }
+    if (m_wetStale) markWet();
+    std::vector<std::int32_t> kind(m_owned);
+    std::vector<std::uint8_t> wet(m_owned);
+    m_mem.copyToHost(kind.data(), cptr<SphField::Kind>(), std::size_t(m_owned) * sizeof(std::int32_t));
+    m_mem.copyToHost(wet.data(), m_wet.data(), std::size_t(m_owned));
+    w.resize(m_owned);
+    for (Index i = 0; i < m_owned; ++i) w[i] = sphCostWeight(kind[i] == kernels::kFluid, wet[i] != 0);
+    return w;
   }
   void dropGhosts() override {
     m_numBoundary = 0;
@@ -363,6 +379,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
   Buffer m_wet{m_mem, 0};  // MarkWet, per owned particle
   Buffer m_packRow{m_mem, 0}, m_packState{m_mem, 0}, m_packPm{m_mem, 0};  // PackRates, per local row
   bool m_wetStale = true;
+  bool m_sorted = false;  // cellStart and the wet flags exist from the first sortByCell
   Index m_numBoundary = 0;
 };
 

@@ -261,7 +261,10 @@ Result<std::unique_ptr<SphSimulation>> SphSimulation::create(const RunConfig& co
     // This rank's share of the scene's particles, their scene index as global id.
     SphSetup& st = setup.value();
     std::vector<std::size_t> mine;
-    if (Status s = sim->m_domain->partitionPoints(st.grid, st.position, mine); !s.isOk()) return s;
+    // Balanced by expected work (fluid and wet walls more than dry walls: sphCostWeight), not by count.
+    if (sim->m_domain->ranks() > 1) st.costWeight = sphCostWeights(st.grid, st.position, st.kind);
+    if (Status s = sim->m_domain->partitionPoints(st.grid, st.position, mine, st.costWeight); !s.isOk()) return s;
+    keepRows(st.costWeight, mine);
     keepRows(st.position, mine);
     keepRows(st.velocity, mine);
     keepRows(st.density, mine);
@@ -309,6 +312,33 @@ Result<std::unique_ptr<SphSimulation>> SphSimulation::create(const RunConfig& co
     return Status(StatusCode::kResourceExhausted, e.what());
   }
   return sim;
+}
+
+std::vector<double> sphCostWeights(const CellGrid& g, const std::vector<Vec3d>& position, const std::vector<std::int32_t>& kind) {
+  // Cells holding fluid, widened by the grid's reach along each axis in turn: then a particle's cell is marked when
+  // a fluid particle is listed within reach of it (MarkWet's test).
+  std::vector<std::uint8_t> near(g.numCells(), 0), line;
+  for (std::size_t i = 0; i < position.size(); ++i)
+    if (kind[i] == std::int32_t(ParticleKind::kFluid)) near[g.cellOf(position[i])] = 1;
+  const int n[3] = {g.nx, g.ny, g.nz};
+  const std::size_t stride[3] = {1, std::size_t(g.nx), std::size_t(g.nx) * std::size_t(g.ny)};
+  for (int axis = 0; axis < 3; ++axis) {
+    const int len = n[axis];
+    line.resize(std::size_t(len));
+    for (std::size_t first = 0; first < near.size(); ++first) {
+      if ((first / stride[axis]) % std::size_t(len) != 0) continue;  // a line starts where its axis index is 0
+      for (int k = 0; k < len; ++k) line[std::size_t(k)] = near[first + std::size_t(k) * stride[axis]];
+      for (int k = 0; k < len; ++k) {
+        std::uint8_t any = 0;
+        for (int d = std::max(0, k - g.reach); d <= std::min(len - 1, k + g.reach); ++d) any |= line[std::size_t(d)];
+        near[first + std::size_t(k) * stride[axis]] = any;
+      }
+    }
+  }
+  std::vector<double> w(position.size());
+  for (std::size_t i = 0; i < position.size(); ++i)
+    w[i] = sphCostWeight(kind[i] == std::int32_t(ParticleKind::kFluid), near[g.cellOf(position[i])] != 0);
+  return w;
 }
 
 Result<SphSetup> prepareSphSetup(const RunConfig& config) {

@@ -102,5 +102,57 @@ TEST(SphDistributed, MirrorWallsSameFrontAsOneProcess) {
   if (worldRank() == 0) EXPECT_EQ(split.mass, one.mass);
 }
 
+// The ranks share the expected work, not the particle count: a wall particle near the fluid weighs half a fluid
+// particle, a dry one 0.05 (compute::sph::sphCostWeight). In the dam break most walls are dry (the column fills a
+// fifth of the tank), so count balance would leave the ranks away from the column with little to do.
+TEST(SphDistributed, PartitionBalancesTheExpectedWork) {
+  const RunConfig c = damBreak2D(0.01, 0.45);
+  auto setup = compute::sph::prepareSphSetup(c);
+  ASSERT_TRUE(setup.isOk()) << setup.status().message();
+  const auto& st = setup.value();
+  const std::vector<double> w = compute::sph::sphCostWeights(st.grid, st.position, st.kind);
+  ASSERT_EQ(w.size(), st.position.size());
+  double total = 0;
+  int fluid = 0, wet = 0, dry = 0;
+  for (std::size_t i = 0; i < w.size(); ++i) {
+    total += w[i];
+    if (st.kind[i] == 0) {
+      EXPECT_EQ(w[i], 1.0);
+      ++fluid;
+      continue;
+    }
+    // A wall particle is wet when a fluid particle is listed within the grid's reach of its cell: closer than `reach`
+    // cells to the column (its particles span x, z = 0.005 .. 0.195, 0.395 m) it is, further than reach + 1 it is not.
+    const double reach = st.grid.reach * st.grid.cellSize;
+    const bool nearColumn = st.position[i].x < 0.195 + reach && st.position[i].z < 0.395 + reach;
+    const bool farFromColumn = st.position[i].x > 0.195 + reach + st.grid.cellSize;
+    if (nearColumn) EXPECT_EQ(w[i], 0.5) << "x = " << st.position[i].x;
+    if (farFromColumn) EXPECT_EQ(w[i], 0.05) << "x = " << st.position[i].x;
+    (w[i] == 0.5 ? wet : dry) += 1;
+  }
+  EXPECT_GT(dry, wet);  // most of the tank's walls are dry
+  EXPECT_EQ(fluid, 800);
+
+  SphOptions o;
+  o.executor = testExecutor();
+  if (o.executor == compute::ExecutorKind::kCuda) o.device = testDevice();
+  compute::MpiDomainOptions split;
+  split.cost = compute::MpiDomainOptions::Cost::kCount;
+  o.domain = std::make_shared<MpiDomain>(MPI_COMM_WORLD, split);
+  auto sim = SphSimulation::create(c, o);
+  ASSERT_TRUE(sim.isOk()) << sim.status().message();
+  const compute::ParticleSnapshot mine = sim.value()->snapshot({"id"}, true);
+  double local = 0;
+  const auto* id = mine.find("id")->as<Gid>();
+  for (std::size_t i = 0; i < mine.n; ++i) local += w[std::size_t(id[i])];
+  int ranks = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  std::vector<double> all(std::size_t(ranks), 0.0);
+  MPI_Allgather(&local, 1, MPI_DOUBLE, all.data(), 1, MPI_DOUBLE, MPI_COMM_WORLD);
+  const double mean = total / ranks;
+  // The curve cuts between cells (a cell of the column holds about 3.5 fluid particles here): within 10 %.
+  for (int r = 0; r < ranks; ++r) EXPECT_NEAR(all[std::size_t(r)], mean, 0.1 * mean) << "rank " << r << " of " << ranks;
+}
+
 }  // namespace
 }  // namespace pflow::test
