@@ -40,6 +40,7 @@ int main(int argc, char** argv) {
   std::string overlap = "on", integrator = "scene";
   double advance = 0;
   std::optional<double> skin;
+  std::string decomposition = "scene";
   app.add_option("--scene", scene, "an SPH scene file")->capture_default_str();
   app.add_option("--spacing", spacings, "particle spacings dp [m], one run each (the scene's sph.spacing replaced)")->delimiter(',');
   app.add_option("--executor", executor, "cpu | cuda")->check(CLI::IsMember({"cpu", "cuda"}))->capture_default_str();
@@ -56,6 +57,8 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"scene", "symplectic", "verlet", "velocity_verlet"}))->capture_default_str();
   app.add_option("--advance", advance, "simulated seconds run before the warm-up (time the flow, not the start at rest)")
       ->capture_default_str();
+  app.add_option("--decomposition", decomposition, "distributed runs: the scene's simulation.decomposition, or sfc | multisection")
+      ->check(CLI::IsMember({"scene", "sfc", "multisection"}))->capture_default_str();
   app.add_option("--skin", skin, "the neighbour skin as a fraction of h instead of the scene's sph.skin");
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::warn);
@@ -88,6 +91,9 @@ int main(int argc, char** argv) {
     const bool verlet = cfg.sph.integrator == compute::sph::Integrator::kVerlet;
     const bool kdk = cfg.sph.integrator == compute::sph::Integrator::kVelocityVerlet;
     if (skin) cfg.sph.skin = *skin;
+    const compute::DecompositionKind strategy = decomposition == "scene" ? cfg.sim.decomposition
+                                                : decomposition == "sfc"  ? compute::DecompositionKind::kSfc
+                                                                          : compute::DecompositionKind::kMultiSection;
     compute::sph::SphOptions so;
     so.executor = executor == "cuda" ? compute::ExecutorKind::kCuda : compute::ExecutorKind::kCpu;
     if (so.executor == compute::ExecutorKind::kCuda) {  // one GPU a rank: the rank's index on its node
@@ -100,6 +106,7 @@ int main(int argc, char** argv) {
     if (ranks > 1) {
       compute::MpiDomainOptions split;
       split.cost = compute::MpiDomainOptions::Cost::kCount;
+      split.strategy = strategy;
       so.domain = std::make_shared<compute::MpiDomain>(MPI_COMM_WORLD, split);
     }
     so.overlapHalo = overlap == "on";
@@ -157,6 +164,7 @@ int main(int argc, char** argv) {
                      {"gpus", executor == "cuda" ? std::min(ranks, gpus) : 0},
                      {"threads", threads},
                      {"overlap", overlap},
+                     {"decomposition", strategy == compute::DecompositionKind::kSfc ? "sfc" : "multisection"},
                      {"fluid", sim.fluidParticles()},
                      {"steps", steps},
                      {"ms_per_step", 1e3 * wall / steps},

@@ -2,7 +2,7 @@
 # One call on the lent GPU machine (see bench/README.md): unpack the bundle built here, run the GPU
 # tests, measure the copy bandwidth and the settled-bed throughput, print a short table last.
 # Usage (from the repository root on the device machine):
-#   bash bench/gpu/device_run.sh [tests] [sanitize] [bench] [scaling] [largest] [cpu] [cpuab] [layouts] [mpi] [model] [accuracy] [sph] [sph3d] [sphmirror] [sphmpi] [sphflow]
+#   bash bench/gpu/device_run.sh [tests] [sanitize] [bench] [scaling] [largest] [cpu] [cpuab] [layouts] [mpi] [model] [accuracy] [sph] [sph3d] [sphmirror] [sphmpi] [sphflow] [sphtarget]
 # Logs and JSON go to $OUT (or ./out).
 set -uo pipefail
 OUT=${OUT:-out}
@@ -319,6 +319,36 @@ for line in open(sys.argv[1]):
     print(j["integrator"], "n=%d" % j["n"], "%.2f ms/step" % j["ms_per_step"], "%.3g p-s/s" % j["particle_steps_per_s"], "sorts=%d" % j["cell_sorts"],
           "t=%.3f" % j["sim_time"], j["phases_s"])
 ' "$OUT/sph_flow.jsonl" 2>&1)")
+fi
+# The issue's size (SPHERIC test 2 at dp 6 mm, 4.9e6 particles, velocity Verlet, float): one GPU from rest and in the
+# flow (after 0.32 s); two GPUs: the decompositions at dp 6.4 mm from rest, then dp 6 mm in the flow.
+if has sphtarget; then
+  export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+  ngpu=$(nvidia-smi -L | wc -l)
+  "$B/pflow-gpu-bandwidth" > "$OUT/bandwidth.json" 2>&1
+  bw=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["memcpy_gb_per_s"])' "$OUT/bandwidth.json" 2>/dev/null || echo 0)
+  st() {  # ranks, pflow-sph-bench options...
+    local np=$1; shift
+    timeout "${SPHT_TIMEOUT:-200}" mpirun --oversubscribe --bind-to none -np "$np" "$B/pflow-sph-bench" --executor cuda --precision float \
+      --integrator velocity_verlet --copy-bandwidth "$bw" --device "$np x $dev" --commit "$commit" "$@" \
+      >> "$OUT/sph_target.jsonl" 2>> "$OUT/sph_target.log"
+    summary+=("sph-bench np=$np $* rc=$?")
+  }
+  st 1 --spacing 0.006 --warmup 10 --steps 50
+  st 1 --spacing 0.006 --advance 0.32 --warmup 10 --steps 100
+  if ((ngpu > 1)); then
+    st 2 --spacing 0.0064 --warmup 10 --steps 50 --decomposition sfc
+    st 2 --spacing 0.0064 --warmup 10 --steps 50 --decomposition multisection
+    st 2 --spacing 0.006 --advance 0.32 --warmup 10 --steps 100 --decomposition "${SPHT_DECOMP:-multisection}"
+  fi
+  summary+=("$(python3 -c '
+import json, sys
+for line in open(sys.argv[1]):
+    j = json.loads(line)
+    ph = " ".join("%s=%.3f" % (k, v) for k, v in j.get("phases_max_s", j["phases_s"]).items())
+    print("ranks=%d" % j["ranks"], j.get("decomposition", ""), "adv=%.2f" % j["advance_s"], "n=%d" % j["n"], "%.2f ms/step" % j["ms_per_step"],
+          "%.3g p-s/s" % j["particle_steps_per_s"], "sorts=%d" % j["cell_sorts"], "max " + ph, j.get("owned_per_rank", ""))
+' "$OUT/sph_target.jsonl" 2>&1)")
 fi
 if [[ -s $OUT/bench.jsonl ]]; then
   summary+=("$(python3 - "$OUT/bench.jsonl" <<'PY'
