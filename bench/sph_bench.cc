@@ -196,6 +196,12 @@ int main(int argc, char** argv) {
       std::vector<long long> perRank(std::size_t(ranks), 0);
       MPI_Allgather(&owned, 1, MPI_LONG_LONG, perRank.data(), 1, MPI_LONG_LONG, MPI_COMM_WORLD);
       j["owned_per_rank"] = perRank;
+      // Rank 0's rebuilds, where their time went (MpiDomain::rebuildTimes), and its ghosts.
+      const auto& t = static_cast<const compute::MpiDomain&>(*so.domain).rebuildTimes();
+      j["rebuild_s"] = {{"rebuilds", t.rebuilds}, {"positions", t.positions}, {"weights", t.weights}, {"balance", t.balance},
+                        {"owners", t.owners}, {"migration", t.migration}, {"halo_rows", t.haloRows}, {"ghosts", t.ghosts}};
+      j["rebalances"] = static_cast<const compute::MpiDomain&>(*so.domain).rebalances();
+      j["ghosts"] = sim.engine().ghosts();
     }
     if (rank == 0) {
       std::printf("%s\n", j.dump().c_str());

@@ -1,6 +1,7 @@
 #include "compute/mpi/MpiDomain.h"
 
 #include <algorithm>
+#include <chrono>
 #include <climits>
 #include <cstring>
 #include <numeric>
@@ -13,6 +14,12 @@
 namespace pflow::compute {
 
 namespace {
+double secondsSince(std::chrono::steady_clock::time_point& mark) {
+  const auto now = std::chrono::steady_clock::now();
+  const double s = std::chrono::duration<double>(now - mark).count();
+  mark = now;
+  return s;
+}
 Vec3d cellCentre(const CellGrid& g, std::uint32_t c) {
   const std::uint32_t x = c % std::uint32_t(g.nx), y = (c / std::uint32_t(g.nx)) % std::uint32_t(g.ny),
                       z = c / (std::uint32_t(g.nx) * std::uint32_t(g.ny));
@@ -219,11 +226,15 @@ Status MpiDomain::migrate(DistributedRows& engine, double cost) {
   MPI_Allreduce(MPI_IN_PLACE, slots, 2, MPI_INT, MPI_MAX, m_comm);
   engine.ensureSlots(slots[0], slots[1]);
 
+  auto mark = std::chrono::steady_clock::now();
+  ++m_times.rebuilds;
   std::vector<Vec3d> pos = positions(engine);
   const std::size_t n = pos.size();
+  m_times.positions += secondsSince(mark);
   // Each particle's share of the rank's work (the engine's weights; all alike when it gives none).
   std::vector<double> weight = engine.costWeights();
   if (weight.size() != n) weight.assign(n, 1.0);
+  m_times.weights += secondsSince(mark);
   const double units = std::accumulate(weight.begin(), weight.end(), 0.0);
 
   // Cost per unit of weight (per particle where all weigh 1), smoothed over rebuilds; rebalance when the busiest
@@ -250,6 +261,7 @@ Status MpiDomain::migrate(DistributedRows& engine, double cost) {
     spdlog::debug("rank {}: rebalanced ({:.3f} > 1 + {:.3f})", m_rank, m_lastImbalance, m_options.tolerance);
   }
 
+  m_times.balance += secondsSince(mark);
   // Every particle to the owner of its cell now, however far it went since the last rebuild.
   std::vector<std::vector<Index>> leaving(static_cast<std::size_t>(m_size));
   std::vector<Index> stay;
@@ -259,6 +271,7 @@ Status MpiDomain::migrate(DistributedRows& engine, double cost) {
     if (owner == m_rank) stay.push_back(i);
     else leaving[std::size_t(owner)].push_back(i);
   }
+  m_times.owners += secondsSince(mark);
   std::vector<Index> rows;
   std::vector<int> counts, recvCounts;
   flatten(leaving, rows, counts);
@@ -270,6 +283,7 @@ Status MpiDomain::migrate(DistributedRows& engine, double cost) {
   long long owned = (long long)engine.size();
   m_ownedPerRank.assign(static_cast<std::size_t>(m_size), 0);
   MPI_Allgather(&owned, 1, MPI_LONG_LONG, m_ownedPerRank.data(), 1, MPI_LONG_LONG, m_comm);
+  m_times.migration += secondsSince(mark);
   return Status::ok();
 }
 
@@ -278,7 +292,9 @@ Status MpiDomain::exchangeGhosts(DistributedRows& engine) {
   // Each owned particle goes to every other rank that owns a cell within the grid's reach of its own. The set
   // depends on the cell only: worked out once per decomposition, when a cell is first met (most cells are
   // interior, with no other rank around them).
+  auto mark = std::chrono::steady_clock::now();
   const std::vector<Vec3d> pos = positions(engine);
+  m_times.positions += secondsSince(mark);
   std::vector<std::vector<Index>> to(static_cast<std::size_t>(m_size));
   std::uint32_t lastCell = ~0u;
   const std::int32_t* dest = nullptr;
@@ -294,8 +310,10 @@ Status MpiDomain::exchangeGhosts(DistributedRows& engine) {
   std::vector<Index> rows;
   flatten(to, rows, m_haloSend);
   engine.setHaloRows(rows, m_haloSend);
+  m_times.haloRows += secondsSince(mark);
   engine.packHalo(kGhost, m_out);
   engine.setGhosts(exchange(m_out, m_haloSend, engine.rowBytes(kGhost), m_haloRecv, false));
+  m_times.ghosts += secondsSince(mark);
   return Status::ok();
 }
 

@@ -68,6 +68,14 @@ class MpiDomain final : public Domain {
   int ownerOfCell(std::uint32_t cell) const { return m_cellOwner[cell]; }
   // Particles this rank has sent to others at rebuilds, in all.
   long long migratedOut() const { return m_migratedOut; }
+  // Where this rank's rebuilds spent their time [s], summed over rebuilds (host clock; the engine's device work
+  // inside is synchronous): positions and weights copied to the host, the balance (rebalance included), the owner
+  // of each particle, the migration (pack, messages, keep and append), the halo's rows and its first exchange.
+  struct RebuildTimes {
+    double positions = 0, weights = 0, balance = 0, owners = 0, migration = 0, haloRows = 0, ghosts = 0;
+    int rebuilds = 0;
+  };
+  const RebuildTimes& rebuildTimes() const { return m_times; }
 
  private:
   // Builds the decomposition from per-particle weights `w` of this rank's particles at `pos` (cell
@@ -111,6 +119,7 @@ class MpiDomain final : public Domain {
   std::vector<MPI_Request> m_requests;  // messages in flight (post .. complete)
   std::vector<PackedRows> m_blocks;     // where they land in m_in
   std::vector<PackedRows> m_arrived;    // awaitRefresh .. finishRefresh
+  RebuildTimes m_times;
 };
 
 // The ranks of `comm` that share this process's node (MPI_Comm_split_type, shared memory): this process's index
