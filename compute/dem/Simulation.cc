@@ -268,12 +268,13 @@ Status Simulation::initialise() {
 }
 
 Result<SimulationState> Simulation::state() const {
-  if (m_domain->ranks() > 1) return Status(StatusCode::kFailedPrecondition, "checkpoints of distributed runs are not written yet");
   if (!justRebuilt())
     return Status(StatusCode::kFailedPrecondition, "a checkpoint is taken just after a neighbour rebuild (step " +
                                                        std::to_string(m_rebuiltAt) + " was the last; this is " + std::to_string(m_step) + ")");
   SimulationState s;
-  s.particles = m_engine->stateArrays(m_step, m_time);
+  // Distributed: every rank's rows gathered to rank 0 in id order (the ranks' slot counts are equal after a rebuild;
+  // the other ranks' state has no particles).
+  s.particles = m_domain->gather(m_engine->stateArrays(m_step, m_time));
   s.contactSlots = m_engine->historySlots();
   s.wallSlots = m_engine->wallHistorySlots();
   s.step = m_step;
@@ -290,9 +291,19 @@ Result<SimulationState> Simulation::state() const {
 // a stable sort) and the lists come out the same; the forces are the run's (not recomputed), so the next step is
 // the run's own.
 Status Simulation::resume(const SimulationState& s) {
-  if (m_domain->ranks() > 1) return Status(StatusCode::kFailedPrecondition, "resuming a distributed run is not supported yet");
   try {
-    PFLOW_RETURN_IF_ERROR(m_engine->loadState(s.particles, s.contactSlots, s.wallSlots));
+    if (m_domain->ranks() > 1) {
+      // Rank 0's state to every rank, split as a new run's scene is, each rank keeping its share.
+      ParticleSnapshot all = s.particles;
+      m_domain->broadcast(all);
+      const SnapshotArray* x = all.find("position");
+      if (!x) return Status(StatusCode::kInvalidArgument, "the state has no position");
+      std::vector<std::size_t> mine;
+      PFLOW_RETURN_IF_ERROR(m_domain->partitionPoints(m_grid, std::vector<Vec3d>(x->as<Vec3d>(), x->as<Vec3d>() + all.n), mine));
+      PFLOW_RETURN_IF_ERROR(m_domain->agree(m_engine->loadState(keepSnapshotRows(all, mine), s.contactSlots, s.wallSlots)));
+    } else {
+      PFLOW_RETURN_IF_ERROR(m_engine->loadState(s.particles, s.contactSlots, s.wallSlots));
+    }
     m_step = s.step;
     m_stepBase = s.stepBase;
     m_time = s.time;

@@ -47,9 +47,10 @@ class Simulation {
   Status runUntil(double time, const std::function<Status(const Simulation&)>& observer = {});
   Status runSteps(std::int64_t steps);
 
-  // File checkpoints. justRebuilt(): the last step ended with a neighbour rebuild, where state() may be taken
-  // (one process; distributed runs are not checkpointed yet). resume(): this run, created from the same scene,
-  // goes on from `s` as the run it came from did; call scheduleOutput afterwards.
+  // File checkpoints. justRebuilt(): the last step ended with a neighbour rebuild, where state() may be taken.
+  // resume(): this run, created from the same scene, goes on from `s` as the run it came from did; call
+  // scheduleOutput afterwards. Distributed runs: both are collective; state() gathers the rows to rank 0 (in id
+  // order), resume() reads them from rank 0's argument and splits them over this run's ranks, whatever their number.
   bool justRebuilt() const { return m_rebuiltAt == m_step; }
   Result<SimulationState> state() const;
   Status resume(const SimulationState& s);

@@ -3,9 +3,12 @@
 #include <algorithm>
 #include <chrono>
 #include <climits>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <numeric>
 #include <stdexcept>
+#include <string>
 
 #include "common/Log.h"
 #include "compute/dem/ParticleFields.h"
@@ -393,6 +396,42 @@ ParticleSnapshot MpiDomain::gather(ParticleSnapshot local) {
     a.data = std::move(sorted);
   }
   return all;
+}
+
+void MpiDomain::broadcast(ParticleSnapshot& s) {
+  // The shape first (rows, step, time, and per array its name, type, components and unit), then the data in messages
+  // of at most 1 GiB.
+  std::string shape;
+  if (m_rank == 0) {
+    shape = std::to_string(s.n) + "\n" + std::to_string(s.step) + "\n";
+    char t[32];
+    std::snprintf(t, sizeof t, "%a", s.time);
+    shape += std::string(t) + "\n";
+    for (const SnapshotArray& a : s.arrays)
+      shape += a.name + "\n" + std::to_string(int(a.type)) + "\n" + std::to_string(a.components) + "\n" + a.unit + "\n";
+  }
+  long long length = (long long)shape.size();
+  MPI_Bcast(&length, 1, MPI_LONG_LONG, 0, m_comm);
+  shape.resize(std::size_t(length));
+  MPI_Bcast(shape.data(), int(length), MPI_CHAR, 0, m_comm);
+  if (m_rank != 0) {
+    std::vector<std::string> lines;
+    std::size_t at = 0;
+    for (std::size_t nl; (nl = shape.find('\n', at)) != std::string::npos; at = nl + 1) lines.push_back(shape.substr(at, nl - at));
+    s = ParticleSnapshot{};
+    s.n = std::size_t(std::stoull(lines[0]));
+    s.step = std::stoll(lines[1]);
+    s.time = std::strtod(lines[2].c_str(), nullptr);
+    for (std::size_t k = 3; k + 3 < lines.size(); k += 4) {  // name, type, components, unit (maybe empty)
+      SnapshotArray a{lines[k], ScalarType(std::stoi(lines[k + 1])), std::stoi(lines[k + 2]), lines[k + 3], {}};
+      a.data.resize(s.n * std::size_t(a.components) * scalarBytesOf(a.type));
+      s.arrays.push_back(std::move(a));
+    }
+  }
+  constexpr std::size_t kChunk = std::size_t(1) << 30;
+  for (SnapshotArray& a : s.arrays)
+    for (std::size_t at = 0; at < a.data.size(); at += kChunk)
+      MPI_Bcast(a.data.data() + at, int(std::min(kChunk, a.data.size() - at)), MPI_BYTE, 0, m_comm);
 }
 
 NodeRanks nodeRanks(MPI_Comm comm) {

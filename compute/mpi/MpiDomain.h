@@ -56,6 +56,7 @@ class MpiDomain final : public Domain {
   Status finishRefresh(DistributedRows& engine) override;
   Status agree(Status local) override;
   ParticleSnapshot gather(ParticleSnapshot local) override;
+  void broadcast(ParticleSnapshot& s) override;
   double sum(double local) override;
   double max(double local) override;
   void sum(std::vector<double>& values) override;

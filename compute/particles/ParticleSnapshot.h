@@ -43,6 +43,9 @@ struct ParticleSnapshot {
   }
 };
 
+// Rows `rows` of every array of s, in that order (a rank's share of a whole state: SimulationState on resume).
+ParticleSnapshot keepSnapshotRows(const ParticleSnapshot& s, const std::vector<std::size_t>& rows);
+
 // Wall geometry at one instant, for output (all meshes concatenated, planes separately).
 struct GeometrySnapshot {
   std::vector<Vec3d> vertices;                 // [m]

@@ -102,7 +102,8 @@ class SphEngine : public DistributedRows {
   // Checkpoints (SphSimulation::state, resume): the owned rows' kMigrate and kCheckpoint fields, row-major
   // (FieldRows::stateArrays), and their load into an engine of either executor.
   virtual ParticleSnapshot stateArrays(std::int64_t step, double time) const = 0;
-  virtual Status loadState(const ParticleSnapshot& s) = 0;
+  // `costWeight`: the rows' balance weights until the first sort (a distributed resume's partition's; empty: one process).
+  virtual Status loadState(const ParticleSnapshot& s, std::vector<double> costWeight = {}) = 0;
 
   virtual SphProbeState probe(Index i) const = 0;
   virtual std::size_t deviceBytes() const = 0;

@@ -181,7 +181,9 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
   ParticleSnapshot stateArrays(std::int64_t step, double time) const override {
     return m_rows.stateArrays(step, time, m_owned, kMigrate | kCheckpoint);
   }
-  Status loadState(const ParticleSnapshot& s) override {
+  Status loadState(const ParticleSnapshot& s, std::vector<double> costWeight = {}) override {
+    m_setup.costWeight = std::move(costWeight);
+    m_sorted = false;
     m_fields.allocate(std::max<Index>(Index(s.n), 1), 0, 0, false);
     m_n = m_owned = Index(s.n);
     Status st = m_rows.loadState(s, kMigrate | kCheckpoint);

@@ -149,12 +149,12 @@ void SphSimulation::scheduleOutput(double interval, double end) {
 }
 
 Result<SimulationState> SphSimulation::state() const {
-  if (m_domain->ranks() > 1) return Status(StatusCode::kFailedPrecondition, "checkpoints of distributed runs are not written yet");
   if (!justRebuilt())
     return Status(StatusCode::kFailedPrecondition, "a checkpoint is taken just after a cell sort (step " + std::to_string(m_rebuiltAt) +
                                                        " was the last; this is " + std::to_string(m_step) + ")");
   SimulationState s;
-  s.particles = m_engine->stateArrays(m_step, m_time);
+  // Distributed: every rank's rows gathered to rank 0 in id order (the other ranks' state has no particles).
+  s.particles = m_domain->gather(m_engine->stateArrays(m_step, m_time));
   s.step = m_step;
   s.rebuilds = m_rebuilds;
   s.time = m_time;
@@ -166,9 +166,24 @@ Result<SimulationState> SphSimulation::state() const {
 // The rows as the run's sort at s.step left them: sorting them again keeps their order, and the rates are the run's
 // (not recomputed), so the next step is the run's own.
 Status SphSimulation::resume(const SimulationState& s) {
-  if (m_domain->ranks() > 1) return Status(StatusCode::kFailedPrecondition, "resuming a distributed run is not supported yet");
   try {
-    PFLOW_TRY(m_engine->loadState(s.particles));
+    if (m_domain->ranks() > 1) {
+      // Rank 0's state to every rank, split as a new run's scene is (by expected work), each rank keeping its share.
+      ParticleSnapshot all = s.particles;
+      m_domain->broadcast(all);
+      const SnapshotArray* x = all.find("position");
+      const SnapshotArray* kind = all.find("kind");
+      if (!x || !kind) return Status(StatusCode::kInvalidArgument, "the state has no position or kind");
+      const std::vector<Vec3d> pos(x->as<Vec3d>(), x->as<Vec3d>() + all.n);
+      const std::vector<std::int32_t> kinds(kind->as<std::int32_t>(), kind->as<std::int32_t>() + all.n);
+      std::vector<double> weight = sphCostWeights(m_grid, pos, kinds);
+      std::vector<std::size_t> mine;
+      PFLOW_TRY(m_domain->partitionPoints(m_grid, pos, mine, weight));
+      keepRows(weight, mine);
+      PFLOW_TRY(m_domain->agree(m_engine->loadState(keepSnapshotRows(all, mine), std::move(weight))));
+    } else {
+      PFLOW_TRY(m_engine->loadState(s.particles));
+    }
     m_step = s.step;
     m_time = s.time;
     m_dt = s.dt;

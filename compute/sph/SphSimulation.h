@@ -42,8 +42,9 @@ class SphSimulation {
   Status runSteps(std::int64_t steps);
 
   // Checkpoints (docs/operations.md), as DEM's Simulation: justRebuilt() after a step that ended with a cell
-  // sort, where state() may be taken (one process); resume() goes on from it in a run created from the same
-  // scene (then scheduleOutput).
+  // sort, where state() may be taken; resume() goes on from it in a run created from the same scene (then
+  // scheduleOutput). Distributed runs: both are collective; state() gathers the rows to rank 0 (in id order),
+  // resume() reads them from rank 0's argument and splits them over this run's ranks, whatever their number.
   bool justRebuilt() const { return m_rebuiltAt == m_step; }
   Result<SimulationState> state() const;
   Status resume(const SimulationState& s);
