@@ -7,6 +7,7 @@
 
 #include "compute/dem/Simulation.h"
 #include "compute/sph/SphSimulation.h"
+#include "tests/support/CheckpointTest.h"
 #include "tests/support/SphScenes.h"
 #include "tests/support/TestScenes.h"
 
@@ -15,24 +16,10 @@ using namespace pflow::compute;
 
 namespace {
 
-// Every array of the snapshot by particle id, as bytes.
-std::map<Gid, std::vector<std::byte>> byId(const ParticleSnapshot& s, const std::string& field) {
-  std::map<Gid, std::vector<std::byte>> out;
-  const SnapshotArray* a = s.find(field);
-  EXPECT_NE(a, nullptr) << field;
-  if (!a) return out;
-  const std::size_t each = a->data.size() / std::max<std::size_t>(1, s.n);
-  const Gid* id = s.find("id")->as<Gid>();
-  for (std::size_t i = 0; i < s.n; ++i) out[id[i]].assign(a->data.begin() + i * each, a->data.begin() + (i + 1) * each);
-  return out;
-}
-
 void expectSameState(const Simulation& a, const Simulation& b) {
   EXPECT_EQ(a.stepCount(), b.stepCount());
   EXPECT_EQ(a.time(), b.time());
-  const ParticleSnapshot sa = a.snapshot(), sb = b.snapshot();
-  for (const char* f : {"position", "velocity", "angular_velocity", "force"})
-    EXPECT_TRUE(byId(sa, f) == byId(sb, f)) << f << " differs";
+  test::expectSameArrays(a.snapshot(), b.snapshot(), {"position", "velocity", "angular_velocity", "force"});
 }
 
 std::unique_ptr<Simulation> make(const RunConfig& c, SimulationOptions o = {}) {
@@ -54,18 +41,14 @@ TEST(Checkpoint, ResumedDemRunIsBitIdentical) {
     auto straight = make(c, o), first = make(c, o), resumed = make(c, o);
     ASSERT_TRUE(straight && first && resumed);
     ASSERT_TRUE(straight->runSteps(2000).isOk());
-    ASSERT_TRUE(first->runSteps(800).isOk());
-    while (!first->justRebuilt()) ASSERT_TRUE(first->runSteps(1).isOk());
-    auto state = first->state();
-    ASSERT_TRUE(state.isOk()) << state.status().message();
-    EXPECT_GT(state.value().step, 800);
-    EXPECT_GT(state.value().contactSlots, 0);
-    ASSERT_TRUE(resumed->resume(state.value()).isOk());
-    EXPECT_EQ(resumed->stepCount(), state.value().step);
-    ASSERT_TRUE(resumed->runSteps(2000 - resumed->stepCount()).isOk());
+    const auto state = test::checkpointAfter(*first, 800);
+    ASSERT_TRUE(state);
+    EXPECT_GT(state->step, 800);
+    EXPECT_GT(state->contactSlots, 0);
+    ASSERT_TRUE(test::resumeTo(*resumed, *state, 2000));
     expectSameState(*straight, *resumed);
     EXPECT_EQ(straight->rebuilds(), resumed->rebuilds());
-    std::printf("checkpoint at step %lld; to step 2000 (t = %.3g s): %lld rebuilds, %zu histories\n", (long long)state.value().step,
+    std::printf("checkpoint at step %lld; to step 2000 (t = %.3g s): %lld rebuilds, %zu histories\n", (long long)state->step,
                 straight->time(), (long long)straight->rebuilds(), straight->contactStats().historyEntries);
   }
 }
@@ -97,18 +80,14 @@ TEST(Checkpoint, ResumedSphRunIsBitIdentical) {
     auto straight = make(), first = make(), resumed = make();
     ASSERT_TRUE(straight && first && resumed);
     ASSERT_TRUE(straight->runSteps(900).isOk());
-    ASSERT_TRUE(first->runSteps(300).isOk());
-    while (!first->justRebuilt()) ASSERT_TRUE(first->runSteps(1).isOk());
-    auto state = first->state();
-    ASSERT_TRUE(state.isOk()) << state.status().message();
-    ASSERT_LT(state.value().step, 900);
-    ASSERT_TRUE(resumed->resume(state.value()).isOk());
-    ASSERT_TRUE(resumed->runSteps(900 - resumed->stepCount()).isOk());
+    const auto state = test::checkpointAfter(*first, 300);
+    ASSERT_TRUE(state);
+    ASSERT_LT(state->step, 900);
+    ASSERT_TRUE(test::resumeTo(*resumed, *state, 900));
     EXPECT_EQ(straight->time(), resumed->time());
     EXPECT_EQ(straight->rebuilds(), resumed->rebuilds());
-    const ParticleSnapshot a = straight->snapshot(), b = resumed->snapshot();
-    for (const char* f : {"position", "velocity", "density", "pressure"}) EXPECT_TRUE(byId(a, f) == byId(b, f)) << f << " differs";
-    std::printf("SPH checkpoint at step %lld, to step 900 (t = %.4g s): %lld cell sorts\n", (long long)state.value().step,
+    test::expectSameArrays(straight->snapshot(), resumed->snapshot(), {"position", "velocity", "density", "pressure"});
+    std::printf("SPH checkpoint at step %lld, to step 900 (t = %.4g s): %lld cell sorts\n", (long long)state->step,
                 straight->time(), (long long)straight->rebuilds());
   }
 }

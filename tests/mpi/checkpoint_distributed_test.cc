@@ -6,12 +6,12 @@
 #include <gtest/gtest.h>
 #include <mpi.h>
 
-#include <map>
 #include <memory>
 
 #include "compute/dem/Simulation.h"
 #include "compute/mpi/MpiDomain.h"
 #include "compute/sph/SphSimulation.h"
+#include "tests/support/CheckpointTest.h"
 #include "tests/support/MpiTest.h"
 #include "tests/support/SphScenes.h"
 #include "tests/support/TestScenes.h"
@@ -25,26 +25,6 @@ int worldRank() {
   int r;
   MPI_Comm_rank(MPI_COMM_WORLD, &r);
   return r;
-}
-
-// The named arrays of a (gathered) snapshot by particle id, as bytes.
-std::map<Gid, std::vector<std::byte>> byId(const ParticleSnapshot& s, const char* field) {
-  std::map<Gid, std::vector<std::byte>> out;
-  const compute::SnapshotArray* a = s.find(field);
-  if (!a || !s.find("id")) return out;
-  const std::size_t each = a->data.size() / std::max<std::size_t>(1, s.n);
-  const Gid* id = s.find("id")->as<Gid>();
-  for (std::size_t i = 0; i < s.n; ++i) out[id[i]].assign(a->data.begin() + i * each, a->data.begin() + (i + 1) * each);
-  return out;
-}
-
-void expectSame(const ParticleSnapshot& a, const ParticleSnapshot& b, std::initializer_list<const char*> fields, const char* what) {
-  ASSERT_EQ(a.n, b.n) << what;
-  for (const char* f : fields) {
-    const auto fa = byId(a, f), fb = byId(b, f);
-    EXPECT_FALSE(fa.empty()) << what << ": " << f;
-    EXPECT_TRUE(fa == fb) << what << ": " << f << " differs";
-  }
 }
 
 std::shared_ptr<compute::MpiDomain> domain() {
@@ -73,25 +53,19 @@ TEST(CheckpointDistributed, SphResumedOnTheRanksAndInOneProcess) {
     auto straight = make(true), first = make(true), resumed = make(true);
     ASSERT_TRUE(straight && first && resumed);
     ASSERT_TRUE(straight->runSteps(900).isOk());
-    ASSERT_TRUE(first->runSteps(300).isOk());
-    while (!first->justRebuilt()) ASSERT_TRUE(first->runSteps(1).isOk());
-    auto state = first->state();
-    ASSERT_TRUE(state.isOk()) << state.status().message();
-    ASSERT_TRUE(resumed->resume(state.value()).isOk());
-    EXPECT_EQ(resumed->stepCount(), state.value().step);
-    ASSERT_TRUE(resumed->runSteps(900 - resumed->stepCount()).isOk());
+    const auto state = checkpointAfter(*first, 300);
+    ASSERT_TRUE(state);
+    ASSERT_TRUE(resumeTo(*resumed, *state, 900));
     const std::vector<std::string> fields = {"id", "position", "velocity", "density", "pressure"};
     const ParticleSnapshot a = straight->snapshot(fields), b = resumed->snapshot(fields);
     if (worldRank() == 0) {
-      expectSame(a, b, {"position", "velocity", "density", "pressure"}, "resumed on the ranks");
+      expectSameArrays(a, b, {"position", "velocity", "density", "pressure"}, "resumed on the ranks");
       // Another rank count: one process resumes rank 0's state.
       auto one = make(false);
-      ASSERT_TRUE(one);
-      ASSERT_TRUE(one->resume(state.value()).isOk());
-      ASSERT_TRUE(one->runSteps(900 - one->stepCount()).isOk());
-      expectSame(a, one->snapshot(fields), {"position", "velocity", "density", "pressure"}, "resumed in one process");
+      ASSERT_TRUE(one && resumeTo(*one, *state, 900));
+      expectSameArrays(a, one->snapshot(fields), {"position", "velocity", "density", "pressure"}, "resumed in one process");
       std::printf("SPH %s: checkpoint at step %lld of %zu particles, resumed to step 900\n", compute::sph::integratorName(integrator),
-                  (long long)state.value().step, state.value().particles.n);
+                  (long long)state->step, state->particles.n);
     }
   }
 }
@@ -113,23 +87,18 @@ TEST(CheckpointDistributed, DemResumedOnTheRanksAndInOneProcess) {
   auto straight = make(true), first = make(true), resumed = make(true);
   ASSERT_TRUE(straight && first && resumed);
   ASSERT_TRUE(straight->runSteps(2000).isOk());
-  ASSERT_TRUE(first->runSteps(800).isOk());
-  while (!first->justRebuilt()) ASSERT_TRUE(first->runSteps(1).isOk());
-  auto state = first->state();
-  ASSERT_TRUE(state.isOk()) << state.status().message();
-  ASSERT_TRUE(resumed->resume(state.value()).isOk());
-  ASSERT_TRUE(resumed->runSteps(2000 - resumed->stepCount()).isOk());
+  const auto state = checkpointAfter(*first, 800);
+  ASSERT_TRUE(state);
+  ASSERT_TRUE(resumeTo(*resumed, *state, 2000));
   const ParticleSnapshot a = straight->snapshot(), b = resumed->snapshot();
   if (worldRank() == 0) {
-    EXPECT_GT(state.value().contactSlots, 0);
-    expectSame(a, b, {"position", "velocity", "angular_velocity", "force"}, "resumed on the ranks");
+    EXPECT_GT(state->contactSlots, 0);
+    expectSameArrays(a, b, {"position", "velocity", "angular_velocity", "force"}, "resumed on the ranks");
     auto one = make(false);
-    ASSERT_TRUE(one);
-    ASSERT_TRUE(one->resume(state.value()).isOk());
-    ASSERT_TRUE(one->runSteps(2000 - one->stepCount()).isOk());
-    expectSame(a, one->snapshot(), {"position", "velocity", "angular_velocity", "force"}, "resumed in one process");
-    std::printf("DEM: checkpoint at step %lld of %zu particles (%d history slots), resumed to step 2000\n", (long long)state.value().step,
-                state.value().particles.n, state.value().contactSlots);
+    ASSERT_TRUE(one && resumeTo(*one, *state, 2000));
+    expectSameArrays(a, one->snapshot(), {"position", "velocity", "angular_velocity", "force"}, "resumed in one process");
+    std::printf("DEM: checkpoint at step %lld of %zu particles (%d history slots), resumed to step 2000\n", (long long)state->step,
+                state->particles.n, state->contactSlots);
   }
 }
 
