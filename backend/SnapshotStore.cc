@@ -206,14 +206,38 @@ Result<std::shared_ptr<SnapshotStore::Job>> SnapshotStore::job(const std::string
     j = it->second;
   }
   lock = std::unique_lock(j->mutex);
+  j->lastUse = ++m_uses;
   if (!j->writer) {
     std::error_code ec;
     if (mode != JobMode::kCreate && !fs::exists(path, ec)) return j;  // known (an ingest runs) but nothing stored
     auto writer = SnapshotWriter::openOrCreate(path);
     if (!writer) return writer.status();
     j->writer = std::move(writer.value());
+    j->open = true;
+    closeIdleFiles(j.get());
   }
   return j;
+}
+
+void SnapshotStore::closeIdleFiles(const Job* keep) {
+  std::vector<std::shared_ptr<Job>> open;
+  {
+    std::lock_guard guard(m_mutex);
+    for (const auto& [id, j] : m_jobs)
+      if (j->open && j.get() != keep) open.push_back(j);
+  }
+  const std::size_t most = std::max<std::size_t>(1, m_options.maxOpenJobFiles);
+  if (open.size() + 1 <= most) return;
+  std::sort(open.begin(), open.end(), [](const auto& a, const auto& b) { return a->lastUse < b->lastUse; });
+  std::size_t count = open.size() + 1;
+  for (const auto& j : open) {
+    if (count <= most) break;
+    std::unique_lock lock(j->mutex, std::try_to_lock);  // a job in use now is skipped (never waited for: we hold `keep`)
+    if (!lock || !j->writer || !j->receiving.empty()) continue;
+    j->writer.reset();
+    j->open = false;
+    --count;
+  }
 }
 
 void SnapshotStore::release(const std::string& jobId, std::int64_t step) {

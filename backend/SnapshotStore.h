@@ -13,6 +13,7 @@
 // Reading: openRead returns a cursor that reads one piece (<= 1 MiB, a hyperslab of one array) per next().
 // Thread safety: every method may be called from any thread; calls for one job are serialized.
 #pragma once
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -32,6 +33,10 @@ namespace pflow::backend {
 struct StoreOptions {
   std::string dataDir;
   double gridCellSize = 0;  // m; 0 = 4 x the largest particle radius of each snapshot
+  // Job files kept open at once (each an HDF5 file: a descriptor or more); beyond it the least recently used idle
+  // one is closed (and opened again when its job is next written or listed). Bounds the back-end's descriptors
+  // however many jobs it has stored.
+  std::size_t maxOpenJobFiles = 64;
 };
 
 struct SnapshotInfo {
@@ -124,8 +129,10 @@ class SnapshotStore {
  private:
   struct Job {
     std::mutex mutex;
-    std::unique_ptr<SnapshotWriter> writer;  // opened on first use, kept open
+    std::unique_ptr<SnapshotWriter> writer;  // opened on first use, kept open while among the recently used
     std::set<std::int64_t> receiving;        // steps being ingested
+    std::atomic<bool> open{false};           // writer is set (read without the job's lock: closeIdleFiles)
+    std::atomic<std::uint64_t> lastUse{0};   // the store's use count at this job's last use
   };
   explicit SnapshotStore(StoreOptions options) : m_options(std::move(options)) {}
   // The job's state, its mutex locked into `lock`. kExisting: NOT_FOUND when the job has no file; kReserve: the
@@ -134,11 +141,15 @@ class SnapshotStore {
   Result<std::shared_ptr<Job>> job(const std::string& jobId, JobMode mode, std::unique_lock<std::mutex>& lock);
   Result<std::optional<GridFields>> computeGrid(SnapshotStaging& staging) const;
   void release(const std::string& jobId, std::int64_t step);
+  // Closes the least recently used idle job files (not `keep`, not locked, nothing being received) until at most
+  // maxOpenJobFiles are open.
+  void closeIdleFiles(const Job* keep);
 
   StoreOptions m_options;
   std::mutex m_mutex;  // m_jobs, m_serial
   std::map<std::string, std::shared_ptr<Job>> m_jobs;
   std::uint64_t m_serial = 0;
+  std::atomic<std::uint64_t> m_uses{0};
 };
 
 // OK when jobId is 1..128 characters of [A-Za-z0-9._-], not starting with '.' (no path separators).

@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   std::string listen = "127.0.0.1:50053";
   std::string dataDir = "pflow-data";
   double cellSize = 0;
+  std::size_t maxOpen = 64;
   std::string portFile;
   std::string level = "info";
   app.add_option("--listen", listen, "HOST:PORT to serve on (port 0 picks a free one)")->capture_default_str();
@@ -29,12 +30,15 @@ int main(int argc, char** argv) {
   app.add_option("--grid-cell-size", cellSize, "grid cell size [m]; 0 = 4 x the largest particle radius of each snapshot")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--max-open-files", maxOpen, "job files kept open at once (the least recently used idle one is closed beyond it)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   app.add_option("--port-file", portFile, "write the bound port to this file once serving");
   app.add_option("--log-level", level, "trace, debug, info, warn, error")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   pflow::log::init("pflow-backend", level);
 
-  auto store = pflow::backend::SnapshotStore::open({dataDir, cellSize});
+  auto store = pflow::backend::SnapshotStore::open({dataDir, cellSize, maxOpen});
   if (!store) {
     spdlog::error("{}", store.status().toString());
     return 1;

@@ -281,6 +281,43 @@ TEST_F(StoreTest, AbortAndFailedCommitLeaveNothing) {
   EXPECT_EQ(listing->snapshots.size(), 1u);
 }
 
+std::size_t openDescriptors() {
+  std::size_t n = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator("/proc/self/fd")) ++n;
+  return n;
+}
+
+// Job files are closed once more than StoreOptions::maxOpenJobFiles are open (the least recently used first) and
+// opened again on demand: over 2,000 jobs the back-end's descriptors stay bounded (it ran out after about a
+// thousand jobs when every job file stayed open), and every job is still listed and read back.
+TEST_F(StoreTest, OpenJobFilesStayBoundedOverManyJobs) {
+  st.reset();
+  StoreOptions o{dir.string(), 0.0};
+  o.maxOpenJobFiles = 8;
+  auto opened = SnapshotStore::open(o);
+  ASSERT_TRUE(opened) << opened.status().toString();
+  st = std::move(opened.value());
+  const ParticleSnapshot s = makeSnapshot(1, 4);
+  const std::size_t before = openDescriptors();
+  std::size_t most = before;
+  constexpr int kJobs = 2000;
+  for (int k = 0; k < kJobs; ++k) {
+    auto r = store(*st, "job" + std::to_string(k), s);
+    ASSERT_TRUE(r) << k << ": " << r.status().toString();
+    most = std::max(most, openDescriptors());
+  }
+  EXPECT_LE(most, before + 8 + 2) << "descriptors grew from " << before << " to " << most;
+  for (int k : {0, 1, 977, kJobs - 1}) {  // closed long ago or just now: listed and read back alike
+    auto l = st->list("job" + std::to_string(k));
+    ASSERT_TRUE(l) << l.status().toString();
+    EXPECT_EQ(l.value().snapshots.size(), 1u);
+    auto rb = readBack(*st, "job" + std::to_string(k), {});
+    ASSERT_TRUE(rb) << rb.status().toString();
+    EXPECT_EQ(rb.value().particles["position"], bytesOf(*s.find("position")));
+  }
+  EXPECT_LE(openDescriptors(), before + 8 + 2);
+}
+
 TEST_F(StoreTest, BadInputs) {
   const auto s = makeSnapshot(3, 10);
   for (const char* bad : {"", "../x", "a/b", ".hidden", "a b"})
