@@ -2,6 +2,8 @@
 
 #include "backend/BackendClient.h"
 #include "backend/store/SnapshotFile.h"
+#include "compute/worker/SpoolingSink.h"
+#include "compute/worker/WorkerOptions.h"
 
 namespace pflow::worker {
 
@@ -48,8 +50,12 @@ class BackendSink final : public SnapshotSink {
 
 }  // namespace
 
-Result<std::unique_ptr<SnapshotSink>> makeBackendSink(const std::string& address, const std::string& jobId) {
-  return std::unique_ptr<SnapshotSink>(new BackendSink(backend::makeGrpcBackendClient(address), jobId));
+Result<std::unique_ptr<SnapshotSink>> makeBackendSink(const WorkerOptions& o) {
+  SpoolOptions spool;
+  spool.maxBytes = std::uint64_t(o.spoolBytes);
+  spool.closeWait = std::chrono::milliseconds(std::int64_t(1e3 * o.spoolCloseWait));
+  return std::unique_ptr<SnapshotSink>(
+      new SpoolingSink(std::make_unique<BackendSink>(backend::makeGrpcBackendClient(o.backendAddress), o.jobId), std::move(spool)));
 }
 
 Result<std::unique_ptr<SnapshotSink>> makeFileSink(const std::string& h5Path) {

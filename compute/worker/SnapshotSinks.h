@@ -20,6 +20,8 @@ class SnapshotSink {
 };
 
 Result<std::unique_ptr<SnapshotSink>> makeFileSink(const std::string& h5Path);
-Result<std::unique_ptr<SnapshotSink>> makeBackendSink(const std::string& address, const std::string& jobId);
+// Snapshots to the back-end at `address`, through a SpoolingSink (SpoolingSink.h) of the worker's spool options.
+struct WorkerOptions;
+Result<std::unique_ptr<SnapshotSink>> makeBackendSink(const WorkerOptions& o);
 
 }  // namespace pflow::worker

@@ -59,7 +59,7 @@ int runSphRank(const WorkerOptions& o, int rank, int ranks, const frontend::Load
   std::unique_ptr<SnapshotSink> sink;
   Status opened;
   if (lead) {
-    auto made = o.backendAddress.empty() ? makeFileSink(o.output) : makeBackendSink(o.backendAddress, o.jobId);
+    auto made = o.backendAddress.empty() ? makeFileSink(o.output) : makeBackendSink(o);
     if (made) sink = std::move(made).value();
     else opened = made.status();
     if (opened.isOk()) opened = sink->writeGeometry({});

@@ -2,6 +2,7 @@
 //   pflow-worker --job-id ID --model DIR --manager HOST:PORT --backend HOST:PORT --devices node:kind:index,...
 // One MPI rank per leased device; rank r uses the r-th entry of --devices.
 #pragma once
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -24,6 +25,10 @@ struct WorkerOptions {
   std::vector<LeasedDevice> devices;
   double progressInterval = 1.0;  // [s] wall clock between progress reports
   int threads = 0;               // OpenMP threads per rank; 0 = all cores / ranks on this node
+  // Output the back-end could not take yet, kept in order (SpoolingSink): at most this many bytes before output
+  // pauses; at the end, how long to wait for the back-end before the job fails.
+  double spoolBytes = double(std::uint64_t(1) << 30);
+  double spoolCloseWait = 600;  // [s]
 };
 
 // "node:gpu:0,node:cpu:1" -> devices; errors name the entry.

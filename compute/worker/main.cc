@@ -89,7 +89,7 @@ int runRank(const worker::WorkerOptions& o, int rank, int ranks) {
   std::unique_ptr<worker::SnapshotSink> sink;
   Status opened;
   if (lead) {
-    auto made = o.backendAddress.empty() ? worker::makeFileSink(o.output) : worker::makeBackendSink(o.backendAddress, o.jobId);
+    auto made = o.backendAddress.empty() ? worker::makeFileSink(o.output) : worker::makeBackendSink(o);
     if (made) sink = std::move(made).value();
     else opened = made.status();
     if (opened.isOk()) opened = sink->writeGeometry(sim.geometry());
@@ -166,6 +166,12 @@ int main(int argc, char** argv) {
   app.add_option("--devices", devices, "leased devices in rank order: node:gpu|cpu:index,...")->required();
   app.add_option("--progress-interval", o.progressInterval, "seconds between progress reports")->capture_default_str();
   app.add_option("--threads", o.threads, "OpenMP threads per rank (0: all)");
+  app.add_option("--spool-bytes", o.spoolBytes, "output kept while the back-end is away before output pauses [bytes]")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--spool-wait", o.spoolCloseWait, "at the end, seconds to wait for the back-end to take the spool")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--log-level", logLevel, "trace, debug, info, warn, error")->capture_default_str();
   try {
     app.parse(argc, argv);
