@@ -2,6 +2,7 @@
 #include "backend/SnapshotStore.h"
 
 #include <spdlog/spdlog.h>
+#include <sys/statvfs.h>
 
 #include <algorithm>
 #include <cmath>
@@ -166,6 +167,12 @@ Status validateJobId(const std::string& jobId) {
   return Status::ok();
 }
 
+static std::uint64_t fileSystemFreeBytes(const std::string& folder) {
+  struct statvfs v {};
+  if (::statvfs(folder.c_str(), &v) != 0) return std::numeric_limits<std::uint64_t>::max();  // unknown: not refused here
+  return std::uint64_t(v.f_bavail) * std::uint64_t(v.f_frsize);
+}
+
 Result<std::unique_ptr<SnapshotStore>> SnapshotStore::open(const StoreOptions& options) {
   if (options.dataDir.empty()) return invalidArgument("data directory is empty");
   if (!std::isfinite(options.gridCellSize) || options.gridCellSize < 0)
@@ -180,7 +187,9 @@ Result<std::unique_ptr<SnapshotStore>> SnapshotStore::open(const StoreOptions& o
     if (fs::remove(entry.path(), rm)) ++removed;
   }
   if (removed > 0) spdlog::info("removed {} scratch file(s) of unfinished ingests in {}", removed, scratch.string());
-  return std::unique_ptr<SnapshotStore>(new SnapshotStore(options));
+  StoreOptions o = options;
+  if (!o.freeBytes) o.freeBytes = fileSystemFreeBytes;
+  return std::unique_ptr<SnapshotStore>(new SnapshotStore(std::move(o)));
 }
 
 SnapshotStore::~SnapshotStore() = default;
@@ -240,6 +249,19 @@ void SnapshotStore::closeIdleFiles(const Job* keep) {
   }
 }
 
+static std::string mib(std::uint64_t bytes) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.1f MiB", double(bytes) / double(1 << 20));
+  return b;
+}
+
+Status SnapshotStore::fullDiskOr(Status st) const {
+  if (st.code() != StatusCode::kIo) return st;
+  const std::uint64_t free = m_options.freeBytes(m_options.dataDir);
+  if (free >= m_options.reserveBytes) return st;
+  return Status(StatusCode::kResourceExhausted, "the disk holding " + m_options.dataDir + " is full (" + mib(free) + " free): " + st.message());
+}
+
 void SnapshotStore::release(const std::string& jobId, std::int64_t step) {
   std::shared_ptr<Job> j;
   {
@@ -281,7 +303,7 @@ Result<std::unique_ptr<SnapshotStore::Ingest>> SnapshotStore::beginSnapshot(cons
   first.time = time;
   first.particles = particles;
   auto assembler = ChunkAssembler::create(scratch, first);
-  if (!assembler) return assembler.status();
+  if (!assembler) return fullDiskOr(assembler.status());
   jb.receiving.insert(step);
   auto ingest = std::unique_ptr<Ingest>(new Ingest());
   ingest->m_store = this;
@@ -297,7 +319,7 @@ std::uint64_t SnapshotStore::Ingest::bytes() const { return m_assembler ? m_asse
 
 Status SnapshotStore::Ingest::appendChunk(const Chunk& chunk) {
   if (m_done) return failedPrecondition("the ingest of step " + std::to_string(m_step) + " is finished");
-  Status st = m_assembler->add(chunk);
+  Status st = m_store->fullDiskOr(m_assembler->add(chunk));
   if (!st)
     return {st.code(), "job '" + m_jobId + "' step " + std::to_string(m_step) + ": " + st.message()};
   return Status::ok();
@@ -315,8 +337,9 @@ void SnapshotStore::Ingest::abort() {
 Result<CommitResult> SnapshotStore::Ingest::commit() {
   if (m_done) return failedPrecondition("the ingest of step " + std::to_string(m_step) + " is finished");
   const std::string where = "job '" + m_jobId + "' step " + std::to_string(m_step) + ": ";
-  auto fail = [&](const Status& st) -> Status {
+  auto fail = [&](const Status& failed) -> Status {
     abort();
+    const Status st = m_store->fullDiskOr(failed);
     return {st.code(), where + st.message()};
   };
   if (Status st = m_assembler->checkComplete(); !st) return fail(st);
@@ -327,6 +350,21 @@ Result<CommitResult> SnapshotStore::Ingest::commit() {
     auto g = m_assembler->geometry().take();
     if (!g) return fail(g.status());
     geometry = std::move(g.value());
+  }
+  // Room first: the arrays and the grid, copied into the job file, plus the reserve.
+  {
+    std::uint64_t needed = m_store->m_options.reserveBytes;
+    for (const ArrayMeta& a : m_assembler->staging().meta().arrays) needed += a.rows() * a.rowBytes();
+    if (grid.value()) {
+      const GridFields& g = *grid.value();
+      needed += 8 * (g.solidFraction.size() + g.meanVelocity.size() + g.granularTemperature.size() + g.meanPressure.size());
+    }
+    const std::uint64_t free = m_store->m_options.freeBytes(m_store->m_options.dataDir);
+    if (free < needed)
+      return fail(Status(StatusCode::kResourceExhausted, "the disk holding " + m_store->m_options.dataDir + " has " + mib(free) +
+                                                             " free; this snapshot needs " + mib(needed) + " with the " +
+                                                             mib(m_store->m_options.reserveBytes) +
+                                                             " kept free: refused, nothing written (free space, then send it again)"));
   }
   CommitResult result;
   result.jobId = m_jobId;

@@ -37,6 +37,12 @@ struct StoreOptions {
   // one is closed (and opened again when its job is next written or listed). Bounds the back-end's descriptors
   // however many jobs it has stored.
   std::size_t maxOpenJobFiles = 64;
+  // A commit needs the snapshot's bytes plus this much left free on the data directory's file system, or it is
+  // refused (RESOURCE_EXHAUSTED, the job file untouched): HDF5 does not survive a disk that fills mid-copy (it
+  // crashed the back-end in H5Ocopy).
+  std::uint64_t reserveBytes = std::uint64_t(16) << 20;
+  // The free bytes of the file system holding a folder (statvfs); tests replace it.
+  std::function<std::uint64_t(const std::string& folder)> freeBytes;
 };
 
 struct SnapshotInfo {
@@ -141,6 +147,9 @@ class SnapshotStore {
   Result<std::shared_ptr<Job>> job(const std::string& jobId, JobMode mode, std::unique_lock<std::mutex>& lock);
   Result<std::optional<GridFields>> computeGrid(SnapshotStaging& staging) const;
   void release(const std::string& jobId, std::int64_t step);
+  // An I/O error on a data directory with less than reserveBytes free is a full disk: RESOURCE_EXHAUSTED, which
+  // the worker waits out (SpoolingSink), instead of an internal error that fails the job.
+  Status fullDiskOr(Status st) const;
   // Closes the least recently used idle job files (not `keep`, not locked, nothing being received) until at most
   // maxOpenJobFiles are open.
   void closeIdleFiles(const Job* keep);

@@ -6,6 +6,7 @@
 
 #include <hdf5.h>
 
+#include <cstdio>
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -416,7 +417,10 @@ Result<std::unique_ptr<SnapshotStaging>> SnapshotStaging::create(const std::stri
   auto fapl = makeFileAccess(scratchPath);
   if (!fapl) return fapl.status();
   impl->file = fileHid(H5Fcreate(scratchPath.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl->get()));
-  if (!impl->file.valid()) return h5Error(scratchPath, "cannot create the staging file");
+  if (!impl->file.valid()) {
+    std::remove(scratchPath.c_str());  // a create that failed part-way (a full disk) may have left the file
+    return h5Error(scratchPath, "cannot create the staging file");
+  }
   impl->path = scratchPath;  // from here on the destructor removes it
   auto group = createGroup(impl->file.get(), "particles", true, scratchPath);
   if (!group) return group.status();

@@ -1,10 +1,13 @@
 // SnapshotStore: ingest in chunks, commit/abort, list, streaming reads, grid fields, bad input.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+
+#include <unistd.h>
 
 #include "backend/SnapshotStore.h"
 
@@ -316,6 +319,88 @@ TEST_F(StoreTest, OpenJobFilesStayBoundedOverManyJobs) {
     EXPECT_EQ(rb.value().particles["position"], bytesOf(*s.find("position")));
   }
   EXPECT_LE(openDescriptors(), before + 8 + 2);
+}
+
+// The free-space check before a commit, on any machine (the file system's free bytes replaced): a snapshot that
+// would leave less than the reserve is refused with RESOURCE_EXHAUSTED (which the worker waits out), the job file
+// and the scratch folder untouched; once there is room, the same step is stored.
+TEST_F(StoreTest, CommitRefusedWhenTheDiskWouldFill) {
+  st.reset();
+  std::uint64_t free = std::uint64_t(1) << 40;
+  StoreOptions o{dir.string(), 0.0};
+  o.reserveBytes = 1 << 20;
+  o.freeBytes = [&free](const std::string&) { return free; };
+  auto opened = SnapshotStore::open(o);
+  ASSERT_TRUE(opened) << opened.status().toString();
+  st = std::move(opened.value());
+  ASSERT_TRUE(store(*st, "j", makeSnapshot(1, 1000)));
+  free = (1 << 20) + 1000;  // the reserve and a little: not the snapshot's 64 kB
+  auto refused = store(*st, "j", makeSnapshot(2, 1000));
+  ASSERT_FALSE(refused);
+  EXPECT_EQ(refused.status().code(), StatusCode::kResourceExhausted) << refused.status().toString();
+  EXPECT_NE(refused.status().message().find("refused, nothing written"), std::string::npos) << refused.status().toString();
+  EXPECT_EQ(scratchFiles(), 0u);
+  EXPECT_EQ(st->list("j").value().snapshots.size(), 1u);
+  free = std::uint64_t(1) << 40;
+  ASSERT_TRUE(store(*st, "j", makeSnapshot(2, 1000)));
+  EXPECT_EQ(st->list("j").value().snapshots.size(), 2u);
+}
+
+// A data directory on a small file system (a 3 MiB tmpfs, mounted where the test may: root; skipped elsewhere) fills
+// up: the commit that does not fit is refused with a clear error (never a crash), leaves no scratch file, and every
+// snapshot stored before it still reads back.
+TEST_F(StoreTest, FullDiskRefusesTheSnapshotAndKeepsTheRest) {
+  st.reset();
+  fs::create_directories(dir);
+  if (::geteuid() != 0 || std::system(("mount -t tmpfs -o size=3m tmpfs " + dir.string() + " 2>/dev/null").c_str()) != 0)
+    GTEST_SKIP() << "cannot mount a small tmpfs here (needs root)";
+  struct Unmount {
+    std::string at;
+    ~Unmount() { (void)std::system(("umount " + at).c_str()); }
+  } unmount{dir.string()};
+  StoreOptions o{dir.string(), 0.0};
+  o.reserveBytes = 256 << 10;  // a small disk: keep a quarter MiB
+  auto opened = SnapshotStore::open(o);
+  ASSERT_TRUE(opened) << opened.status().toString();
+  st = std::move(opened.value());
+  std::int64_t step = 0;
+  Status refused;
+  for (; step < 100; ++step) {
+    auto r = store(*st, "full", makeSnapshot(step, 4000));  // about 0.3 MB each
+    if (!r) {
+      refused = r.status();
+      break;
+    }
+  }
+  ASSERT_FALSE(refused.isOk()) << "3 MiB never filled";
+  EXPECT_TRUE(refused.code() == StatusCode::kResourceExhausted || refused.code() == StatusCode::kIo) << refused.toString();
+  EXPECT_NE(refused.message().find("step " + std::to_string(step)), std::string::npos) << refused.toString();
+  std::printf("refused at step %lld: %s\n", (long long)step, refused.toString().c_str());
+  EXPECT_EQ(scratchFiles(), 0u);
+  // The disk full already while the snapshot arrives (its scratch file cannot be written): a clean error too.
+  {
+    std::ofstream filler(dir / "filler", std::ios::binary);
+    const std::vector<char> block(64 << 10, 'x');
+    while (filler.write(block.data(), std::streamsize(block.size())) && filler.flush()) {
+    }
+  }
+  auto r = store(*st, "full", makeSnapshot(step, 4000));
+  ASSERT_FALSE(r) << "stored on a full disk";
+  EXPECT_TRUE(r.status().code() == StatusCode::kResourceExhausted || r.status().code() == StatusCode::kIo) << r.status().toString();
+  std::printf("full disk while receiving: %s\n", r.status().toString().c_str());
+  EXPECT_EQ(scratchFiles(), 0u);
+  fs::remove(dir / "filler");
+  auto l = st->list("full");
+  ASSERT_TRUE(l) << l.status().toString();
+  EXPECT_EQ(l.value().snapshots.size(), std::size_t(step));
+  for (std::int64_t k = 0; k < step; ++k) {
+    ReadRequest q;
+    q.step = k;
+    auto rb = readBack(*st, "full", q);
+    ASSERT_TRUE(rb) << k << ": " << rb.status().toString();
+    EXPECT_EQ(rb.value().particles["position"], bytesOf(*makeSnapshot(k, 4000).find("position"))) << k;
+  }
+  st.reset();
 }
 
 TEST_F(StoreTest, BadInputs) {
