@@ -229,17 +229,17 @@ Result<std::shared_ptr<SnapshotStore::Job>> SnapshotStore::job(const std::string
 }
 
 void SnapshotStore::closeIdleFiles(const Job* keep) {
-  std::vector<std::shared_ptr<Job>> open;
+  std::vector<std::pair<std::uint64_t, std::shared_ptr<Job>>> open;  // last use as read now: other threads move it on
   {
     std::lock_guard guard(m_mutex);
     for (const auto& [id, j] : m_jobs)
-      if (j->open && j.get() != keep) open.push_back(j);
+      if (j->open && j.get() != keep) open.emplace_back(j->lastUse.load(), j);
   }
   const std::size_t most = std::max<std::size_t>(1, m_options.maxOpenJobFiles);
   if (open.size() + 1 <= most) return;
-  std::sort(open.begin(), open.end(), [](const auto& a, const auto& b) { return a->lastUse < b->lastUse; });
+  std::sort(open.begin(), open.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   std::size_t count = open.size() + 1;
-  for (const auto& j : open) {
+  for (const auto& [use, j] : open) {
     if (count <= most) break;
     std::unique_lock lock(j->mutex, std::try_to_lock);  // a job in use now is skipped (never waited for: we hold `keep`)
     if (!lock || !j->writer || !j->receiving.empty()) continue;
@@ -288,7 +288,8 @@ Result<std::unique_ptr<SnapshotStore::Ingest>> SnapshotStore::beginSnapshot(cons
   if (jb.writer && jb.writer->hasStep(step))
     return alreadyExists("job '" + jobId + "' already has a snapshot for step " + std::to_string(step));
   if (jb.receiving.count(step) != 0)
-    return alreadyExists("job '" + jobId + "': step " + std::to_string(step) + " is being written by another stream");
+    return unavailable("job '" + jobId + "': step " + std::to_string(step) +
+                       " is being written by another stream (an earlier try still being received): try again");
   std::uint64_t serial;
   {
     std::lock_guard guard(m_mutex);
@@ -338,8 +339,8 @@ Result<CommitResult> SnapshotStore::Ingest::commit() {
   if (m_done) return failedPrecondition("the ingest of step " + std::to_string(m_step) + " is finished");
   const std::string where = "job '" + m_jobId + "' step " + std::to_string(m_step) + ": ";
   auto fail = [&](const Status& failed) -> Status {
+    const Status st = m_store->fullDiskOr(failed);  // before the scratch file goes and frees its space
     abort();
-    const Status st = m_store->fullDiskOr(failed);
     return {st.code(), where + st.message()};
   };
   if (Status st = m_assembler->checkComplete(); !st) return fail(st);
@@ -351,21 +352,40 @@ Result<CommitResult> SnapshotStore::Ingest::commit() {
     if (!g) return fail(g.status());
     geometry = std::move(g.value());
   }
-  // Room first: the arrays and the grid, copied into the job file, plus the reserve.
+  // Room first: the arrays and the grid, copied into the job file, plus the reserve. What commits running now will
+  // write counts as taken (claimed until each ends), so two of them cannot both pass on the same free bytes.
+  std::uint64_t claim = 0;
+  std::string refused;
   {
-    std::uint64_t needed = m_store->m_options.reserveBytes;
-    for (const ArrayMeta& a : m_assembler->staging().meta().arrays) needed += a.rows() * a.rowBytes();
+    std::uint64_t bytes = 0;
+    for (const ArrayMeta& a : m_assembler->staging().meta().arrays) bytes += a.rows() * a.rowBytes();
     if (grid.value()) {
       const GridFields& g = *grid.value();
-      needed += 8 * (g.solidFraction.size() + g.meanVelocity.size() + g.granularTemperature.size() + g.meanPressure.size());
+      bytes += 8 * (g.solidFraction.size() + g.meanVelocity.size() + g.granularTemperature.size() + g.meanPressure.size());
     }
+    const std::uint64_t needed = bytes + m_store->m_options.reserveBytes;
+    std::lock_guard guard(m_store->m_mutex);
     const std::uint64_t free = m_store->m_options.freeBytes(m_store->m_options.dataDir);
-    if (free < needed)
-      return fail(Status(StatusCode::kResourceExhausted, "the disk holding " + m_store->m_options.dataDir + " has " + mib(free) +
-                                                             " free; this snapshot needs " + mib(needed) + " with the " +
-                                                             mib(m_store->m_options.reserveBytes) +
-                                                             " kept free: refused, nothing written (free space, then send it again)"));
+    const std::uint64_t claimed = m_store->m_claimedBytes;
+    if (free < needed + claimed) {
+      refused = "the disk holding " + m_store->m_options.dataDir + " has " + mib(free) + " free" +
+                (claimed ? " (" + mib(claimed) + " of it claimed by snapshots being stored)" : std::string()) + "; this snapshot needs " +
+                mib(needed) + " with the " + mib(m_store->m_options.reserveBytes) +
+                " kept free: refused, nothing written (free space, then send it again)";
+    } else {
+      claim = bytes;
+      m_store->m_claimedBytes += claim;
+    }
   }
+  if (!refused.empty()) return fail(Status(StatusCode::kResourceExhausted, refused));
+  struct Unclaim {
+    SnapshotStore* store;
+    std::uint64_t bytes;
+    ~Unclaim() {
+      std::lock_guard guard(store->m_mutex);
+      store->m_claimedBytes -= bytes;
+    }
+  } unclaim{m_store, claim};
   CommitResult result;
   result.jobId = m_jobId;
   result.step = m_step;
@@ -562,7 +582,9 @@ Result<std::uint64_t> SnapshotStore::appendProbes(const std::string& jobId, cons
   std::unique_lock<std::mutex> lock;
   auto j = job(jobId, JobMode::kCreate, lock);
   if (!j) return j.status();
-  return j.value()->writer->appendProbes(samples);
+  auto stored = j.value()->writer->appendProbes(samples);
+  if (!stored) return fullDiskOr(stored.status());
+  return stored;
 }
 
 Status SnapshotStore::readChunks(const std::string& jobId, const ReadRequest& request,

@@ -113,8 +113,9 @@ class SnapshotStore {
     bool m_done = false;
   };
 
-  // Reserves (job, step): INVALID_ARGUMENT for a bad job id, non-finite time or n > 2^32 - 1; ALREADY_EXISTS when
-  // the step is stored or being received. Creates the job on first use.
+  // Reserves (job, step): INVALID_ARGUMENT for a bad job id, non-finite time or n > 2^32 - 1; UNAVAILABLE while
+  // another stream is receiving the step (a retry may come before the earlier try has ended: the spool tries again);
+  // ALREADY_EXISTS when the step is stored. Creates the job on first use.
   Result<std::unique_ptr<Ingest>> beginSnapshot(const std::string& jobId, std::int64_t step, double time,
                                                 std::uint64_t particles);
   // NOT_FOUND for an unknown job.
@@ -155,10 +156,11 @@ class SnapshotStore {
   void closeIdleFiles(const Job* keep);
 
   StoreOptions m_options;
-  std::mutex m_mutex;  // m_jobs, m_serial
+  std::mutex m_mutex;  // m_jobs, m_serial, m_claimedBytes
   std::map<std::string, std::shared_ptr<Job>> m_jobs;
   std::uint64_t m_serial = 0;
   std::atomic<std::uint64_t> m_uses{0};
+  std::uint64_t m_claimedBytes = 0;  // bytes commits in progress will write (m_mutex)
 };
 
 // OK when jobId is 1..128 characters of [A-Za-z0-9._-], not starting with '.' (no path separators).

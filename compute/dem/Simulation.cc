@@ -272,8 +272,10 @@ Result<SimulationState> Simulation::state() const {
     return Status(StatusCode::kFailedPrecondition, "a checkpoint is taken just after a neighbour rebuild (step " +
                                                        std::to_string(m_rebuiltAt) + " was the last; this is " + std::to_string(m_step) + ")");
   SimulationState s;
-  // Distributed: every rank's rows gathered to rank 0 in id order (the ranks' slot counts are equal after a rebuild;
-  // the other ranks' state has no particles).
+  // Distributed: every rank's rows gathered to rank 0 in id order (the other ranks' state has no particles), with
+  // the same history slots on every rank (the rebuild's force pass may have grown one rank's).
+  if (m_domain->ranks() > 1)
+    m_engine->ensureSlots(int(m_domain->max(double(m_engine->historySlots()))), int(m_domain->max(double(m_engine->wallHistorySlots()))));
   s.particles = m_domain->gather(m_engine->stateArrays(m_step, m_time));
   s.contactSlots = m_engine->historySlots();
   s.wallSlots = m_engine->wallHistorySlots();
@@ -290,11 +292,16 @@ Result<SimulationState> Simulation::state() const {
 // The rows as they were after the run's rebuild at s.step: sorting them again keeps their order (the same cells,
 // a stable sort) and the lists come out the same; the forces are the run's (not recomputed), so the next step is
 // the run's own.
-Status Simulation::resume(const SimulationState& s) {
+Status Simulation::resume(const SimulationState& state) {
+  SimulationState s;  // distributed: rank 0's scalars on every rank (its particles below)
+  s.setScalars(state.scalars());
   try {
     if (m_domain->ranks() > 1) {
-      // Rank 0's state to every rank, split as a new run's scene is, each rank keeping its share.
-      ParticleSnapshot all = s.particles;
+      std::vector<double> scalars = state.scalars();
+      m_domain->broadcast(scalars);
+      s.setScalars(scalars);
+      // Rank 0's particles to every rank, split as a new run's scene is, each rank keeping its share.
+      ParticleSnapshot all = state.particles;
       m_domain->broadcast(all);
       const SnapshotArray* x = all.find("position");
       if (!x) return Status(StatusCode::kInvalidArgument, "the state has no position");
@@ -302,7 +309,7 @@ Status Simulation::resume(const SimulationState& s) {
       PFLOW_RETURN_IF_ERROR(m_domain->partitionPoints(m_grid, std::vector<Vec3d>(x->as<Vec3d>(), x->as<Vec3d>() + all.n), mine));
       PFLOW_RETURN_IF_ERROR(m_domain->agree(m_engine->loadState(keepSnapshotRows(all, mine), s.contactSlots, s.wallSlots)));
     } else {
-      PFLOW_RETURN_IF_ERROR(m_engine->loadState(s.particles, s.contactSlots, s.wallSlots));
+      PFLOW_RETURN_IF_ERROR(m_engine->loadState(state.particles, s.contactSlots, s.wallSlots));
     }
     m_step = s.step;
     m_stepBase = s.stepBase;

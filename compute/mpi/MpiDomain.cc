@@ -434,6 +434,13 @@ void MpiDomain::broadcast(ParticleSnapshot& s) {
       MPI_Bcast(a.data.data() + at, int(std::min(kChunk, a.data.size() - at)), MPI_BYTE, 0, m_comm);
 }
 
+void MpiDomain::broadcast(std::vector<double>& values) {
+  long long n = (long long)values.size();
+  MPI_Bcast(&n, 1, MPI_LONG_LONG, 0, m_comm);
+  values.resize(std::size_t(n));
+  if (n > 0) MPI_Bcast(values.data(), int(n), MPI_DOUBLE, 0, m_comm);
+}
+
 NodeRanks nodeRanks(MPI_Comm comm) {
   MPI_Comm node;
   MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node);

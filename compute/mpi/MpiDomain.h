@@ -57,6 +57,7 @@ class MpiDomain final : public Domain {
   Status agree(Status local) override;
   ParticleSnapshot gather(ParticleSnapshot local) override;
   void broadcast(ParticleSnapshot& s) override;
+  void broadcast(std::vector<double>& values) override;
   double sum(double local) override;
   double max(double local) override;
   void sum(std::vector<double>& values) override;

@@ -64,8 +64,9 @@ class Domain {
   virtual Status agree(Status local) { return local; }
   // All ranks' particles in one snapshot ordered by id, on rank 0 (an empty one elsewhere). Collective.
   virtual ParticleSnapshot gather(ParticleSnapshot local) { return local; }
-  // Rank 0's snapshot to every rank (collective; one process: as it is).
+  // Rank 0's snapshot, or values, to every rank (collective; one process: as they are).
   virtual void broadcast(ParticleSnapshot& /*s*/) {}
+  virtual void broadcast(std::vector<double>& /*values*/) {}
   // Sum and maximum over ranks (collective).
   virtual double sum(double local) { return local; }
   virtual double max(double local) { return local; }

@@ -3,6 +3,7 @@
 // a neighbour rebuild, where resuming's own rebuild reproduces the run's order and lists. docs/operations.md.
 #pragma once
 #include <cstdint>
+#include <vector>
 
 #include "compute/particles/ParticleSnapshot.h"
 
@@ -17,6 +18,25 @@ struct SimulationState {
   double dt = 0;                  // [s] DEM: the step; SPH: the last step taken
   double dtBefore = 0;            // [s] SPH Verlet: the step before it
   int reductions = 0;             // DEM: simulation.on_instability: reduce_dt's so far
+
+  // Everything but the particles, as exact doubles (a distributed resume broadcasts rank 0's), and back.
+  std::vector<double> scalars() const {
+    return {double(contactSlots), double(wallSlots), double(step), double(stepBase), double(rebuilds), time, timeBase, dt, dtBefore,
+            double(reductions)};
+  }
+  void setScalars(const std::vector<double>& v) {
+    if (v.size() != 10) return;
+    contactSlots = int(v[0]);
+    wallSlots = int(v[1]);
+    step = std::int64_t(v[2]);
+    stepBase = std::int64_t(v[3]);
+    rebuilds = std::int64_t(v[4]);
+    time = v[5];
+    timeBase = v[6];
+    dt = v[7];
+    dtBefore = v[8];
+    reductions = int(v[9]);
+  }
 };
 
 }  // namespace pflow::compute

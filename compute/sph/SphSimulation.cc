@@ -165,11 +165,16 @@ Result<SimulationState> SphSimulation::state() const {
 
 // The rows as the run's sort at s.step left them: sorting them again keeps their order, and the rates are the run's
 // (not recomputed), so the next step is the run's own.
-Status SphSimulation::resume(const SimulationState& s) {
+Status SphSimulation::resume(const SimulationState& state) {
+  SimulationState s;  // distributed: rank 0's scalars on every rank (its particles below)
+  s.setScalars(state.scalars());
   try {
     if (m_domain->ranks() > 1) {
-      // Rank 0's state to every rank, split as a new run's scene is (by expected work), each rank keeping its share.
-      ParticleSnapshot all = s.particles;
+      std::vector<double> scalars = state.scalars();
+      m_domain->broadcast(scalars);
+      s.setScalars(scalars);
+      // Rank 0's particles to every rank, split as a new run's scene is (by expected work), each keeping its share.
+      ParticleSnapshot all = state.particles;
       m_domain->broadcast(all);
       const SnapshotArray* x = all.find("position");
       const SnapshotArray* kind = all.find("kind");
@@ -182,7 +187,7 @@ Status SphSimulation::resume(const SimulationState& s) {
       keepRows(weight, mine);
       PFLOW_TRY(m_domain->agree(m_engine->loadState(keepSnapshotRows(all, mine), std::move(weight))));
     } else {
-      PFLOW_TRY(m_engine->loadState(s.particles));
+      PFLOW_TRY(m_engine->loadState(state.particles));
     }
     m_step = s.step;
     m_time = s.time;

@@ -4,6 +4,7 @@
 #include "backend/store/SnapshotFile.h"
 #include "compute/worker/SpoolingSink.h"
 #include "compute/worker/WorkerOptions.h"
+#include "compute/worker/WorkerRun.h"
 
 namespace pflow::worker {
 
@@ -52,7 +53,8 @@ class BackendSink final : public SnapshotSink {
 
 Result<std::unique_ptr<SnapshotSink>> makeBackendSink(const WorkerOptions& o) {
   SpoolOptions spool;
-  spool.maxBytes = std::uint64_t(o.spoolBytes);
+  spool.maxBytes = o.spoolBytes >= 1.8e19 ? ~std::uint64_t(0) : std::uint64_t(std::max(1.0, o.spoolBytes));
+  spool.stopRequested = [] { return g_stopSignal != 0; };
   spool.closeWait = std::chrono::milliseconds(std::int64_t(1e3 * o.spoolCloseWait));
   return std::unique_ptr<SnapshotSink>(
       new SpoolingSink(std::make_unique<BackendSink>(backend::makeGrpcBackendClient(o.backendAddress), o.jobId), std::move(spool)));

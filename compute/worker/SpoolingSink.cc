@@ -30,6 +30,10 @@ std::string describe(const std::variant<compute::ParticleSnapshot, backend::Prob
 SpoolingSink::SpoolingSink(std::unique_ptr<SnapshotSink> inner, SpoolOptions options)
     : m_inner(std::move(inner)), m_options(std::move(options)) {
   if (!m_options.sleep) m_options.sleep = [](std::chrono::milliseconds d) { std::this_thread::sleep_for(d); };
+  if (!m_options.now) m_options.now = [] { return std::chrono::steady_clock::now(); };
+  if (!m_options.stopRequested) m_options.stopRequested = [] { return false; };
+  m_options.firstBackoff = std::max(m_options.firstBackoff, std::chrono::milliseconds(1));
+  m_options.maxBackoff = std::max(m_options.maxBackoff, m_options.firstBackoff);
 }
 
 bool SpoolingSink::retryable(const Status& s) {
@@ -69,9 +73,14 @@ Status SpoolingSink::drain() {
   return Status::ok();
 }
 
-Status SpoolingSink::waitForRoom(std::uint64_t bytes, std::chrono::milliseconds limit, const char* what) {
-  std::chrono::milliseconds backoff = m_options.firstBackoff, waited{0};
-  while (!m_queue.empty() && m_bytes + bytes > m_options.maxBytes) {
+Status SpoolingSink::waitForRoom(std::uint64_t bytes, bool all, std::chrono::milliseconds limit, const char* what) {
+  std::chrono::milliseconds backoff = m_options.firstBackoff;
+  const auto start = m_options.now();
+  while (!m_queue.empty() && (all || m_bytes + bytes > m_options.maxBytes)) {
+    const auto waited = std::chrono::duration_cast<std::chrono::milliseconds>(m_options.now() - start);
+    if (m_options.stopRequested())
+      return Status(StatusCode::kCancelled, std::string(what) + ": stopped while waiting for the back-end; " + std::to_string(m_queue.size()) +
+                                                " outputs unsent (" + describe(m_queue.front().first) + " first)");
     if (waited >= limit)
       return Status(m_lastFailure.code(), std::string(what) + ": the back-end did not answer for " + std::to_string(waited.count() / 1000) +
                                               " s; " + std::to_string(m_queue.size()) + " outputs unsent (" + describe(m_queue.front().first) +
@@ -79,7 +88,6 @@ Status SpoolingSink::waitForRoom(std::uint64_t bytes, std::chrono::milliseconds 
     spdlog::warn("{}: the spool is full ({} outputs, {} of {} bytes): output paused, retrying in {} ms (back-end: {})", what,
                  m_queue.size(), m_bytes, m_options.maxBytes, backoff.count(), m_lastFailure.message());
     m_options.sleep(backoff);
-    waited += backoff;
     backoff = std::min(2 * backoff, m_options.maxBackoff);
     if (Status st = drain(); !st.isOk()) return st;
   }
@@ -95,7 +103,7 @@ Status SpoolingSink::add(Item item, std::uint64_t bytes) {
     spdlog::warn("back-end unavailable ({}): {} kept in the spool", st.message(), describe(item));
   } else if (m_bytes + bytes > m_options.maxBytes) {
     ++m_pauses;
-    if (Status st = waitForRoom(bytes, std::chrono::milliseconds::max(), "output"); !st.isOk()) return st;
+    if (Status st = waitForRoom(bytes, false, std::chrono::milliseconds::max(), "output"); !st.isOk()) return st;
     if (m_queue.empty()) return add(std::move(item), bytes);
   }
   m_queue.emplace_back(std::move(item), bytes);
@@ -110,7 +118,7 @@ Status SpoolingSink::writeProbes(const backend::ProbeSeries& samples) { return a
 Status SpoolingSink::close() {
   if (Status st = drain(); !st.isOk()) return st;
   // Everything must go: wait as for room for the whole spool.
-  if (Status st = waitForRoom(m_options.maxBytes + 1, m_options.closeWait, "close"); !st.isOk()) return st;
+  if (Status st = waitForRoom(0, true, m_options.closeWait, "close"); !st.isOk()) return st;
   return m_inner->close();
 }
 

@@ -25,8 +25,11 @@ struct SpoolOptions {
   std::uint64_t maxBytes = std::uint64_t(1) << 30;  // what the spool may hold (snapshot and probe payloads)
   std::chrono::milliseconds firstBackoff{500}, maxBackoff{30000};
   std::chrono::milliseconds closeWait{std::chrono::minutes(10)};  // close(): how long to wait for the back-end
-  // How a pause waits (tests replace it with a clock of their own).
+  // How a pause waits and measures its wait (tests replace both with a clock of their own).
   std::function<void(std::chrono::milliseconds)> sleep;
+  std::function<std::chrono::steady_clock::time_point()> now;
+  // A pause ends when this says the worker must stop (SIGTERM from its agent): the output then fails as cancelled.
+  std::function<bool()> stopRequested;
 };
 
 class SpoolingSink final : public SnapshotSink {
@@ -48,8 +51,8 @@ class SpoolingSink final : public SnapshotSink {
   Status deliver(const Item& item);
   // Sends the spool's items, oldest first, until it is empty or the back-end fails again (OK then: they stay).
   Status drain();
-  // Waits (with the backoff) until the spool has `bytes` of room or is empty, at most `limit` in all.
-  Status waitForRoom(std::uint64_t bytes, std::chrono::milliseconds limit, const char* what);
+  // Waits (with the backoff) until the spool has `bytes` of room (`all`: until it is empty), at most `limit` in all.
+  Status waitForRoom(std::uint64_t bytes, bool all, std::chrono::milliseconds limit, const char* what);
 
   std::unique_ptr<SnapshotSink> m_inner;
   SpoolOptions m_options;

@@ -48,6 +48,8 @@ struct Fixture {
   FakeBackend* backend = nullptr;
   std::unique_ptr<SpoolingSink> sink;
   std::vector<long> slept;  // [ms]
+  std::chrono::steady_clock::time_point clock{};  // moved on by the pauses only
+  bool stop = false;
   explicit Fixture(std::uint64_t maxBytes) {
     auto b = std::make_unique<FakeBackend>();
     backend = b.get();
@@ -56,7 +58,12 @@ struct Fixture {
     o.firstBackoff = std::chrono::milliseconds(100);
     o.maxBackoff = std::chrono::milliseconds(800);
     o.closeWait = std::chrono::milliseconds(5000);
-    o.sleep = [this](std::chrono::milliseconds d) { slept.push_back(long(d.count())); };
+    o.sleep = [this](std::chrono::milliseconds d) {
+      slept.push_back(long(d.count()));
+      clock += d;
+    };
+    o.now = [this] { return clock; };
+    o.stopRequested = [this] { return stop; };
     sink = std::make_unique<SpoolingSink>(std::move(b), o);
   }
 };
@@ -139,6 +146,18 @@ TEST(SpoolingSink, CloseGivesUpAfterItsWaitWithTheReason) {
   EXPECT_GE(total, 5000);
   EXPECT_LT(total, 5000 + 800);
   EXPECT_FALSE(f.backend->closed);
+}
+
+// A worker told to stop (SIGTERM from its agent) while its output is paused stops waiting: the output fails as
+// cancelled, naming what was not sent.
+TEST(SpoolingSink, StopEndsAPause) {
+  Fixture f(1500);
+  f.backend->downFor = 1000000;
+  ASSERT_TRUE(f.sink->write(snapshot(1)).isOk());
+  f.stop = true;
+  const Status s = f.sink->write(snapshot(2));
+  EXPECT_EQ(s.code(), StatusCode::kCancelled) << s.message();
+  EXPECT_NE(s.message().find("snapshot step 1 first"), std::string::npos) << s.message();
 }
 
 }  // namespace
