@@ -364,7 +364,7 @@ Status MpiDomain::finishRefresh(DistributedRows& engine) {
 ParticleSnapshot MpiDomain::gather(ParticleSnapshot local) {
   // Every array gathered to rank 0 (ranks produce the same arrays in the same order), then ordered by id.
   int n = int(local.n);
-  std::vector<int> counts(static_cast<std::size_t>(m_size)), displs(static_cast<std::size_t>(m_size), 0);
+  std::vector<int> counts(static_cast<std::size_t>(m_size));
   MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, m_comm);
   long long total = 0;
   for (int r = 0; r < m_size; ++r) total += counts[r];
@@ -372,14 +372,22 @@ ParticleSnapshot MpiDomain::gather(ParticleSnapshot local) {
   all.step = local.step;
   all.time = local.time;
   all.n = m_rank == 0 ? std::size_t(total) : 0;
+  std::vector<int> at(static_cast<std::size_t>(m_size), 0);  // in rows
+  for (int r = 1; r < m_size; ++r) at[r] = at[r - 1] + counts[r - 1];
   for (SnapshotArray& a : local.arrays) {
-    const std::size_t row = local.n ? a.data.size() / local.n : std::size_t(a.components) * scalarBytesOf(a.type);
-    std::vector<int> bytes(static_cast<std::size_t>(m_size)), at(static_cast<std::size_t>(m_size), 0);
-    for (int r = 0; r < m_size; ++r) bytes[r] = int(std::size_t(counts[r]) * row);
-    for (int r = 1; r < m_size; ++r) at[r] = at[r - 1] + bytes[r - 1];
+    // Rows travel as one datatype of a row's bytes (counts and offsets in rows: no int overflow past 2 GiB of an
+    // array); a row's bytes are the ranks' that hold rows (a rank with none may not know a slot field's width).
+    unsigned long long row = local.n ? a.data.size() / local.n : 0;
+    MPI_Allreduce(MPI_IN_PLACE, &row, 1, MPI_UNSIGNED_LONG_LONG, MPI_MAX, m_comm);
     SnapshotArray g{a.name, a.type, a.components, a.unit, {}};
-    if (m_rank == 0) g.data.resize(std::size_t(total) * row);
-    MPI_Gatherv(a.data.data(), int(a.data.size()), MPI_BYTE, g.data.data(), bytes.data(), at.data(), MPI_BYTE, 0, m_comm);
+    if (m_rank == 0) g.data.resize(std::size_t(total) * std::size_t(row));
+    if (row > 0) {
+      MPI_Datatype rowType;
+      MPI_Type_contiguous(int(row), MPI_BYTE, &rowType);
+      MPI_Type_commit(&rowType);
+      MPI_Gatherv(a.data.data(), n, rowType, g.data.data(), counts.data(), at.data(), rowType, 0, m_comm);
+      MPI_Type_free(&rowType);
+    }
     all.arrays.push_back(std::move(g));
   }
   if (m_rank != 0) return all;

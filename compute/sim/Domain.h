@@ -8,6 +8,7 @@
 
 #include "common/Status.h"
 #include "compute/particles/ParticleSnapshot.h"
+#include "compute/sim/SimulationState.h"
 
 namespace pflow::compute {
 
@@ -73,5 +74,16 @@ class Domain {
   // Element-wise sum over ranks, in place (collective).
   virtual void sum(std::vector<double>& /*values*/) {}
 };
+
+// A distributed resume (DEM's and SPH's resume()): rank 0's state on every rank (collective): its scalars into
+// `scalars`, its particles returned; each rank then keeps its share (partitionPoints).
+inline ParticleSnapshot shareState(Domain& domain, const SimulationState& given, SimulationState& scalars) {
+  std::vector<double> v = given.scalars();
+  domain.broadcast(v);
+  scalars.setScalars(v);
+  ParticleSnapshot all = given.particles;
+  domain.broadcast(all);
+  return all;
+}
 
 }  // namespace pflow::compute

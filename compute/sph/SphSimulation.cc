@@ -170,12 +170,8 @@ Status SphSimulation::resume(const SimulationState& state) {
   s.setScalars(state.scalars());
   try {
     if (m_domain->ranks() > 1) {
-      std::vector<double> scalars = state.scalars();
-      m_domain->broadcast(scalars);
-      s.setScalars(scalars);
-      // Rank 0's particles to every rank, split as a new run's scene is (by expected work), each keeping its share.
-      ParticleSnapshot all = state.particles;
-      m_domain->broadcast(all);
+      // Rank 0's state on every rank, split as a new run's scene is (by expected work), each keeping its share.
+      const ParticleSnapshot all = shareState(*m_domain, state, s);
       const SnapshotArray* x = all.find("position");
       const SnapshotArray* kind = all.find("kind");
       if (!x || !kind) return Status(StatusCode::kInvalidArgument, "the state has no position or kind");

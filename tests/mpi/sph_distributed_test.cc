@@ -99,7 +99,9 @@ TEST(SphDistributed, MirrorWallsSameFrontAsOneProcess) {
     EXPECT_EQ(split.t[k], one.t[k]) << "Z = " << kFrontZ[k] << ": not bit for bit";
   }
   EXPECT_EQ(split.steps, one.steps);
-  if (worldRank() == 0) EXPECT_EQ(split.mass, one.mass);
+  if (worldRank() == 0) {
+    EXPECT_EQ(split.mass, one.mass);
+  }
 }
 
 // The ranks share the expected work, not the particle count: a wall particle near the fluid weighs half a fluid
@@ -126,8 +128,12 @@ TEST(SphDistributed, PartitionBalancesTheExpectedWork) {
     const double reach = st.grid.reach * st.grid.cellSize;
     const bool nearColumn = st.position[i].x < 0.195 + reach && st.position[i].z < 0.395 + reach;
     const bool farFromColumn = st.position[i].x > 0.195 + reach + st.grid.cellSize;
-    if (nearColumn) EXPECT_EQ(w[i], 0.5) << "x = " << st.position[i].x;
-    if (farFromColumn) EXPECT_EQ(w[i], 0.05) << "x = " << st.position[i].x;
+    if (nearColumn) {
+      EXPECT_EQ(w[i], 0.5) << "x = " << st.position[i].x;
+    }
+    if (farFromColumn) {
+      EXPECT_EQ(w[i], 0.05) << "x = " << st.position[i].x;
+    }
     (w[i] == 0.5 ? wet : dry) += 1;
   }
   EXPECT_GT(dry, wet);  // most of the tank's walls are dry

@@ -63,7 +63,9 @@ bool resumeTo(Sim& sim, const compute::SimulationState& state, std::int64_t to) 
     ADD_FAILURE() << "resume: " << s.message();
     return false;
   }
-  if (state.step > 0) EXPECT_EQ(sim.stepCount(), state.step);  // (a distributed resume's other ranks pass an empty state)
+  if (state.step > 0) {  // (a distributed resume's other ranks pass an empty state)
+    EXPECT_EQ(sim.stepCount(), state.step);
+  }
   if (Status s = sim.runSteps(to - sim.stepCount()); !s.isOk()) {
     ADD_FAILURE() << s.message();
     return false;
