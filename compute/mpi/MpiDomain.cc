@@ -160,6 +160,15 @@ Status MpiDomain::agree(Status local) {
 
 // ---- particle exchange -------------------------------------------------------------------------
 
+std::vector<std::uint32_t> MpiDomain::cellsOf(DistributedRows& engine, std::vector<Vec3d>& pos) const {
+  std::vector<std::uint32_t> cells;
+  if (engine.cellKeys(m_grid, cells)) return cells;
+  pos = positions(engine);
+  cells.resize(pos.size());
+  for (std::size_t i = 0; i < pos.size(); ++i) cells[i] = m_grid.cellOf(pos[i]);
+  return cells;
+}
+
 std::vector<Vec3d> MpiDomain::positions(DistributedRows& engine) const {
   const ParticleSnapshot s = engine.snapshot(0, 0, {"position"});
   const SnapshotArray* a = s.find("position");
@@ -231,8 +240,9 @@ Status MpiDomain::migrate(DistributedRows& engine, double cost) {
 
   auto mark = std::chrono::steady_clock::now();
   ++m_times.rebuilds;
-  std::vector<Vec3d> pos = positions(engine);
-  const std::size_t n = pos.size();
+  std::vector<Vec3d> pos;  // only where the engine gives no cells, or to rebalance
+  std::vector<std::uint32_t> cells = cellsOf(engine, pos);
+  const std::size_t n = cells.size();
   m_times.positions += secondsSince(mark);
   // Each particle's share of the rank's work (the engine's weights; all alike when it gives none).
   std::vector<double> weight = engine.costWeights();
@@ -259,6 +269,7 @@ Status MpiDomain::migrate(DistributedRows& engine, double cost) {
     const double meanPerUnit = total > 0 ? sumCost / total : 0.0;
     const double w = m_costPerUnit > 0 ? m_costPerUnit : (meanPerUnit > 0 ? meanPerUnit : 1.0);
     for (double& x : weight) x *= w;
+    if (pos.size() != n) pos = positions(engine);
     if (Status s = decompose(pos, weight); !s.isOk()) return s;
     ++m_rebalances;
     spdlog::debug("rank {}: rebalanced ({:.3f} > 1 + {:.3f})", m_rank, m_lastImbalance, m_options.tolerance);
@@ -270,7 +281,7 @@ Status MpiDomain::migrate(DistributedRows& engine, double cost) {
   std::vector<Index> stay;
   stay.reserve(n);
   for (Index i = 0; i < Index(n); ++i) {
-    const int owner = m_cellOwner[m_grid.cellOf(pos[i])];
+    const int owner = m_cellOwner[cells[std::size_t(i)]];
     if (owner == m_rank) stay.push_back(i);
     else leaving[std::size_t(owner)].push_back(i);
   }
@@ -296,14 +307,15 @@ Status MpiDomain::exchangeGhosts(DistributedRows& engine) {
   // depends on the cell only: worked out once per decomposition, when a cell is first met (most cells are
   // interior, with no other rank around them).
   auto mark = std::chrono::steady_clock::now();
-  const std::vector<Vec3d> pos = positions(engine);
+  std::vector<Vec3d> pos;
+  const std::vector<std::uint32_t> cells = cellsOf(engine, pos);
   m_times.positions += secondsSince(mark);
   std::vector<std::vector<Index>> to(static_cast<std::size_t>(m_size));
   std::uint32_t lastCell = ~0u;
   const std::int32_t* dest = nullptr;
   int destCount = 0;
-  for (Index i = 0; i < Index(pos.size()); ++i) {
-    const std::uint32_t c = m_grid.cellOf(pos[i]);
+  for (Index i = 0; i < Index(cells.size()); ++i) {
+    const std::uint32_t c = cells[std::size_t(i)];
     if (c != lastCell) {
       haloRanksOf(c, dest, destCount);
       lastCell = c;

@@ -71,7 +71,7 @@ class MpiDomain final : public Domain {
   // Particles this rank has sent to others at rebuilds, in all.
   long long migratedOut() const { return m_migratedOut; }
   // Where this rank's rebuilds spent their time [s], summed over rebuilds (host clock; the engine's device work
-  // inside is synchronous): positions and weights copied to the host, the balance (rebalance included), the owner
+  // inside is synchronous): particles' cells (or positions) and weights copied to the host, the balance (rebalance included), the owner
   // of each particle, the migration (pack, messages, keep and append), the halo's rows and its first exchange.
   struct RebuildTimes {
     double positions = 0, weights = 0, balance = 0, owners = 0, migration = 0, haloRows = 0, ghosts = 0;
@@ -96,6 +96,9 @@ class MpiDomain final : public Domain {
   // Rows to[d] for each rank d, concatenated, with the count per rank.
   static void flatten(const std::vector<std::vector<Index>>& to, std::vector<Index>& rows, std::vector<int>& counts);
   std::vector<Vec3d> positions(DistributedRows& engine) const;
+  // Each owned particle's cell: the engine's (DistributedRows::cellKeys), else binned from its positions (then in
+  // `pos` too).
+  std::vector<std::uint32_t> cellsOf(DistributedRows& engine, std::vector<Vec3d>& pos) const;
   // The other ranks owning a cell among the 27 around cell c (count, then a pointer to them), cached.
   void haloRanksOf(std::uint32_t c, const std::int32_t*& dest, int& count);
 

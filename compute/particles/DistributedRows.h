@@ -13,6 +13,8 @@
 
 namespace pflow::compute {
 
+struct CellGrid;
+
 // `count` rows packed by DistributedRows::pack, as received from one rank.
 struct PackedRows {
   const std::byte* data;
@@ -33,6 +35,9 @@ class DistributedRows {
   // Each owned particle's share of the work, relative to the others' (the balance's weights: a rank's measured cost
   // is spread over its particles in these proportions). Empty: all alike (DEM).
   virtual std::vector<double> costWeights() { return {}; }
+  // Each owned particle's cell of `grid` now, computed where the particles are (4 bytes a row to the host instead of
+  // a 24-byte position). False: not offered (the caller bins the positions itself).
+  virtual bool cellKeys(const CellGrid& /*grid*/, std::vector<std::uint32_t>& /*cells*/) { return false; }
 
   // Local rows are the owned particles [0, size()), then the ghosts [size(), size() + ghosts()). A rebuild is:
   // dropGhosts, keepOwned + appendOwned (migration), the engine's cell sort, setGhosts; between rebuilds

@@ -68,6 +68,15 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     splitBoundary();
     m_wetStale = true;
   }
+  bool cellKeys(const CellGrid& grid, std::vector<std::uint32_t>& cells) override {
+    sizeLocalBuffers();
+    cells.resize(m_owned);
+    if (m_owned == 0) return true;
+    m_exec.forEach(m_owned, compute::kernels::CellKey{grid, cptr<SphField::Position>(), m_cellKey.as<std::uint32_t>()});
+    m_mem.copyToHost(cells.data(), m_cellKey.data(), std::size_t(m_owned) * sizeof(std::uint32_t));
+    return true;
+  }
+
   std::vector<double> costWeights() override {
     std::vector<double> w;
     if (!m_sorted) {  // the scene's partition's weights, until the first sort
