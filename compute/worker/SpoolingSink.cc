@@ -20,9 +20,10 @@ std::uint64_t payloadBytes(const backend::ProbeSeries& p) {
   for (const auto& v : p.values) b += v.size() * sizeof(double);
   return b;
 }
+std::string describe(const compute::ParticleSnapshot& s) { return "snapshot step " + std::to_string(s.step); }
+std::string describe(const backend::ProbeSeries& p) { return std::to_string(p.time.size()) + " probe samples"; }
 std::string describe(const std::variant<compute::ParticleSnapshot, backend::ProbeSeries>& item) {
-  if (const auto* s = std::get_if<compute::ParticleSnapshot>(&item)) return "snapshot step " + std::to_string(s->step);
-  return std::to_string(std::get<backend::ProbeSeries>(item).time.size()) + " probe samples";
+  return std::visit([](const auto& x) { return describe(x); }, item);
 }
 
 }  // namespace
@@ -49,13 +50,16 @@ bool SpoolingSink::retryable(const Status& s) {
   }
 }
 
+Status SpoolingSink::deliver(const compute::ParticleSnapshot& snapshot) {
+  Status st = m_inner->write(snapshot);
+  if (st.code() == StatusCode::kAlreadyExists) return Status::ok();  // an earlier try landed; its answer did not
+  return st;
+}
+
+Status SpoolingSink::deliver(const backend::ProbeSeries& samples) { return m_inner->writeProbes(samples); }
+
 Status SpoolingSink::deliver(const Item& item) {
-  if (const auto* s = std::get_if<compute::ParticleSnapshot>(&item)) {
-    Status st = m_inner->write(*s);
-    if (st.code() == StatusCode::kAlreadyExists) return Status::ok();  // an earlier try landed; its answer did not
-    return st;
-  }
-  return m_inner->writeProbes(std::get<backend::ProbeSeries>(item));
+  return std::visit([this](const auto& x) { return deliver(x); }, item);
 }
 
 Status SpoolingSink::drain() {
@@ -94,19 +98,20 @@ Status SpoolingSink::waitForRoom(std::uint64_t bytes, bool all, std::chrono::mil
   return Status::ok();
 }
 
-Status SpoolingSink::add(Item item, std::uint64_t bytes) {
+template <class T>
+Status SpoolingSink::add(const T& output, std::uint64_t bytes) {
   if (Status st = drain(); !st.isOk()) return st;  // the oldest first
-  if (m_queue.empty()) {
-    Status st = deliver(item);
-    if (st.isOk() || !retryable(st)) return st;
-    m_lastFailure = st;
-    spdlog::warn("back-end unavailable ({}): {} kept in the spool", st.message(), describe(item));
-  } else if (m_bytes + bytes > m_options.maxBytes) {
+  if (!m_queue.empty() && m_bytes + bytes > m_options.maxBytes) {
     ++m_pauses;
     if (Status st = waitForRoom(bytes, false, std::chrono::milliseconds::max(), "output"); !st.isOk()) return st;
-    if (m_queue.empty()) return add(std::move(item), bytes);
   }
-  m_queue.emplace_back(std::move(item), bytes);
+  if (m_queue.empty()) {
+    Status st = deliver(output);
+    if (st.isOk() || !retryable(st)) return st;
+    m_lastFailure = st;
+    spdlog::warn("back-end unavailable ({}): {} kept in the spool", st.message(), describe(output));
+  }
+  m_queue.emplace_back(Item(output), bytes);  // the copy: only what must wait
   m_bytes += bytes;
   return Status::ok();
 }

@@ -47,7 +47,11 @@ class SpoolingSink final : public SnapshotSink {
 
  private:
   using Item = std::variant<compute::ParticleSnapshot, backend::ProbeSeries>;
-  Status add(Item item, std::uint64_t bytes);
+  // An output delivered at once when nothing waits before it; copied into the spool only when it must wait.
+  template <class T>
+  Status add(const T& output, std::uint64_t bytes);
+  Status deliver(const compute::ParticleSnapshot& snapshot);
+  Status deliver(const backend::ProbeSeries& samples);
   Status deliver(const Item& item);
   // Sends the spool's items, oldest first, until it is empty or the back-end fails again (OK then: they stay).
   Status drain();
