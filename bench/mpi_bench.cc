@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "bench/BedScene.h"
+#include "bench/BenchMpi.h"
 #include "bench/BenchUtil.h"
 #include "common/Log.h"
 #include "compute/mpi/MpiDomain.h"
@@ -170,24 +171,17 @@ int main(int argc, char** argv) {
     if (auto st = s.runSteps(steps); !st.isOk()) return fail("timed run: " + st.toString());
     MPI_Barrier(MPI_COMM_WORLD);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    // Per-phase seconds: the mean over ranks and the largest.
-    const int np = int(Phase::kCount);
-    std::vector<double> mine(std::size_t(np) + 1), sum(std::size_t(np) + 1), max(std::size_t(np) + 1);
-    for (int p = 0; p < np; ++p) mine[std::size_t(p)] = s.timers().seconds(Phase(p));
-    mine[std::size_t(np)] = double(s.engine().boundaryParticles()) / std::max<double>(1, double(s.numParticles()));
-    MPI_Reduce(mine.data(), sum.data(), np + 1, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD);
-    MPI_Reduce(mine.data(), max.data(), np + 1, MPI_DOUBLE, MPI_MAX, 0, MPI_COMM_WORLD);
+    // Per-phase seconds: the mean over ranks and the largest; the boundary share summed over ranks.
+    const pflow::bench::PhaseSpread spread = pflow::bench::phaseSpread(s.timers());
+    double boundary = double(s.engine().boundaryParticles()) / std::max<double>(1, double(s.numParticles()));
+    MPI_Allreduce(MPI_IN_PLACE, &boundary, 1, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
     long long ghosts = (long long)s.engine().ghosts(), ghostSum = 0;
     MPI_Reduce(&ghosts, &ghostSum, 1, MPI_LONG_LONG, MPI_SUM, 0, MPI_COMM_WORLD);
     if (rank != 0) continue;
-    nlohmann::json phases, phasesMax;
+    const nlohmann::json phases = spread.mean(ranks), phasesMax = spread.largest();
     double mean = 0;
-    for (int p = 0; p < np; ++p) {
-      phases[pflow::compute::kPhaseNames[p]] = sum[std::size_t(p)] / ranks;
-      phasesMax[pflow::compute::kPhaseNames[p]] = max[std::size_t(p)];
-      mean += sum[std::size_t(p)] / ranks;
-    }
-    const double comm = (sum[std::size_t(Phase::kHalo)] + sum[std::size_t(Phase::kMigrate)]) / ranks;
+    for (double v : spread.sum) mean += v / ranks;
+    const double comm = (spread.sum[std::size_t(Phase::kHalo)] + spread.sum[std::size_t(Phase::kMigrate)]) / ranks;
     long long owned = 0, busiest = 0;
     for (long long o : domain->ownedPerRank()) owned += o, busiest = std::max(busiest, o);
     const double rate = double(owned) * steps / wall;
@@ -199,7 +193,7 @@ int main(int argc, char** argv) {
                      {"busiest_over_mean", double(busiest) * ranks / double(owned)}, {"tiles", cfg.particles.size() / settled.n},
                      {"steps", steps}, {"wall_s", wall}, {"particle_steps_per_s", rate},
                      {"comm_share", mean > 0 ? comm / mean : 0.0}, {"ghosts_per_owned", double(ghostSum) / double(owned)},
-                     {"boundary_share_mean", sum[std::size_t(np)] / ranks}, {"rebuilds", s.rebuilds() - rebuilds0},
+                     {"boundary_share_mean", boundary / ranks}, {"rebuilds", s.rebuilds() - rebuilds0},
                      {"rebalances", domain->rebalances() - rebalances0}, {"phases_mean_s", phases},
                      {"phases_max_s", phasesMax}, {"settle_s", settleWall}, {"device", where}, {"commit", commit},
                      {"command", "mpirun -np " + std::to_string(ranks) + " " + cmdline.str()}};
@@ -207,7 +201,7 @@ int main(int argc, char** argv) {
     std::fflush(stdout);
     std::fprintf(stderr, "ranks %d %s overlap %s: %.3g particle-steps/s, comm %.1f %%, halo %.3g s, forces %.3g s (mean)\n",
                  ranks, executor.c_str(), on ? "on" : "off", rate, 100 * (mean > 0 ? comm / mean : 0.0),
-                 sum[std::size_t(Phase::kHalo)] / ranks, sum[std::size_t(Phase::kForces)] / ranks);
+                 spread.sum[std::size_t(Phase::kHalo)] / ranks, spread.sum[std::size_t(Phase::kForces)] / ranks);
   }
   owner.reset();
   MPI_Finalize();

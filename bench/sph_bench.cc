@@ -16,6 +16,7 @@
 #include <sstream>
 #include <vector>
 
+#include "bench/BenchMpi.h"
 #include "bench/BenchUtil.h"
 #include "common/Log.h"
 #include "compute/mpi/MpiDomain.h"
@@ -185,22 +186,14 @@ int main(int argc, char** argv) {
       if (sim.timers().seconds(compute::Phase(p)) > 0) phases[compute::kPhaseNames[p]] = sim.timers().seconds(compute::Phase(p));
     j["phases_s"] = phases;  // rank 0's
     if (ranks > 1) {  // each phase's largest over the ranks (the busiest rank sets the pace)
-      std::vector<double> most(std::size_t(compute::Phase::kCount));
-      for (int p = 0; p < int(compute::Phase::kCount); ++p) most[std::size_t(p)] = sim.timers().seconds(compute::Phase(p));
-      MPI_Allreduce(MPI_IN_PLACE, most.data(), int(most.size()), MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
-      nlohmann::json busiest;
-      for (int p = 0; p < int(compute::Phase::kCount); ++p)
-        if (most[std::size_t(p)] > 0) busiest[compute::kPhaseNames[p]] = most[std::size_t(p)];
-      j["phases_max_s"] = busiest;
-      const long long owned = (long long)sim.numParticles();
-      std::vector<long long> perRank(std::size_t(ranks), 0);
-      MPI_Allgather(&owned, 1, MPI_LONG_LONG, perRank.data(), 1, MPI_LONG_LONG, MPI_COMM_WORLD);
-      j["owned_per_rank"] = perRank;
+      const auto& domain = static_cast<const compute::MpiDomain&>(*so.domain);
+      j["phases_max_s"] = bench::phaseSpread(sim.timers()).largest();
+      j["owned_per_rank"] = domain.ownedPerRank();  // at the last rebuild (or the scene's partition)
       // Rank 0's rebuilds, where their time went (MpiDomain::rebuildTimes), and its ghosts.
-      const auto& t = static_cast<const compute::MpiDomain&>(*so.domain).rebuildTimes();
+      const auto& t = domain.rebuildTimes();
       j["rebuild_s"] = {{"rebuilds", t.rebuilds}, {"positions", t.positions}, {"weights", t.weights}, {"balance", t.balance},
                         {"owners", t.owners}, {"migration", t.migration}, {"halo_rows", t.haloRows}, {"ghosts", t.ghosts}};
-      j["rebalances"] = static_cast<const compute::MpiDomain&>(*so.domain).rebalances();
+      j["rebalances"] = domain.rebalances();
       j["ghosts"] = sim.engine().ghosts();
     }
     if (rank == 0) {

@@ -298,12 +298,9 @@ Status Simulation::resume(const SimulationState& state) {
   try {
     if (m_domain->ranks() > 1) {
       // Rank 0's state on every rank, split as a new run's scene is, each rank keeping its share.
-      const ParticleSnapshot all = shareState(*m_domain, state, s);
-      const SnapshotArray* x = all.find("position");
-      if (!x) return Status(StatusCode::kInvalidArgument, "the state has no position");
-      std::vector<std::size_t> mine;
-      PFLOW_RETURN_IF_ERROR(m_domain->partitionPoints(m_grid, std::vector<Vec3d>(x->as<Vec3d>(), x->as<Vec3d>() + all.n), mine));
-      PFLOW_RETURN_IF_ERROR(m_domain->agree(m_engine->loadState(keepSnapshotRows(all, mine), s.contactSlots, s.wallSlots)));
+      auto share = shareForResume(*m_domain, m_grid, state, s);
+      PFLOW_RETURN_IF_ERROR(share.status());
+      PFLOW_RETURN_IF_ERROR(m_domain->agree(m_engine->loadState(share.value().rows, s.contactSlots, s.wallSlots)));
     } else {
       PFLOW_RETURN_IF_ERROR(m_engine->loadState(state.particles, s.contactSlots, s.wallSlots));
     }

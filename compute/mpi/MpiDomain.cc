@@ -244,11 +244,11 @@ Status MpiDomain::migrate(DistributedRows& engine, double cost) {
   std::vector<std::uint32_t> cells = cellsOf(engine, pos);
   const std::size_t n = cells.size();
   m_times.positions += secondsSince(mark);
-  // Each particle's share of the rank's work (the engine's weights; all alike when it gives none).
+  // Each particle's share of the rank's work (the engine's weights; all alike, and none built, when it gives none).
   std::vector<double> weight = engine.costWeights();
-  if (weight.size() != n) weight.assign(n, 1.0);
+  const bool weighted = weight.size() == n;
+  const double units = weighted ? std::accumulate(weight.begin(), weight.end(), 0.0) : double(n);
   m_times.weights += secondsSince(mark);
-  const double units = std::accumulate(weight.begin(), weight.end(), 0.0);
 
   // Cost per unit of weight (per particle where all weigh 1), smoothed over rebuilds; rebalance when the busiest
   // rank is above tolerance.
@@ -268,6 +268,7 @@ Status MpiDomain::migrate(DistributedRows& engine, double cost) {
     const double sumCost = std::accumulate(rankCost.begin(), rankCost.end(), 0.0);
     const double meanPerUnit = total > 0 ? sumCost / total : 0.0;
     const double w = m_costPerUnit > 0 ? m_costPerUnit : (meanPerUnit > 0 ? meanPerUnit : 1.0);
+    if (!weighted) weight.assign(n, 1.0);
     for (double& x : weight) x *= w;
     if (pos.size() != n) pos = positions(engine);
     if (Status s = decompose(pos, weight); !s.isOk()) return s;

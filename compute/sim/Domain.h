@@ -4,6 +4,7 @@
 // itself never sees MPI.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "common/Status.h"
@@ -75,15 +76,32 @@ class Domain {
   virtual void sum(std::vector<double>& /*values*/) {}
 };
 
-// A distributed resume (DEM's and SPH's resume()): rank 0's state on every rank (collective): its scalars into
-// `scalars`, its particles returned; each rank then keeps its share (partitionPoints).
-inline ParticleSnapshot shareState(Domain& domain, const SimulationState& given, SimulationState& scalars) {
+// A distributed resume (DEM's and SPH's resume()), collective: rank 0's state on every rank, its scalars into
+// `scalars`, and this rank's share of its particles, split as a new run's scene is (partitionPoints), in `rows`.
+// `weigh` (optional) gives each particle's balance weight from rank 0's particles and positions; this rank's share of
+// them comes back in `weights`.
+struct ResumeShare {
+  ParticleSnapshot rows;
+  std::vector<double> weights;
+};
+inline Result<ResumeShare> shareForResume(
+    Domain& domain, const CellGrid& grid, const SimulationState& given, SimulationState& scalars,
+    const std::function<std::vector<double>(const ParticleSnapshot&, const std::vector<Vec3d>&)>& weigh = {}) {
   std::vector<double> v = given.scalars();
   domain.broadcast(v);
   scalars.setScalars(v);
   ParticleSnapshot all = given.particles;
   domain.broadcast(all);
-  return all;
+  const SnapshotArray* x = all.find("position");
+  if (!x) return Status(StatusCode::kInvalidArgument, "the checkpoint's state has no position");
+  const std::vector<Vec3d> pos(x->as<Vec3d>(), x->as<Vec3d>() + all.n);
+  ResumeShare share;
+  if (weigh) share.weights = weigh(all, pos);
+  std::vector<std::size_t> mine;
+  if (Status st = domain.partitionPoints(grid, pos, mine, share.weights); !st.isOk()) return st;
+  keepRows(share.weights, mine);
+  share.rows = keepSnapshotRows(all, mine);
+  return share;
 }
 
 }  // namespace pflow::compute

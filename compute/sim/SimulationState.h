@@ -20,12 +20,13 @@ struct SimulationState {
   int reductions = 0;             // DEM: simulation.on_instability: reduce_dt's so far
 
   // Everything but the particles, as exact doubles (a distributed resume broadcasts rank 0's), and back.
+  static constexpr std::size_t kScalars = 10;
   std::vector<double> scalars() const {
     return {double(contactSlots), double(wallSlots), double(step), double(stepBase), double(rebuilds), time, timeBase, dt, dtBefore,
             double(reductions)};
   }
   void setScalars(const std::vector<double>& v) {
-    if (v.size() != 10) return;
+    if (v.size() != kScalars) return;
     contactSlots = int(v[0]);
     wallSlots = int(v[1]);
     step = std::int64_t(v[2]);

@@ -157,7 +157,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
 
   Status kick(double dt) override {
     m_exec.forEach(1, compute::kernels::ResetConditions{m_cond.as<Conditions>()});
-    m_exec.maxOf(m_owned, kernels::Kick<R>{stepArgs(dt)});
+    m_exec.forEach(m_owned, kernels::Kick<R>{stepArgs(dt)});
     return checked();
   }
 

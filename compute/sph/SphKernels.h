@@ -504,17 +504,17 @@ struct KickDrift {
 };
 
 // The second kick, with the rates at x': v' = v(n+1/2) + dt/2 a', rho' = rho(n+1/2) + dt/2 drho'; finished by
-// finishStep.
+// finishStep. Positions do not move here: the step's displacement is KickDrift's (no reduction).
 template <class R>
 struct Kick {
   StepArgs<R> a;
-  PFLOW_HOSTDEVICE double operator()(Index i) const {
+  PFLOW_HOSTDEVICE void operator()(Index i) const {
     const R half = R(0.5 * a.dt);
     const bool fluid = a.kind[i] == kFluid;
     const R r = a.rho0[i] + half * a.drho[i];
     Vec3<R> v = a.vel[i];
     if (fluid) v = a.vel0[i] + half * a.acc[i];
-    return finishStep(a, i, fluid, a.pos[i], v, r);
+    (void)finishStep(a, i, fluid, a.pos[i], v, r);
   }
 };
 

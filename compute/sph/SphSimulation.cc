@@ -171,17 +171,13 @@ Status SphSimulation::resume(const SimulationState& state) {
   try {
     if (m_domain->ranks() > 1) {
       // Rank 0's state on every rank, split as a new run's scene is (by expected work), each keeping its share.
-      const ParticleSnapshot all = shareState(*m_domain, state, s);
-      const SnapshotArray* x = all.find("position");
-      const SnapshotArray* kind = all.find("kind");
-      if (!x || !kind) return Status(StatusCode::kInvalidArgument, "the state has no position or kind");
-      const std::vector<Vec3d> pos(x->as<Vec3d>(), x->as<Vec3d>() + all.n);
-      const std::vector<std::int32_t> kinds(kind->as<std::int32_t>(), kind->as<std::int32_t>() + all.n);
-      std::vector<double> weight = sphCostWeights(m_grid, pos, kinds);
-      std::vector<std::size_t> mine;
-      PFLOW_TRY(m_domain->partitionPoints(m_grid, pos, mine, weight));
-      keepRows(weight, mine);
-      PFLOW_TRY(m_domain->agree(m_engine->loadState(keepSnapshotRows(all, mine), std::move(weight))));
+      auto share = shareForResume(*m_domain, m_grid, state, s, [this](const ParticleSnapshot& all, const std::vector<Vec3d>& pos) {
+        const SnapshotArray* kind = all.find("kind");
+        if (!kind) return std::vector<double>();  // counted alike
+        return sphCostWeights(m_grid, pos, std::vector<std::int32_t>(kind->as<std::int32_t>(), kind->as<std::int32_t>() + all.n));
+      });
+      PFLOW_TRY(share.status());
+      PFLOW_TRY(m_domain->agree(m_engine->loadState(share.value().rows, std::move(share.value().weights))));
     } else {
       PFLOW_TRY(m_engine->loadState(state.particles));
     }
