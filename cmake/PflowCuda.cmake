@@ -19,6 +19,9 @@ if(PFLOW_ENABLE_CUDA)
     set(CMAKE_CUDA_STANDARD 20)
     set(CMAKE_CUDA_STANDARD_REQUIRED ON)
     find_package(CUDAToolkit REQUIRED)
+    # Line tables in the device code (no change to the machine code): Nsight Compute's source page maps its
+    # per-instruction counters to the lines of the kernels (bench/gpu/profile_rates.sh).
+    string(APPEND CMAKE_CUDA_FLAGS " -lineinfo")
     set(PFLOW_HAVE_CUDA ON)
     message(STATUS "pflow: CUDA enabled (${CMAKE_CUDA_COMPILER}, archs ${CMAKE_CUDA_ARCHITECTURES})")
   else()

@@ -121,6 +121,8 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
       if (m_setup.canonicalOrder) f.gid = k.gid;
     }
     k.wet = m_wet.as<std::uint8_t>();
+    // The step loop computes rates only while no particle has moved half the skin since the sort (SphSimulation::rates).
+    k.margin = R(0.5 * m_setup.skin * 1.001 + 1e-5 * m_setup.grid.cellSize);
     const bool mirror = m_setup.mirror.any;
     if (set == RateSet::kAll || (m_numBoundary == 0 && set == RateSet::kInterior)) {
       m_exec.forEach(m_owned, k);

@@ -8,6 +8,7 @@
 
 #include "compute/core/Atomics.h"
 #include "compute/core/Conditions.h"
+#include "compute/core/FastMath.h"
 #include "compute/neighbor/CellGrid.h"
 #include "compute/sph/SphPhysics.h"
 
@@ -94,7 +95,18 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void forCellMergedById(std::uint32_t c, const
 // boundary-boundary pairs have no relative velocity).
 // The walk: the grid's cells are half the support plus half the skin wide (reach 2: 1.7 times fewer candidates
 // than 27 cells of the whole support), and without ghosts each of the 25 rows of 5 cells along x around a's home
-// cell is one contiguous range of rows (cells are numbered x fastest): no per-cell loop.
+// cell is one contiguous range of rows (cells are numbered x fastest): no per-cell loop. Rows, and cells at the
+// ends of a row, that lie farther than the support from a even when their particles have moved `margin` out of
+// them are not walked (walkGap: 81 of the 125 cells for a particle at the centre of its cell).
+// How far a's offset o (from the low corner of its home cell, along one axis) lies from the cells d away along
+// that axis, widened by `margin` on both sides (a particle listed there is within margin of its cell). The grid's
+// first and last cells along the axis also list the particles beyond it (CellGrid::coords clamps): open there.
+template <class R>
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE R walkGap(R o, int d, R cs, R margin, bool first, bool last) {
+  const R lo = R(d) * cs - margin, hi = R(d + 1) * cs + margin;
+  return (o < lo && !first) ? lo - o : ((o > hi && !last) ? o - hi : R(0));
+}
+
 template <class R>
 struct Interact {
   static constexpr bool kVariableCost = true;  // work per particle varies (CpuExecutor::forEach)
@@ -124,6 +136,9 @@ struct Interact {
   // Boundary particles with no fluid listed in the cells within reach (MarkWet: wet[a] == 0) have no rates until
   // the next sort: they are skipped (most of a tank's walls and lid, most of the time).
   const std::uint8_t* wet = nullptr;
+  // How far a particle may be from the cell it is listed in: half the skin (the step loop sorts again before any
+  // particle moves more), widened by 0.1 % and 1e-5 of a cell for the roundings of the gaps. Negative: walk all.
+  R margin = R(-1);
 
   PFLOW_HOSTDEVICE void operator()(Index a) const {
     const RateRow<R> ra = row[a];
@@ -143,17 +158,22 @@ struct Interact {
     R sumDrho = R(0), maxVisc = R(0);
     // b listed in a cell of the row being walked (dy, dz cells from a's): x_a - x_b from the offsets.
     R yRow = R(0), zRow = R(0);
-    auto consider = [&](Index b) {
-      const RateRow<R> rb = row[b];
-      const bool fluidB = !boundaryTag(rb.tag);
-      if (!fluidA && !fluidB) return;  // walls: fluid neighbours only
-      const Vec3<R> d{R(cxA - cellXOfTag(rb.tag)) * cs + (ra.x - rb.x), yRow - rb.y, zRow - rb.z};
+    // b listed in a cell of the row being walked: its separation from a, and whether it is a neighbour.
+    auto separation = [&](const RateRow<R>& rb) {
+      return Vec3<R>{R(cxA - cellXOfTag(rb.tag)) * cs + (ra.x - rb.x), yRow - rb.y, zRow - rb.z};
+    };
+    auto isNeighbour = [&](Index b, const RateRow<R>& rb) {
+      if (!fluidA && boundaryTag(rb.tag)) return false;  // walls: fluid neighbours only
+      return norm2(separation(rb)) < cut2 && b != a;
+    };
+    auto add = [&](Index b, const RateRow<R>& rb) {
+      const Vec3<R> d = separation(rb);
       const R r2 = norm2(d);
-      if (r2 >= cut2 || b == a) return;
       const RateState<R> sb = state[b];
       const RatePm<R> qb = pm[b];
-      const PairRates<R> out = pairRates(params, d, sa.v - sb.v, r2, kernel.f(std::sqrt(r2)), sideA,
-                                         PairSide<R>{sb.rho, qb.pOverRho2, qb.m, qb.mOverRho}, params.c0, params.c0, fluidA && fluidB);
+      const PairRates<R> out = pairRates(params, d, sa.v - sb.v, r2, kernel.f(sqrtFast(r2)), sideA,
+                                         PairSide<R>{sb.rho, qb.pOverRho2, qb.m, qb.mOverRho}, params.c0, params.c0,
+                                         fluidA && !boundaryTag(rb.tag));
       sumAcc += out.acceleration;
       sumDrho += out.densityRate;
       maxVisc = out.viscousRate > maxVisc ? out.viscousRate : maxVisc;
@@ -161,18 +181,44 @@ struct Interact {
     int cx, cy, cz;
     grid.coords(home[a], cx, cy, cz);
     const int r = grid.reach;
-    const int x0 = cx > r ? cx - r : 0, x1 = cx + r < grid.nx ? cx + r : grid.nx - 1;
+    const bool prune = margin >= R(0);
     for (int z = cz > r ? cz - r : 0; z <= (cz + r < grid.nz ? cz + r : grid.nz - 1); ++z) {
+      const R gz = prune ? walkGap(ra.z, z - cz, cs, margin, z == 0, z == grid.nz - 1) : R(0);
+      if (gz * gz >= cut2) continue;
       zRow = ra.z - R(z - cz) * cs;
       for (int y = cy > r ? cy - r : 0; y <= (cy + r < grid.ny ? cy + r : grid.ny - 1); ++y) {
+        const R gy = prune ? walkGap(ra.y, y - cy, cs, margin, y == 0, y == grid.ny - 1) : R(0);
+        const R g2 = gz * gz + gy * gy;
+        if (g2 >= cut2) continue;
         yRow = ra.y - R(y - cy) * cs;
+        // The row's cells within reach along x (a convex set: trimmed from both ends).
+        int x0 = cx > r ? cx - r : 0, x1 = cx + r < grid.nx ? cx + r : grid.nx - 1;
+        if (prune) {
+          while (x0 < cx && [&] { const R g = walkGap(ra.x, x0 - cx, cs, margin, x0 == 0, false); return g2 + g * g >= cut2; }()) ++x0;
+          while (x1 > cx && [&] { const R g = walkGap(ra.x, x1 - cx, cs, margin, false, x1 == grid.nx - 1); return g2 + g * g >= cut2; }()) --x1;
+        }
         const std::uint32_t c0 = grid.index(x0, y, z), c1 = grid.index(x1, y, z);
         if (ghostCellStart) {  // merged by id, cell by cell
-          for (std::uint32_t c = c0; c <= c1; ++c) forCellMergedById(c, cellStart, ghostCellStart, ghostItems, ghostBase, gid, consider);
+          for (std::uint32_t c = c0; c <= c1; ++c)
+            forCellMergedById(c, cellStart, ghostCellStart, ghostItems, ghostBase, gid, [&](Index b) {
+              const RateRow<R> rb = row[b];
+              if (isNeighbour(b, rb)) add(b, rb);
+            });
           continue;
         }
+        // The row's range in pieces of 32 candidates: first which of them are neighbours (one bit each), then the
+        // pair terms of those, in the same order. A warp's lanes evaluate pairs together instead of each lane
+        // waiting through the others' pairs while its own candidate is not a neighbour (docs/sph.md, "Performance").
         const Index end = cellStart[c1 + 1];
-        for (Index b = cellStart[c0]; b < end; ++b) consider(b);
+        for (Index piece = cellStart[c0]; piece < end; piece += 32) {
+          const int len = end - piece < 32 ? int(end - piece) : 32;
+          std::uint32_t hits = 0;
+          for (int j = 0; j < len; ++j) hits |= std::uint32_t(isNeighbour(piece + j, row[piece + j])) << j;
+          for (; hits != 0; hits &= hits - 1) {
+            const Index b = piece + Index(lowestSetBit(hits));
+            add(b, row[b]);
+          }
+        }
       }
     }
     acc[a] = fluidA ? sumAcc + gravity : Vec3<R>{R(0), R(0), R(0)};

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include "compute/core/FastMath.h"
 #include "compute/core/VectorMath.h"
 
 namespace pflow::compute::sph {
@@ -120,22 +121,22 @@ struct PairSide {
 // One pair's terms (docs/sph.md, equations 4-8). xab = x_a - x_b, vab = v_a - v_b, fab = (1/r) dW/dr at
 // r = |xab| (so grad_a W_ab = fab xab). `diffuse`: both are fluid (density diffusion acts between fluid
 // particles only; walls are driven by continuity alone). Two divisions per pair: 1/(r^2 + eta^2) and, where
-// the artificial viscosity acts, the mean density.
+// the artificial viscosity acts, the mean density (float on the GPU: the approximate quotient, FastMath.h).
 template <class R>
 PFLOW_HOSTDEVICE PFLOW_FORCEINLINE PairRates<R> pairRates(const PairParams<R>& p, Vec3<R> xab, Vec3<R> vab, R r2, R fab,
                                                           const PairSide<R>& a, const PairSide<R>& b, R cA, R cB, bool diffuse) {
   PairRates<R> out;
   const Vec3<R> gradW = fab * xab;
   const R vdotx = dot(vab, xab);
-  const R invDenom = R(1) / (r2 + p.eta2);
+  const R invDenom = divFast(R(1), r2 + p.eta2);
   // Momentum: pressure (symmetric form, conserves linear momentum) and Monaghan's artificial viscosity.
   R pi = R(0);
   const R mu = p.h * vdotx * invDenom;
-  if (vdotx < R(0) && p.alpha > R(0)) pi = -p.alpha * (cA + cB) * mu / (a.rho + b.rho);
+  if (vdotx < R(0) && p.alpha > R(0)) pi = divFast(-p.alpha * (cA + cB) * mu, a.rho + b.rho);
   const R coef = -b.m * (a.pOverRho2 + b.pOverRho2 + pi);
   out.acceleration = coef * gradW;
   // Laminar viscosity: m_b 4 nu (x_ab . grad W) / ((rho_a + rho_b)(r^2 + eta^2)) v_ab.
-  if (p.nu > R(0)) out.acceleration += (b.m * R(4) * p.nu * fab * r2 * invDenom / (a.rho + b.rho)) * vab;
+  if (p.nu > R(0)) out.acceleration += divFast(b.m * R(4) * p.nu * fab * r2 * invDenom, a.rho + b.rho) * vab;
   // Continuity: m_b v_ab . grad W.
   out.densityRate = b.m * fab * vdotx;
   // Density diffusion: 2 delta h c0 sum (rho_b - rho_a - hydrostatic) (x_ba . grad W)/(r^2 + eta^2) m_b/rho_b.

@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# A/B of pflow-sph-bench builds in one device call (same machine, same clocks): each binary named on the command
+# line (file names under .gpu/bin after unpacking .gpuz/b.tgz) runs SPHERIC test 2 in float with velocity Verlet,
+# from rest at SPH_AB_SPACING (default 0.006 m) and in the flow (after 0.32 s) at SPH_AB_FLOW_SPACING (default 0.01 m),
+# twice each, interleaved; then the last binary in the flow with the skins in SPH_AB_SKINS. JSON lines and logs to $OUT.
+#   bash bench/gpu/sph_ab.sh pflow-sph-bench-base pflow-sph-bench
+set -uo pipefail
+OUT=${OUT:-out}
+mkdir -p "$OUT"
+tar xzf .gpuz/b.tgz
+source .gpu/env.sh
+B=.gpu/bin
+dev=$(nvidia-smi --query-gpu=name --format=csv,noheader | head -1)
+commit=$(cat .gpuz/commit 2>/dev/null || echo unknown)
+"$B/pflow-gpu-bandwidth" > "$OUT/bandwidth.json" 2>&1 || true
+bw=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["memcpy_gb_per_s"])' "$OUT/bandwidth.json" 2>/dev/null || echo 0)
+rest=${SPH_AB_SPACING:-0.006}
+flow=${SPH_AB_FLOW_SPACING:-0.01}
+one() {  # label binary options...
+  local label=$1 bin=$2
+  shift 2
+  timeout "${SPH_AB_TIMEOUT:-200}" "$B/$bin" --executor cuda --precision float --integrator velocity_verlet --copy-bandwidth "$bw" \
+    --device "$dev" --commit "$commit:$bin" "$@" 2>> "$OUT/ab.log" | sed "s/^{/{\"label\":\"$label\",/" >> "$OUT/ab.jsonl"
+}
+for round in 1 2; do
+  for bin in "$@"; do
+    one "rest $rest" "$bin" --spacing "$rest" --warmup 10 --steps 50
+    one "flow $flow" "$bin" --spacing "$flow" --advance 0.32 --warmup 10 --steps 200
+  done
+done
+last=${!#}
+for skin in ${SPH_AB_SKINS:-}; do
+  one "flow $flow skin $skin" "$last" --spacing "$flow" --advance 0.32 --warmup 10 --steps 200 --skin "$skin"
+done
+for sp in ${SPH_AB_FLOW_BIG:-}; do
+  one "flow $sp" "$last" --spacing "$sp" --advance 0.32 --warmup 10 --steps 100
+done
+python3 - "$OUT/ab.jsonl" <<'E'
+import json, sys
+print("%-26s %-30s %9s %8s %6s" % ("case", "binary", "N", "ms/step", "sorts"))
+for l in open(sys.argv[1]):
+    try: r = json.loads(l)
+    except Exception: continue
+    print("%-26s %-30s %9d %8.3f %6d" % (r["label"], r["commit"].split(":")[-1], r["n"], r["ms_per_step"], r.get("cell_sorts", 0)))
+E

@@ -1,0 +1,45 @@
+// Bit and arithmetic helpers of the pair loops. Square roots and quotients where float on the GPU may use the special-function unit's approximations instead of
+// the correctly rounded sequences (a few instructions instead of about ten, and no slow path): the SPH pair terms,
+// whose float runs are accurate to far less than these roundings (docs/sph.md, "Performance"). On the CPU, and in
+// double everywhere, they are the plain operations, so double runs agree across executors as before.
+#pragma once
+#include <cmath>
+#include <cstdint>
+#include <type_traits>
+
+#include "compute/core/Types.h"
+
+namespace pflow::compute {
+
+// sqrt(x) for x >= 0: PTX sqrt.approx.f32 in float on the GPU (relative error below 2^-22; 0 for 0).
+template <class R>
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE R sqrtFast(R x) {
+#if defined(__CUDA_ARCH__)
+  if constexpr (std::is_same_v<R, float>) {
+    float y;
+    asm("sqrt.approx.f32 %0, %1;" : "=f"(y) : "f"(x));
+    return y;
+  }
+#endif
+  return std::sqrt(x);
+}
+
+// a / b for |b| in [2^-126, 2^126]: __fdividef in float on the GPU (2 ulp).
+template <class R>
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE R divFast(R a, R b) {
+#if defined(__CUDA_ARCH__)
+  if constexpr (std::is_same_v<R, float>) return __fdividef(a, b);
+#endif
+  return a / b;
+}
+
+// The index of the lowest set bit of x != 0.
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE int lowestSetBit(std::uint32_t x) {
+#if defined(__CUDA_ARCH__)
+  return __ffs(int(x)) - 1;
+#else
+  return __builtin_ctz(x);
+#endif
+}
+
+}  // namespace pflow::compute
