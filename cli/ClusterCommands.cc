@@ -69,6 +69,7 @@ const char* stateName(mv1::JobState s) {
     case mv1::JOB_STATE_FAILED: return "failed";
     case mv1::JOB_STATE_CANCELLING: return "cancelling";
     case mv1::JOB_STATE_CANCELLED: return "cancelled";
+    case mv1::JOB_STATE_REQUEUED: return "requeued";
     default: return "unknown";
   }
 }
@@ -111,6 +112,8 @@ json toJson(const mv1::Job& j) {
           {"started_at", j.started_at()},
           {"finished_at", j.finished_at()},
           {"exit_code", j.exit_code()},
+          {"attempts", j.attempts()},
+          {"max_attempts", j.max_attempts()},
           {"model", j.model()},
           {"progress",
            {{"step", p.step()},
@@ -119,6 +122,12 @@ json toJson(const mv1::Job& j) {
             {"duration_s", p.duration()},
             {"particle_steps_per_s", p.particle_steps_per_second()},
             {"eta_s", p.eta_seconds()}}}};
+}
+
+// "2/3": the attempt (a start; more than one after a requeue) and the job's limit; "-" before the first start.
+std::string attemptText(const mv1::Job& j) {
+  if (j.attempts() == 0) return "-";
+  return std::to_string(j.attempts()) + (j.max_attempts() > 0 ? "/" + std::to_string(j.max_attempts()) : "");
 }
 
 double percent(const mv1::Job& j) {
@@ -138,6 +147,8 @@ void printJob(const mv1::Job& j) {
   std::printf("job %s (%s): %s%s%s\n", j.id().c_str(), j.name().c_str(), stateName(j.state()), j.reason().empty() ? "" : ": ",
               j.reason().c_str());
   std::printf("  particles  %llu on %s\n", (unsigned long long)j.particles(), devicesText(j).c_str());
+  if (j.attempts() > 1 || j.state() == mv1::JOB_STATE_REQUEUED)
+    std::printf("  attempt    %s (a lost node or a killed worker puts a job back in the queue)\n", attemptText(j).c_str());
   const auto& p = j.progress();
   std::printf("  progress   step %lld / %lld (%.1f%%), t = %.4g / %.4g s, %.3g particle-steps/s, ETA %s\n", (long long)p.step(),
               (long long)p.total_steps(), percent(j), p.time(), p.duration(), p.particle_steps_per_second(), duration(p.eta_seconds()).c_str());
@@ -203,11 +214,12 @@ int listJobs(const Endpoints& e, bool all, bool json) {
     std::printf("%s\n", out.dump().c_str());
     return kExitOk;
   }
-  std::printf("%-18s %-16s %-10s %10s %-22s %7s %10s %8s\n", "ID", "NAME", "STATE", "PARTICLES", "DEVICES", "DONE", "RATE", "ETA");
+  std::printf("%-18s %-16s %-10s %7s %10s %-22s %7s %10s %8s\n", "ID", "NAME", "STATE", "ATTEMPT", "PARTICLES", "DEVICES", "DONE", "RATE",
+              "ETA");
   for (const auto& j : resp.jobs())
-    std::printf("%-18s %-16s %-10s %10llu %-22s %6.1f%% %10.3g %8s\n", j.id().c_str(), j.name().substr(0, 16).c_str(), stateName(j.state()),
-                (unsigned long long)j.particles(), devicesText(j).substr(0, 22).c_str(), percent(j), j.progress().particle_steps_per_second(),
-                finished(j.state()) ? "-" : duration(j.progress().eta_seconds()).c_str());
+    std::printf("%-18s %-16s %-10s %7s %10llu %-22s %6.1f%% %10.3g %8s\n", j.id().c_str(), j.name().substr(0, 16).c_str(), stateName(j.state()),
+                attemptText(j).c_str(), (unsigned long long)j.particles(), devicesText(j).substr(0, 22).c_str(), percent(j),
+                j.progress().particle_steps_per_second(), finished(j.state()) ? "-" : duration(j.progress().eta_seconds()).c_str());
   if (resp.jobs().empty()) std::printf("(no %sjobs)\n", all ? "" : "active ");
   return kExitOk;
 }

@@ -3,20 +3,20 @@
 #include <sqlite3.h>
 
 #include <map>
+#include <optional>
 #include <utility>
 
 namespace pflow::manager {
 namespace {
 
-constexpr int kSchemaVersion = 2;  // 2: jobs.model
+constexpr int kSchemaVersion = 3;  // 2: jobs.model; 3: the REQUEUED state, jobs.attempts and jobs.max_attempts
 
-constexpr const char* kSchema = R"sql(
-CREATE TABLE IF NOT EXISTS schema_info(version INTEGER NOT NULL);
-CREATE TABLE IF NOT EXISTS jobs(
+// The jobs table's columns and constraints (also the migration's new table).
+constexpr const char* kJobColumns = R"sql((
   seq INTEGER PRIMARY KEY,
   id TEXT NOT NULL UNIQUE,
   name TEXT NOT NULL,
-  state TEXT NOT NULL CHECK(state IN ('QUEUED','STARTING','RUNNING','SUCCEEDED','FAILED','CANCELLING','CANCELLED')),
+  state TEXT NOT NULL CHECK(state IN ('QUEUED','STARTING','RUNNING','SUCCEEDED','FAILED','CANCELLING','CANCELLED','REQUEUED')),
   reason TEXT NOT NULL,
   scene_name TEXT NOT NULL,
   model_id TEXT NOT NULL,
@@ -37,7 +37,11 @@ CREATE TABLE IF NOT EXISTS jobs(
   particle_steps_per_second REAL NOT NULL,
   eta_seconds REAL NOT NULL,
   progress_at REAL NOT NULL,
-  message TEXT NOT NULL);
+  message TEXT NOT NULL,
+  attempts INTEGER NOT NULL DEFAULT 0,
+  max_attempts INTEGER NOT NULL DEFAULT 0))sql";
+
+constexpr const char* kOtherTables = R"sql(
 CREATE TABLE IF NOT EXISTS job_devices(
   job_id TEXT NOT NULL REFERENCES jobs(id) ON DELETE CASCADE,
   rank INTEGER NOT NULL,
@@ -48,6 +52,13 @@ CREATE TABLE IF NOT EXISTS job_devices(
   PRIMARY KEY(job_id, rank));
 CREATE UNIQUE INDEX IF NOT EXISTS one_live_lease_per_device ON job_devices(node, kind, device_index) WHERE leased = 1;
 )sql";
+
+// Version 2 -> 3: SQLite cannot change a CHECK constraint, so the jobs table is rebuilt (SQLite's documented
+// procedure: foreign keys off, new table, copy, drop, rename, check). A job that had started counts one attempt.
+constexpr const char* kOldColumns =
+    "seq, id, name, state, reason, scene_name, model_id, model_uri, particles, memory_bytes, model, max_devices, wait, "
+    "submitted_at, started_at, finished_at, exit_code, step, total_steps, sim_time, sim_duration, "
+    "particle_steps_per_second, eta_seconds, progress_at, message";
 
 // A prepared statement that finalizes itself.
 class Stmt {
@@ -90,13 +101,19 @@ Result<std::unique_ptr<JobStore>> JobStore::open(const std::string& path) {
   if (path != ":memory:") {
     if (Status s = store->exec("PRAGMA journal_mode=WAL;"); !s) return s;
   }
-  for (const char* sql : {"PRAGMA synchronous=NORMAL;", "PRAGMA foreign_keys=ON;", kSchema})
+  const std::string schema = std::string("CREATE TABLE IF NOT EXISTS schema_info(version INTEGER NOT NULL);\n") +
+                             "CREATE TABLE IF NOT EXISTS jobs" + kJobColumns + ";\n" + kOtherTables;
+  for (const char* sql : {"PRAGMA synchronous=NORMAL;", "PRAGMA foreign_keys=ON;", schema.c_str()})
     if (Status s = store->exec(sql); !s) return s;
 
-  Stmt version(db, "SELECT version FROM schema_info LIMIT 1");
-  if (!version.ok()) return store->error("reading the schema version");
-  if (version.step() == SQLITE_ROW) {
-    auto v = version.colI64(0);
+  std::optional<std::int64_t> stored;  // read and finalized first: a migration may drop a table
+  {
+    Stmt version(db, "SELECT version FROM schema_info LIMIT 1");
+    if (!version.ok()) return store->error("reading the schema version");
+    if (version.step() == SQLITE_ROW) stored = version.colI64(0);
+  }
+  if (stored) {
+    auto v = *stored;
     if (v == 1) {  // version 1 had no model column: add it (empty for the jobs it holds)
       if (Status s = store->exec("BEGIN IMMEDIATE; ALTER TABLE jobs ADD COLUMN model TEXT NOT NULL DEFAULT ''; "
                                  "UPDATE schema_info SET version = 2; COMMIT;");
@@ -105,6 +122,17 @@ Result<std::unique_ptr<JobStore>> JobStore::open(const std::string& path) {
         return s;
       }
       v = 2;
+    }
+    if (v == 2) {
+      const std::string sql = std::string("BEGIN IMMEDIATE; CREATE TABLE jobs_v3") + kJobColumns + "; INSERT INTO jobs_v3(" + kOldColumns +
+                              ", attempts) SELECT " + kOldColumns + ", CASE WHEN started_at > 0 THEN 1 ELSE 0 END FROM jobs; " +
+                              "DROP TABLE jobs; ALTER TABLE jobs_v3 RENAME TO jobs; UPDATE schema_info SET version = 3; COMMIT;";
+      if (Status s = store->exec("PRAGMA foreign_keys=OFF;"); !s) return s;
+      Status migrated = store->exec(sql.c_str());
+      if (!migrated) store->exec("ROLLBACK;");
+      if (Status s = store->exec("PRAGMA foreign_keys=ON;"); !s) return s;
+      if (!migrated) return migrated;
+      v = 3;
     }
     if (v != kSchemaVersion)
       return failedPrecondition("job database " + path + " has schema version " + std::to_string(v) + "; this manager knows " +
@@ -144,8 +172,8 @@ Status JobStore::save(const Job& job) {
     Stmt st(m_db, R"sql(
 INSERT INTO jobs(seq, id, name, state, reason, scene_name, model_id, model_uri, particles, memory_bytes, max_devices, wait,
                  submitted_at, started_at, finished_at, exit_code, step, total_steps, sim_time, sim_duration,
-                 particle_steps_per_second, eta_seconds, progress_at, message, model)
-VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18, ?19, ?20, ?21, ?22, ?23, ?24, ?25)
+                 particle_steps_per_second, eta_seconds, progress_at, message, model, attempts, max_attempts)
+VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18, ?19, ?20, ?21, ?22, ?23, ?24, ?25, ?26, ?27)
 ON CONFLICT(id) DO UPDATE SET
   name=excluded.name, state=excluded.state, reason=excluded.reason, scene_name=excluded.scene_name,
   model_id=excluded.model_id, model_uri=excluded.model_uri, particles=excluded.particles,
@@ -153,7 +181,8 @@ ON CONFLICT(id) DO UPDATE SET
   submitted_at=excluded.submitted_at, started_at=excluded.started_at, finished_at=excluded.finished_at,
   exit_code=excluded.exit_code, step=excluded.step, total_steps=excluded.total_steps, sim_time=excluded.sim_time,
   sim_duration=excluded.sim_duration, particle_steps_per_second=excluded.particle_steps_per_second,
-  eta_seconds=excluded.eta_seconds, progress_at=excluded.progress_at, message=excluded.message, model=excluded.model
+  eta_seconds=excluded.eta_seconds, progress_at=excluded.progress_at, message=excluded.message, model=excluded.model,
+  attempts=excluded.attempts, max_attempts=excluded.max_attempts
 )sql");
     if (!st.ok()) return fail("preparing the job update");
     st.i64(1, job.seq);
@@ -181,6 +210,8 @@ ON CONFLICT(id) DO UPDATE SET
     st.real(23, job.progressAt);
     st.text(24, job.message);
     st.text(25, job.model);
+    st.i64(26, job.attempts);
+    st.i64(27, job.maxAttempts);
     if (st.step() != SQLITE_DONE) return fail("saving job " + job.id);
   }
   {
@@ -215,7 +246,7 @@ Result<std::vector<Job>> JobStore::loadAll() const {
     Stmt st(m_db, R"sql(
 SELECT seq, id, name, state, reason, scene_name, model_id, model_uri, particles, memory_bytes, max_devices, wait,
        submitted_at, started_at, finished_at, exit_code, step, total_steps, sim_time, sim_duration,
-       particle_steps_per_second, eta_seconds, progress_at, message, model
+       particle_steps_per_second, eta_seconds, progress_at, message, model, attempts, max_attempts
 FROM jobs ORDER BY seq)sql");
     if (!st.ok()) return error("preparing the job query");
     int rc;
@@ -248,6 +279,8 @@ FROM jobs ORDER BY seq)sql");
       j.progressAt = st.colReal(22);
       j.message = st.colText(23);
       j.model = st.colText(24);
+      j.attempts = static_cast<int>(st.colI64(25));
+      j.maxAttempts = static_cast<int>(st.colI64(26));
       index[j.id] = jobs.size();
       jobs.push_back(std::move(j));
     }

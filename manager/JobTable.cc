@@ -5,10 +5,11 @@ namespace pflow::manager {
 bool JobTable::isLegal(JobState from, JobState to) {
   using S = JobState;
   switch (from) {
-    case S::kQueued: return to == S::kStarting || to == S::kCancelled;
+    case S::kQueued:
+    case S::kRequeued: return to == S::kStarting || to == S::kCancelled;
     case S::kStarting:
-      return to == S::kRunning || to == S::kSucceeded || to == S::kFailed || to == S::kCancelling;
-    case S::kRunning: return to == S::kSucceeded || to == S::kFailed || to == S::kCancelling;
+      return to == S::kRunning || to == S::kSucceeded || to == S::kFailed || to == S::kCancelling || to == S::kRequeued;
+    case S::kRunning: return to == S::kSucceeded || to == S::kFailed || to == S::kCancelling || to == S::kRequeued;
     case S::kCancelling: return to == S::kCancelled;
     case S::kSucceeded:
     case S::kFailed:
@@ -20,7 +21,10 @@ bool JobTable::isLegal(JobState from, JobState to) {
 Status JobTable::transition(Job& job, JobState to, const std::string& reason, double now) {
   if (!isLegal(job.state, to))
     return failedPrecondition("job " + job.id + " cannot go from " + jobStateName(job.state) + " to " + jobStateName(to));
-  if (job.state == JobState::kQueued && to != JobState::kCancelled) job.startedAt = now;
+  if (isWaiting(job.state) && to == JobState::kStarting) {
+    job.startedAt = now;
+    ++job.attempts;
+  }
   job.state = to;
   if (!reason.empty()) job.reason = reason;
   if (isFinal(to)) job.finishedAt = now;
@@ -51,7 +55,7 @@ std::vector<const Job*> JobTable::queued() const {
   std::vector<const Job*> out;
   for (const auto& [seq, id] : m_bySeq) {
     const Job& j = m_jobs.at(id);
-    if (j.state == JobState::kQueued) out.push_back(&j);
+    if (isWaiting(j.state)) out.push_back(&j);
   }
   return out;
 }

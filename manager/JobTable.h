@@ -2,8 +2,9 @@
 //
 //   QUEUED     -> STARTING (placed), CANCELLED (cancel)
 //   STARTING   -> RUNNING (start confirmed or first progress), SUCCEEDED/FAILED (exit, start failure, node lost),
-//                 CANCELLING (cancel)
-//   RUNNING    -> SUCCEEDED, FAILED, CANCELLING
+//                 CANCELLING (cancel), REQUEUED (node lost, worker gone or killed, attempts left)
+//   RUNNING    -> SUCCEEDED, FAILED, CANCELLING, REQUEUED
+//   REQUEUED   -> STARTING (placed again), CANCELLED (cancel)
 //   CANCELLING -> CANCELLED (worker exited, node lost, start failed)
 //   SUCCEEDED, FAILED, CANCELLED: final.
 #pragma once
@@ -21,7 +22,7 @@ class JobTable {
   static bool isLegal(JobState from, JobState to);
 
   // Applies a transition to a job value: state, reason, and the timestamps (startedAt when it leaves the queue,
-  // finishedAt when it becomes final). FAILED_PRECONDITION naming both states when the transition is illegal.
+  // finishedAt when it becomes final) and the attempt count (one more each time it leaves the queue). FAILED_PRECONDITION naming both states when the transition is illegal.
   static Status transition(Job& job, JobState to, const std::string& reason, double now);
 
   // Inserts or replaces a job (by id).
@@ -29,7 +30,7 @@ class JobTable {
   const Job* find(const std::string& id) const;
   // Every job in submission order; only queued/starting/running/cancelling ones when activeOnly.
   std::vector<Job> list(bool activeOnly) const;
-  // Queued jobs, oldest first (the FIFO).
+  // Queued and requeued jobs, in submission order (the FIFO: a requeued job keeps its place).
   std::vector<const Job*> queued() const;
   // Jobs that hold devices (starting, running, cancelling).
   std::vector<const Job*> holdingDevices() const;

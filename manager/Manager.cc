@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <csignal>
 #include <cstdio>
 #include <set>
 
@@ -50,6 +51,7 @@ Result<std::unique_ptr<Manager>> Manager::create(ManagerOptions options, const C
                                                  AgentClient& agents, FrontendClient& frontend) {
   if (!(options.heartbeatTimeoutSeconds > 0) || !(options.heartbeatIntervalSeconds > 0) || !(options.missingJobGraceSeconds > 0))
     return invalidArgument("manager: heartbeat timeout, interval and missing-job grace must be positive");
+  if (options.maxAttempts < 1) return invalidArgument("manager: --max-attempts must be at least 1 (" + std::to_string(options.maxAttempts) + ")");
   if (options.thresholds.particlesPerGpu == 0 || options.thresholds.particlesPerCpuSlot == 0)
     return invalidArgument("manager: particles per GPU and per CPU slot must be positive");
   std::unique_ptr<Manager> m(new Manager(std::move(options), clock, store, agents, frontend));
@@ -61,7 +63,7 @@ Result<std::unique_ptr<Manager>> Manager::create(ManagerOptions options, const C
       if (Status s = m->m_inventory.lease(j.devices, j.id); !s) return internalError("job database " + store.path() + ": " + s.message());
       m->m_runtime[j.id].attached = true;  // whatever the agent says at its next heartbeat decides
       ++active;
-    } else if (j.state == JobState::kQueued) {
+    } else if (isWaiting(j.state)) {
       ++queued;
     }
     m->m_jobs.put(std::move(j));
@@ -118,6 +120,23 @@ void Manager::endLocked(const Job& job, JobState to, const std::string& reason, 
   (void)commitLocked(std::move(next), event);
 }
 
+void Manager::requeueOrFailLocked(const Job& job, const std::string& why, std::optional<int> exitCode) {
+  const int limit = job.maxAttempts > 0 ? job.maxAttempts : m_options.maxAttempts;
+  const std::string attempt = "attempt " + std::to_string(job.attempts) + " of " + std::to_string(limit);
+  if (job.attempts >= limit) {
+    endLocked(job, JobState::kFailed, why + " (" + attempt + ")", exitCode, "failed: " + why + " (" + attempt + ", none left)");
+    return;
+  }
+  Job next = job;
+  if (Status s = JobTable::transition(next, JobState::kRequeued, why + " (" + attempt + "; requeued)", m_clock.now()); !s) {
+    spdlog::error("manager: {}", s.message());
+    return;
+  }
+  if (exitCode) next.exitCode = *exitCode;
+  next.message.clear();
+  (void)commitLocked(std::move(next), "requeued: " + why + " (" + attempt + ")");
+}
+
 Lease Manager::leaseFor(const Job& job) const {
   Lease l;
   l.jobId = job.id;
@@ -143,8 +162,8 @@ void Manager::scheduleLocked(Actions& actions) {
     const Placement p = place({job.particles, job.memoryBytes, job.maxDevices}, m_inventory.snapshot(), m_options.thresholds);
     if (p.outcome != PlacementOutcome::kPlaced) break;  // FIFO: the head of the queue waits, and so does everyone behind it
     Job next = job;
+    if (next.state == JobState::kQueued) next.reason.clear();  // a requeued job keeps why its last attempt ended
     (void)JobTable::transition(next, JobState::kStarting, "", m_clock.now());
-    next.reason.clear();
     next.devices = p.devices;
     if (!commitLocked(next, "starting on " + describeDevices(p.devices))) break;
     m_runtime[id] = Runtime{};
@@ -262,6 +281,7 @@ Result<Job> Manager::submit(const SubmitRequest& req) {
     j.memoryBytes = model->memoryBytes;
     j.model = model->model;
     j.maxDevices = req.maxDevices;
+    j.maxAttempts = m_options.maxAttempts;
     j.wait = req.wait;
     j.submittedAt = m_clock.now();
     j.progress.totalSteps = model->steps;
@@ -298,6 +318,7 @@ Result<Job> Manager::cancel(const std::string& id) {
     if (!j) return notFound("no job '" + id + "'");
     switch (j->state) {
       case JobState::kQueued:
+      case JobState::kRequeued:
         endLocked(*j, JobState::kCancelled, "cancelled while queued", std::nullopt, "cancelled while queued");
         scheduleLocked(actions);  // the jobs behind it may fit now
         break;
@@ -354,7 +375,9 @@ Result<HeartbeatReply> Manager::heartbeat(const HeartbeatInfo& hb) {
     const std::set<std::string> running(hb.runningJobs.begin(), hb.runningJobs.end());
     for (const std::string& id : running) {
       const Job* j = m_jobs.find(id);
-      if (!j || isFinal(j->state) || j->state == JobState::kCancelling || j->state == JobState::kQueued) reply.stopJobs.push_back(id);
+      // Ended, cancelling, waiting in the queue, or started again on other devices (a worker of an earlier attempt).
+      if (!j || isFinal(j->state) || j->state == JobState::kCancelling || isWaiting(j->state) || !nodesOf(*j).count(hb.node))
+        reply.stopJobs.push_back(id);
     }
     std::vector<std::string> held;
     for (const Job* j : m_jobs.holdingDevices())
@@ -396,6 +419,7 @@ Result<bool> Manager::reportProgress(const std::string& jobId, const Progress& p
   const Job* j = m_jobs.find(jobId);
   if (!j) return notFound("no job '" + jobId + "'");
   if (isFinal(j->state)) return true;  // a stray worker of an ended job: tell it to stop
+  if (j->state == JobState::kRequeued) return true;  // a worker of the attempt that was given up: stop
   if (j->state == JobState::kQueued)
     return failedPrecondition("job " + jobId + " is queued: it has no worker that could report progress");
 
@@ -442,6 +466,7 @@ Status Manager::reportExit(const std::string& jobId, const std::string& node, in
     const Job* j = m_jobs.find(jobId);
     if (!j) return notFound("no job '" + jobId + "'");
     if (isFinal(j->state)) return Status::ok();  // it already ended (e.g. its node was declared lost)
+    if (j->state == JobState::kRequeued) return Status::ok();  // the exit of an attempt already given up
     if (j->state == JobState::kQueued) return failedPrecondition("job " + jobId + " is queued: it has no worker that could exit");
     const auto nodes = nodesOf(*j);
     if (!node.empty() && !nodes.count(node))
@@ -453,7 +478,14 @@ Status Manager::reportExit(const std::string& jobId, const std::string& node, in
       endLocked(*j, JobState::kSucceeded, "", exitCode, "succeeded");
     } else {
       const std::string why = "the worker failed with " + code + (reason.empty() ? "" : ": " + reason);
-      endLocked(*j, JobState::kFailed, why, exitCode, "failed: " + why);
+      // Killed from outside, or cut off from a service or its disk: another attempt (elsewhere) may succeed. A
+      // simulation's own error (exit code 3, a crash) would repeat.
+      const bool external = exitCode == 2 || exitCode == 128 + SIGKILL || exitCode == 128 + SIGTERM || exitCode == 128 + SIGHUP ||
+                            exitCode == 128 + SIGINT;
+      if (external)
+        requeueOrFailLocked(*j, why, exitCode);
+      else
+        endLocked(*j, JobState::kFailed, why, exitCode, "failed: " + why);
     }
     scheduleLocked(actions);
   }
@@ -495,7 +527,7 @@ void Manager::checkNodesLocked(Actions& actions) {
     if (j.state == JobState::kCancelling)
       endLocked(j, JobState::kCancelled, "", std::nullopt, "cancelled: " + why);
     else
-      endLocked(j, JobState::kFailed, why, std::nullopt, "failed: " + why);
+      requeueOrFailLocked(j, why, std::nullopt);
   }
 }
 

@@ -37,6 +37,9 @@ struct ManagerOptions {
   double heartbeatTimeoutSeconds = 15;   // a node silent this long is lost
   double heartbeatIntervalSeconds = 2;   // what agents are told to use
   double missingJobGraceSeconds = 15;    // a started job its agent's heartbeats stop listing fails after this long
+  // Starts a job may have: when its node is lost, its agent stops listing its worker, or the worker is killed by a
+  // signal or cannot reach a service (exit code 2), the job is REQUEUED until this many have failed, then FAILED.
+  int maxAttempts = 3;
   std::string managerAddress;            // put in leases: where workers report progress
   std::string backendAddress;            // put in leases: where workers send snapshots
 };
@@ -70,7 +73,9 @@ class Manager {
   // Records progress (STARTING -> RUNNING on the first report) and fills in the rate and ETA when the worker
   // left them 0. Returns whether the worker should stop (the job is cancelling, or already ended).
   Result<bool> reportProgress(const std::string& jobId, const Progress& progress, const std::string& message);
-  // Exit code 0 -> SUCCEEDED; otherwise FAILED with the reason; a cancelling job -> CANCELLED. Frees the devices.
+  // Exit code 0 -> SUCCEEDED; a cancelling job -> CANCELLED; a worker killed by SIGKILL/SIGTERM/SIGHUP/SIGINT or
+  // exiting with 2 (a service out of reach, an I/O error) -> REQUEUED while attempts are left; otherwise FAILED with
+  // the reason. Frees the devices.
   // A report for a job that already ended is accepted and ignored.
   Status reportExit(const std::string& jobId, const std::string& node, int exitCode, const std::string& reason);
 
@@ -108,6 +113,8 @@ class Manager {
   // The job table and the watchers only (no store, no leases): for progress between saves.
   void publishLocked(const Job& next, const std::string& event);
   void endLocked(const Job& job, JobState to, const std::string& reason, std::optional<int> exitCode, const std::string& event);
+  // A failure a new attempt may not repeat: REQUEUED while the job has attempts left, else FAILED ("attempt N of M").
+  void requeueOrFailLocked(const Job& job, const std::string& why, std::optional<int> exitCode);
   void scheduleLocked(Actions& actions);
   void checkNodesLocked(Actions& actions);
   Lease leaseFor(const Job& job) const;

@@ -22,6 +22,7 @@ mv1::JobState toProto(JobState state) {
     case JobState::kFailed: return mv1::JOB_STATE_FAILED;
     case JobState::kCancelling: return mv1::JOB_STATE_CANCELLING;
     case JobState::kCancelled: return mv1::JOB_STATE_CANCELLED;
+    case JobState::kRequeued: return mv1::JOB_STATE_REQUEUED;
   }
   return mv1::JOB_STATE_UNSPECIFIED;
 }
@@ -47,6 +48,8 @@ mv1::Job toProto(const Job& j) {
   pr->set_eta_seconds(j.progress.etaSeconds);
   p.set_exit_code(j.exitCode);
   p.set_model(j.model);
+  p.set_attempts(j.attempts);
+  p.set_max_attempts(j.maxAttempts);
   return p;
 }
 

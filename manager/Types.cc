@@ -17,7 +17,7 @@ const char* deviceStateName(DeviceState state) {
 
 namespace {
 constexpr JobState kAllStates[] = {JobState::kQueued,    JobState::kStarting,   JobState::kRunning,  JobState::kSucceeded,
-                                   JobState::kFailed,    JobState::kCancelling, JobState::kCancelled};
+                                   JobState::kFailed,    JobState::kCancelling, JobState::kCancelled, JobState::kRequeued};
 }
 
 const char* jobStateName(JobState state) {
@@ -29,6 +29,7 @@ const char* jobStateName(JobState state) {
     case JobState::kFailed: return "FAILED";
     case JobState::kCancelling: return "CANCELLING";
     case JobState::kCancelled: return "CANCELLED";
+    case JobState::kRequeued: return "REQUEUED";
   }
   return "?";
 }
@@ -40,6 +41,8 @@ std::optional<JobState> jobStateFromName(const std::string& name) {
 }
 
 bool isFinal(JobState s) { return s == JobState::kSucceeded || s == JobState::kFailed || s == JobState::kCancelled; }
+
+bool isWaiting(JobState s) { return s == JobState::kQueued || s == JobState::kRequeued; }
 
 bool holdsDevices(JobState s) {
   return s == JobState::kStarting || s == JobState::kRunning || s == JobState::kCancelling;

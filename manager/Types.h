@@ -53,10 +53,12 @@ struct NodeView {
 
 // ---- jobs --------------------------------------------------------------------------------------------------------
 
-enum class JobState { kQueued, kStarting, kRunning, kSucceeded, kFailed, kCancelling, kCancelled };
+// kRequeued: back in the queue after a failure of its node or worker that a new attempt may not repeat (Manager).
+enum class JobState { kQueued, kStarting, kRunning, kSucceeded, kFailed, kCancelling, kCancelled, kRequeued };
 const char* jobStateName(JobState state);  // "QUEUED", ...
 std::optional<JobState> jobStateFromName(const std::string& name);
 bool isFinal(JobState state);         // succeeded, failed, cancelled
+bool isWaiting(JobState state);       // queued, requeued: in the queue
 bool holdsDevices(JobState state);    // starting, running, cancelling: the job has a lease
 
 struct Progress {
@@ -90,6 +92,8 @@ struct Job {
   std::string message;                // the last progress message from the worker
   int exitCode = 0;
   std::string model;                  // the least model chosen for the scene (BuiltModel::model)
+  int attempts = 0;                   // how many times it was started (the current attempt's number once started)
+  int maxAttempts = 0;                // the manager's --max-attempts when it was submitted (0: the manager's now)
 };
 
 // What a job may use, as sent to the agent of its first device's node.

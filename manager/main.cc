@@ -67,9 +67,13 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   app.add_option("--missing-job-grace", options.missingJobGraceSeconds,
-                 "seconds a started job may be missing from its agent's heartbeats before it fails")
+                 "seconds a started job may be missing from its agent's heartbeats before it is requeued")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  app.add_option("--max-attempts", options.maxAttempts,
+                 "starts a job may have: a lost node, a vanished or killed worker requeues it until this many failed")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100));
   app.add_option("--tick", tickSeconds, "seconds between lost-node checks and queue scans")->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--threads", threads, "worker threads for calls that reach agents or the frontend")
       ->capture_default_str()

@@ -12,7 +12,7 @@ namespace pflow::manager {
 namespace {
 
 constexpr JobState kAll[] = {JobState::kQueued,    JobState::kStarting,   JobState::kRunning,  JobState::kSucceeded,
-                             JobState::kFailed,    JobState::kCancelling, JobState::kCancelled};
+                             JobState::kFailed,    JobState::kCancelling, JobState::kCancelled, JobState::kRequeued};
 
 TEST(JobTable, EveryTransition) {
   using S = JobState;
@@ -20,7 +20,8 @@ TEST(JobTable, EveryTransition) {
       {S::kQueued, S::kStarting},     {S::kQueued, S::kCancelled},     {S::kStarting, S::kRunning},
       {S::kStarting, S::kSucceeded},  {S::kStarting, S::kFailed},      {S::kStarting, S::kCancelling},
       {S::kRunning, S::kSucceeded},   {S::kRunning, S::kFailed},       {S::kRunning, S::kCancelling},
-      {S::kCancelling, S::kCancelled}};
+      {S::kCancelling, S::kCancelled}, {S::kStarting, S::kRequeued},   {S::kRunning, S::kRequeued},
+      {S::kRequeued, S::kStarting},   {S::kRequeued, S::kCancelled}};
   int checked = 0;
   for (S from : kAll) {
     for (S to : kAll) {
@@ -41,7 +42,7 @@ TEST(JobTable, EveryTransition) {
       ++checked;
     }
   }
-  EXPECT_EQ(checked, 49);
+  EXPECT_EQ(checked, 64);
 }
 
 TEST(JobTable, TimestampsAndReason) {
@@ -56,6 +57,37 @@ TEST(JobTable, TimestampsAndReason) {
   EXPECT_EQ(j.finishedAt, 20.0);
   EXPECT_EQ(j.reason, "node a lost");
   EXPECT_TRUE(isFinal(j.state));
+}
+
+// Each start counts an attempt and stamps startedAt; a requeue keeps the count; the requeued job waits in the queue
+// in its submission order.
+TEST(JobTable, AttemptsAndTheRequeuedQueue) {
+  Job j;
+  j.id = "job-1";
+  ASSERT_TRUE(JobTable::transition(j, JobState::kStarting, "", 1.0));
+  EXPECT_EQ(j.attempts, 1);
+  ASSERT_TRUE(JobTable::transition(j, JobState::kRunning, "", 2.0));
+  ASSERT_TRUE(JobTable::transition(j, JobState::kRequeued, "node a lost", 3.0));
+  EXPECT_EQ(j.attempts, 1);
+  EXPECT_FALSE(holdsDevices(j.state));
+  EXPECT_FALSE(isFinal(j.state));
+  EXPECT_TRUE(isWaiting(j.state));
+  ASSERT_TRUE(JobTable::transition(j, JobState::kStarting, "", 4.0));
+  EXPECT_EQ(j.attempts, 2);
+  EXPECT_EQ(j.startedAt, 4.0);
+  EXPECT_EQ(j.finishedAt, 0.0);
+
+  JobTable t;
+  Job a, b;
+  a.seq = 1, a.id = "job-a", a.state = JobState::kRequeued;
+  b.seq = 2, b.id = "job-b", b.state = JobState::kQueued;
+  t.put(b);
+  t.put(a);
+  const auto q = t.queued();
+  ASSERT_EQ(q.size(), 2u);
+  EXPECT_EQ(q[0]->id, "job-a");
+  EXPECT_EQ(q[1]->id, "job-b");
+  EXPECT_EQ(t.list(true).size(), 2u);
 }
 
 TEST(JobTable, ListsInSubmissionOrderAndQueue) {
@@ -109,6 +141,8 @@ Job sampleJob() {
   j.progressAt = 110.0;
   j.message = "executor: CUDA";
   j.exitCode = 0;
+  j.attempts = 2;
+  j.maxAttempts = 3;
   return j;
 }
 
@@ -138,6 +172,8 @@ TEST(JobStore, RoundTripsEveryFieldAndLease) {
   EXPECT_EQ(j.sceneName, want.sceneName);
   EXPECT_EQ(j.modelId, want.modelId);
   EXPECT_EQ(j.modelUri, want.modelUri);
+  EXPECT_EQ(j.attempts, 2);
+  EXPECT_EQ(j.maxAttempts, 3);
   EXPECT_EQ(j.particles, want.particles);
   EXPECT_EQ(j.memoryBytes, want.memoryBytes);
   EXPECT_EQ(j.maxDevices, want.maxDevices);

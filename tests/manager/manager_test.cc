@@ -314,7 +314,10 @@ TEST_F(ManagerTest, StopNotFoundFinishesACancellingJob) {
   EXPECT_EQ(deviceState("a", 0), DeviceState::kFree);
 }
 
-TEST_F(ManagerTest, LostNodeFailsItsJobsAndFreesDevices) {
+// On its last attempt (--max-attempts 1), a job whose node is lost fails with the reason.
+TEST_F(ManagerTest, LostNodeFailsAJobOnItsLastAttempt) {
+  options.maxAttempts = 1;
+  makeManager();
   ASSERT_TRUE(manager->heartbeat(nodeBeat("a", 1)));
   ASSERT_TRUE(manager->heartbeat(nodeBeat("b", 1)));
   auto ja = manager->submit(submitRequest(10));
@@ -333,6 +336,7 @@ TEST_F(ManagerTest, LostNodeFailsItsJobsAndFreesDevices) {
   const Job lost = job(ja->id);
   EXPECT_EQ(lost.state, JobState::kFailed);
   EXPECT_NE(lost.reason.find("node a lost"), std::string::npos) << lost.reason;
+  EXPECT_NE(lost.reason.find("attempt 1 of 1"), std::string::npos) << lost.reason;
   EXPECT_EQ(job(jb->id).state, JobState::kRunning);
   EXPECT_EQ(deviceState("a", 0), DeviceState::kLost);
   bool sawLost = false;
@@ -350,6 +354,86 @@ TEST_F(ManagerTest, LostNodeFailsItsJobsAndFreesDevices) {
   EXPECT_EQ(deviceState("a", 0), DeviceState::kFree);
 }
 
+// A lost node puts its jobs back in the queue; they start again, first in the queue, on the next free device; the
+// lost node's stray worker is told to stop when the node comes back, and its late exit report is refused.
+TEST_F(ManagerTest, LostNodeRequeuesItsJobsOntoFreeDevices) {
+  ASSERT_TRUE(manager->heartbeat(nodeBeat("a", 1)));
+  ASSERT_TRUE(manager->heartbeat(nodeBeat("b", 1)));
+  auto ja = manager->submit(submitRequest(10));
+  auto jb = manager->submit(submitRequest(10));
+  auto jc = manager->submit(submitRequest(10, true));  // queued behind them
+  ASSERT_TRUE(ja && jb && jc);
+  ASSERT_EQ(ja->devices.front().node, "a");
+  EXPECT_EQ(ja->attempts, 1);
+  EXPECT_EQ(ja->maxAttempts, 3);
+  clock.advance(16);
+  ASSERT_TRUE(manager->heartbeat(nodeBeat("b", 1, 0, 80ull << 30, {jb->id})));
+  manager->tick();
+  Job requeued = job(ja->id);
+  EXPECT_EQ(requeued.state, JobState::kRequeued);
+  EXPECT_NE(requeued.reason.find("node a lost"), std::string::npos) << requeued.reason;
+  EXPECT_NE(requeued.reason.find("attempt 1 of 3; requeued"), std::string::npos) << requeued.reason;
+  EXPECT_EQ(deviceState("a", 0), DeviceState::kLost);
+  EXPECT_EQ(manager->list(true).size(), 3u);  // requeued is active
+  // Progress from the lost attempt's worker is answered "stop".
+  auto stop = manager->reportProgress(ja->id, {5, 100, 0.05, 1.0, 0, 0}, "");
+  ASSERT_TRUE(stop);
+  EXPECT_TRUE(*stop);
+  // b frees: the requeued job (submitted first) starts there before the queued one.
+  ASSERT_TRUE(manager->reportExit(jb->id, "b", 0, ""));
+  Job again = job(ja->id);
+  EXPECT_EQ(again.state, JobState::kRunning);
+  EXPECT_EQ(again.attempts, 2);
+  EXPECT_EQ(again.devices.front().node, "b");
+  EXPECT_NE(again.reason.find("node a lost"), std::string::npos) << "why attempt 1 ended stays visible";
+  EXPECT_EQ(job(jc->id).state, JobState::kQueued);
+  // Node a comes back listing the old worker: told to stop; its exit report names a node the job no longer runs on.
+  auto hb = manager->heartbeat(nodeBeat("a", 1, 0, 80ull << 30, {ja->id}));
+  ASSERT_TRUE(hb);
+  EXPECT_EQ(hb->stopJobs, std::vector<std::string>{ja->id});
+  EXPECT_EQ(manager->reportExit(ja->id, "a", 137, "").code(), StatusCode::kFailedPrecondition);
+  EXPECT_EQ(job(ja->id).state, JobState::kRunning);
+  EXPECT_EQ(job(jc->id).state, JobState::kRunning);  // on a, free again
+}
+
+// Which exits requeue: killed by a signal from outside (137 = SIGKILL) or a service out of reach (2); a simulation's
+// own error (3) fails at once. The third failed attempt fails the job.
+TEST_F(ManagerTest, KilledWorkersAreRequeuedUntilTheLastAttempt) {
+  ASSERT_TRUE(manager->heartbeat(nodeBeat("a", 1)));
+  auto j = manager->submit(submitRequest(10));
+  ASSERT_TRUE(j);
+  ASSERT_TRUE(manager->reportExit(j->id, "a", 137, "ended by signal 9 (Killed)"));
+  EXPECT_EQ(job(j->id).state, JobState::kRunning);  // requeued and started again at once: the device is free
+  EXPECT_EQ(job(j->id).attempts, 2);
+  EXPECT_EQ(job(j->id).exitCode, 137);
+  ASSERT_TRUE(manager->reportExit(j->id, "a", 2, "the back-end at backend:50053 is unreachable"));
+  EXPECT_EQ(job(j->id).attempts, 3);
+  ASSERT_TRUE(manager->reportExit(j->id, "a", 137, ""));
+  const Job failed = job(j->id);
+  EXPECT_EQ(failed.state, JobState::kFailed);
+  EXPECT_NE(failed.reason.find("attempt 3 of 3"), std::string::npos) << failed.reason;
+  EXPECT_EQ(deviceState("a", 0), DeviceState::kFree);
+
+  auto k = manager->submit(submitRequest(10));
+  ASSERT_TRUE(k);
+  ASSERT_TRUE(manager->reportExit(k->id, "a", 3, "non-finite velocity of particle 17"));
+  EXPECT_EQ(job(k->id).state, JobState::kFailed);
+  EXPECT_EQ(job(k->id).attempts, 1);
+}
+
+// A requeued job waiting for devices can be cancelled like a queued one.
+TEST_F(ManagerTest, CancelRequeued) {
+  ASSERT_TRUE(manager->heartbeat(nodeBeat("a", 1)));
+  auto j = manager->submit(submitRequest(10));
+  ASSERT_TRUE(j);
+  clock.advance(16);
+  manager->tick();  // node a lost: nowhere to start again
+  ASSERT_EQ(job(j->id).state, JobState::kRequeued);
+  auto c = manager->cancel(j->id);
+  ASSERT_TRUE(c);
+  EXPECT_EQ(c->state, JobState::kCancelled);
+}
+
 TEST_F(ManagerTest, LostNodeWhileCancellingCancels) {
   ASSERT_TRUE(manager->heartbeat(nodeBeat("a", 1)));
   auto j = manager->submit(submitRequest(10));
@@ -362,7 +446,7 @@ TEST_F(ManagerTest, LostNodeWhileCancellingCancels) {
   EXPECT_EQ(job(j->id).state, JobState::kCancelled);
 }
 
-TEST_F(ManagerTest, SpanningJobFailsWhenAnyOfItsNodesIsLost) {
+TEST_F(ManagerTest, SpanningJobIsRequeuedWhenAnyOfItsNodesIsLost) {
   ASSERT_TRUE(manager->heartbeat(nodeBeat("a", 1)));
   ASSERT_TRUE(manager->heartbeat(nodeBeat("b", 1)));
   auto j = manager->submit(submitRequest(500000));  // 2 GPUs on 2 nodes
@@ -372,14 +456,18 @@ TEST_F(ManagerTest, SpanningJobFailsWhenAnyOfItsNodesIsLost) {
   clock.advance(16);
   ASSERT_TRUE(manager->heartbeat(nodeBeat(lead, 1, 0, 80ull << 30, {j->id})));
   manager->tick();
-  const Job failed = job(j->id);
-  EXPECT_EQ(failed.state, JobState::kFailed);
-  EXPECT_NE(failed.reason.find("node " + other + " lost"), std::string::npos);
+  // Requeued, then started again on the device left (fewer GPUs than it deserves, as when fewer exist).
+  const Job again = job(j->id);
+  EXPECT_EQ(again.state, JobState::kRunning);
+  EXPECT_EQ(again.attempts, 2);
+  ASSERT_EQ(again.devices.size(), 1u);
+  EXPECT_EQ(again.devices[0].node, lead);
+  EXPECT_NE(again.reason.find("node " + other + " lost"), std::string::npos);
   ASSERT_FALSE(agents.stopsCopy().empty());  // the lead agent is told to stop the rest
   EXPECT_EQ(agents.stopsCopy().back().address, lead + ":7000");
 }
 
-TEST_F(ManagerTest, JobMissingFromItsAgentsHeartbeatsFails) {
+TEST_F(ManagerTest, JobMissingFromItsAgentsHeartbeatsIsRequeued) {
   ASSERT_TRUE(manager->heartbeat(nodeBeat("a", 1)));
   auto j = manager->submit(submitRequest(10));
   ASSERT_TRUE(j);
@@ -389,9 +477,11 @@ TEST_F(ManagerTest, JobMissingFromItsAgentsHeartbeatsFails) {
   EXPECT_EQ(job(j->id).state, JobState::kRunning);  // within the grace
   clock.advance(6);
   ASSERT_TRUE(manager->heartbeat(nodeBeat("a", 1)));
-  const Job failed = job(j->id);
-  EXPECT_EQ(failed.state, JobState::kFailed);
-  EXPECT_NE(failed.reason.find("no longer runs the worker"), std::string::npos) << failed.reason;
+  const Job again = job(j->id);
+  EXPECT_EQ(again.state, JobState::kRunning);  // requeued, then started again on the device it freed
+  EXPECT_EQ(again.attempts, 2);
+  EXPECT_NE(again.reason.find("no longer runs the worker"), std::string::npos) << again.reason;
+  EXPECT_EQ(agents.startsCopy().size(), 2u);
 }
 
 TEST_F(ManagerTest, HeartbeatValidation) {
@@ -596,7 +686,7 @@ TEST_F(ManagerRestartTest, MigratesASchemaVersion1Database) {
   EXPECT_NE(job(next->id).model.find("tangential history"), std::string::npos);
 }
 
-TEST_F(ManagerRestartTest, JobFailsWhenTheAgentDoesNotListIt) {
+TEST_F(ManagerRestartTest, JobIsRequeuedWhenTheAgentDoesNotListIt) {
   ASSERT_TRUE(manager->heartbeat(nodeBeat("a", 1)));
   auto j = manager->submit(submitRequest(10));
   ASSERT_TRUE(j);
@@ -608,13 +698,16 @@ TEST_F(ManagerRestartTest, JobFailsWhenTheAgentDoesNotListIt) {
   EXPECT_EQ(job(j->id).state, JobState::kRunning);  // within the grace
   clock.advance(options.missingJobGraceSeconds - 10);
   manager->tick();
-  const Job failed = job(j->id);
-  EXPECT_EQ(failed.state, JobState::kFailed);
-  EXPECT_NE(failed.reason.find("agent on node a no longer runs the worker"), std::string::npos) << failed.reason;
-  EXPECT_EQ(deviceState("a", 0), DeviceState::kFree);
+  const Job again = job(j->id);
+  EXPECT_EQ(again.state, JobState::kRunning);  // requeued and started again
+  EXPECT_EQ(again.attempts, 2);
+  EXPECT_NE(again.reason.find("agent on node a no longer runs the worker"), std::string::npos) << again.reason;
+  reopen();  // and that is stored
+  EXPECT_EQ(job(j->id).attempts, 2);
+  EXPECT_EQ(job(j->id).state, JobState::kRunning);
 }
 
-TEST_F(ManagerRestartTest, JobFailsWhenTheAgentNeverComesBack) {
+TEST_F(ManagerRestartTest, JobIsRequeuedWhenTheAgentNeverComesBack) {
   ASSERT_TRUE(manager->heartbeat(nodeBeat("a", 1)));
   auto j = manager->submit(submitRequest(10));
   ASSERT_TRUE(j);
@@ -623,11 +716,44 @@ TEST_F(ManagerRestartTest, JobFailsWhenTheAgentNeverComesBack) {
   EXPECT_EQ(job(j->id).state, JobState::kRunning);
   clock.advance(16);
   manager->tick();
-  const Job failed = job(j->id);
-  EXPECT_EQ(failed.state, JobState::kFailed);
-  EXPECT_NE(failed.reason.find("node a did not come back within 15.0 s"), std::string::npos) << failed.reason;
+  const Job requeued = job(j->id);
+  EXPECT_EQ(requeued.state, JobState::kRequeued);
+  EXPECT_NE(requeued.reason.find("node a did not come back within 15.0 s"), std::string::npos) << requeued.reason;
   reopen();  // and that is stored too
-  EXPECT_EQ(job(j->id).state, JobState::kFailed);
+  EXPECT_EQ(job(j->id).state, JobState::kRequeued);
+  EXPECT_EQ(job(j->id).attempts, 1);
+  // A node appears: the requeued job starts there (attempt 2).
+  ASSERT_TRUE(manager->heartbeat(nodeBeat("b", 1)));
+  EXPECT_EQ(job(j->id).state, JobState::kRunning);
+  EXPECT_EQ(job(j->id).attempts, 2);
+}
+
+// A job database of schema version 2 (no REQUEUED state, no attempt columns) is rebuilt: a job that had started
+// counts one attempt, and REQUEUED can be stored afterwards.
+TEST_F(ManagerRestartTest, MigratesASchemaVersion2Database) {
+  ASSERT_TRUE(manager->heartbeat(nodeBeat("a", 1)));
+  auto running = manager->submit(submitRequest(10));
+  auto queued = manager->submit(submitRequest(10, true));
+  ASSERT_TRUE(running && queued);
+  manager.reset();
+  store.reset();
+  const std::string downgrade = "sqlite3 '" + path.string() +
+                                "' 'ALTER TABLE jobs DROP COLUMN attempts; ALTER TABLE jobs DROP COLUMN max_attempts; "
+                                "UPDATE schema_info SET version = 2;'";
+  if (std::system(downgrade.c_str()) != 0) GTEST_SKIP() << "no sqlite3 command to write a version 2 database";
+  reopen();
+  EXPECT_EQ(job(running->id).attempts, 1);
+  EXPECT_EQ(job(queued->id).attempts, 0);
+  EXPECT_EQ(job(running->id).devices, running->devices);  // the job's devices and lease survive the rebuild
+  ASSERT_TRUE(manager->heartbeat(nodeBeat("a", 1, 0, 80ull << 30, {running->id})));
+  std::string holder;
+  EXPECT_EQ(deviceState("a", 0, &holder), DeviceState::kBusy);
+  EXPECT_EQ(holder, running->id);
+  clock.advance(16);
+  manager->tick();  // node a silent since: requeued
+  EXPECT_EQ(job(running->id).state, JobState::kRequeued);
+  reopen();
+  EXPECT_EQ(job(running->id).state, JobState::kRequeued);
 }
 
 }  // namespace

@@ -6,7 +6,8 @@ driven by the `pflow` CLI. Each scenario is one function; run all (default) or s
   cancel       cancel mid-run ends the workers within seconds and frees the device
   queue        a second job waits while the device is busy and starts when it frees
   restart      killing the manager mid-job and restarting it keeps the job and its state; the job finishes
-  killworker   killing a worker marks its job failed with the reason and frees the device
+  killworker   killing a worker requeues its job, which starts again; killing it on its last attempt fails it with
+               the reason and frees the device
   multinode    two agents (node-a on 127.0.0.1, node-b on 127.0.0.2) and one job across both through mpirun + hostfile
   errors       unknown ids, double cancel, missing steps, a back-end that is down: clear errors, exit codes
   sph          an SPH dam break (solver: sph) submitted, followed and fetched: the same particles, probe series and
@@ -229,19 +230,39 @@ def restart():
         s.close()
 
 
+def kill_workers(job):
+    """SIGKILL every pflow-worker process of `job`; returns their pids."""
+    out = subprocess.run(["pgrep", "-f", "pflow-worker --job-id %s" % job], capture_output=True, text=True).stdout.split()
+    assert out, "no worker process found"
+    for pid in out:
+        os.kill(int(pid), signal.SIGKILL)
+    return set(out)
+
+
 def killworker():
-    s = Stack()
+    # --max-attempts 2: the first kill puts the job back in the queue (attempt 1 of 2) and it starts again on the
+    # device it freed; the second kill fails it, with the reason, and frees the device.
+    s = Stack(manager_args=["--max-attempts", "2"])
     try:
         job = s.submit(LONG)
         s.wait_state(job, {"running"})
-        # The worker ranks: pflow-worker processes with this job id.
-        out = subprocess.run(["pgrep", "-f", "pflow-worker --job-id %s" % job], capture_output=True, text=True).stdout.split()
-        assert out, "no worker process found"
-        for pid in out:
-            os.kill(int(pid), signal.SIGKILL)
+        first = kill_workers(job)
+        end, last = time.time() + 60, None
+        while time.time() < end:
+            last = s.json("job", job)
+            if last["attempts"] == 2 and last["state"] == "running":
+                break
+            time.sleep(0.3)
+        assert last["attempts"] == 2 and last["state"] == "running", last
+        assert last["max_attempts"] == 2, last
+        assert "requeued" in last["reason"] and "attempt 1 of 2" in last["reason"], last
+        jobs = s.cli("jobs").stdout
+        assert "2/2" in jobs, jobs
+        second = kill_workers(job)
+        assert not (first & second), (first, second)
         final = s.wait_state(job, {"failed", "succeeded", "cancelled"}, timeout=60)
         assert final["state"] == "failed", final
-        assert final["reason"], final
+        assert "attempt 2 of 2" in final["reason"] and "signal 9" in final["reason"], final
         assert s.device_states() == ["free"], s.device_states()
     finally:
         s.close()
