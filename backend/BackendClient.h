@@ -34,6 +34,11 @@ class BackendClient {
   // the job's whole probe series too, as /probes and as CSV beside the file (probesCsvPathFor).
   virtual Status fetch(const std::string& jobId, std::optional<std::int64_t> step, const std::string& outputH5,
                        std::vector<std::string> fields, bool includeGrid, bool includeGeometry, bool includeProbes = false) = 0;
+  // Sends the checkpoint file at `path` (of step `step`) in chunks of <= 1 MiB; the back-end keeps it and the one
+  // before. INVALID_ARGUMENT when the back-end does not read it as a checkpoint of that step.
+  virtual Status writeCheckpoint(const std::string& jobId, std::int64_t step, const std::string& path) = 0;
+  // The job's latest checkpoint into a new local file `path`; returns its step. NOT_FOUND when it has none.
+  virtual Result<std::int64_t> readCheckpoint(const std::string& jobId, const std::string& path) = 0;
 };
 
 struct BackendClientOptions {
@@ -56,6 +61,8 @@ class LocalBackendClient final : public BackendClient {
   Result<std::vector<SnapshotInfo>> list(const std::string& jobId) override;
   Status fetch(const std::string& jobId, std::optional<std::int64_t> step, const std::string& outputH5,
                std::vector<std::string> fields, bool includeGrid, bool includeGeometry, bool includeProbes = false) override;
+  Status writeCheckpoint(const std::string& jobId, std::int64_t step, const std::string& path) override;
+  Result<std::int64_t> readCheckpoint(const std::string& jobId, const std::string& path) override;
 
  private:
   SnapshotStore& m_store;

@@ -1,6 +1,10 @@
 // BackendClient over gRPC (sync stubs; flow control by the blocking Write/Read; a deadline on every call).
 #include <grpcpp/grpcpp.h>
 
+#include <cstdio>
+#include <filesystem>
+#include <vector>
+
 #include "backend/BackendClient.h"
 #include "backend/ChunkProto.h"
 #include "common/rpc/Rpc.h"
@@ -90,6 +94,82 @@ class GrpcBackendClient final : public BackendClient {
     if (!local) return local;
     if (Status st = rpc::fromGrpc(remote, "ReadSnapshot job '" + jobId + "'"); !st) return st;
     return sink.finish();
+  }
+
+  Status writeCheckpoint(const std::string& jobId, std::int64_t step, const std::string& path) override {
+    std::FILE* in = std::fopen(path.c_str(), "rb");
+    if (!in) return ioError("cannot open the checkpoint '" + path + "'");
+    std::error_code ec;
+    const auto total = std::filesystem::file_size(path, ec);
+    auto context = rpc::contextWithDeadline(m_options.bulkDeadlineSeconds);
+    v1::WriteCheckpointResponse response;
+    auto writer = m_stub->WriteCheckpoint(context.get(), &response);
+    std::vector<char> buffer(std::size_t(1) << 20);
+    v1::CheckpointChunk message;
+    std::uint64_t offset = 0;
+    bool broken = false;
+    Status local;
+    while (!ec && offset < total) {
+      const std::size_t n = std::fread(buffer.data(), 1, buffer.size(), in);
+      if (n == 0) {
+        local = ioError("cannot read the checkpoint '" + path + "'");
+        break;
+      }
+      message.set_job_id(jobId);
+      message.set_step(step);
+      message.set_total_bytes(total);
+      message.set_offset(offset);
+      message.set_data(buffer.data(), n);
+      offset += n;
+      if (!writer->Write(message)) {
+        broken = true;  // the server ended the call: its status says why
+        break;
+      }
+    }
+    std::fclose(in);
+    if (ec) local = ioError("cannot size the checkpoint '" + path + "': " + ec.message());
+    if (!local && !broken) {
+      context->TryCancel();
+      writer->Finish();
+      return local;
+    }
+    if (!broken) writer->WritesDone();
+    return rpc::fromGrpc(writer->Finish(), "WriteCheckpoint job '" + jobId + "' step " + std::to_string(step));
+  }
+
+  Result<std::int64_t> readCheckpoint(const std::string& jobId, const std::string& path) override {
+    auto context = rpc::contextWithDeadline(m_options.bulkDeadlineSeconds);
+    v1::ReadCheckpointRequest request;
+    request.set_job_id(jobId);
+    auto reader = m_stub->ReadCheckpoint(context.get(), request);
+    std::FILE* out = std::fopen(path.c_str(), "wb");
+    if (!out) {
+      context->TryCancel();
+      reader->Finish();
+      return ioError("cannot create '" + path + "'");
+    }
+    v1::CheckpointChunk message;
+    Status local;
+    std::int64_t step = -1;
+    std::uint64_t written = 0, total = 0;
+    while (reader->Read(&message)) {
+      step = message.step();
+      total = message.total_bytes();
+      if (message.offset() != written) local = ioError("ReadCheckpoint job '" + jobId + "': chunks out of order");
+      else if (std::fwrite(message.data().data(), 1, message.data().size(), out) != message.data().size())
+        local = ioError("cannot write '" + path + "'");
+      written += message.data().size();
+      if (!local) {
+        context->TryCancel();
+        break;
+      }
+    }
+    const grpc::Status remote = reader->Finish();
+    if (std::fclose(out) != 0 && local) local = ioError("cannot write '" + path + "'");
+    if (!local) return local;
+    if (Status st = rpc::fromGrpc(remote, "ReadCheckpoint job '" + jobId + "'"); !st) return st;
+    if (written != total) return ioError("ReadCheckpoint job '" + jobId + "': " + std::to_string(written) + " of " + std::to_string(total) + " bytes arrived");
+    return step;
   }
 
  private:

@@ -1,5 +1,9 @@
 #include "backend/BackendClient.h"
 
+#include <filesystem>
+#include <fstream>
+#include <vector>
+
 namespace pflow::backend {
 
 Status LocalBackendClient::writeSnapshot(const std::string& jobId, const compute::ParticleSnapshot& snapshot,
@@ -31,6 +35,34 @@ Status LocalBackendClient::fetch(const std::string& jobId, std::optional<std::in
   ReadRequest request{step, std::move(fields), includeGrid, includeGeometry, includeProbes};
   if (Status st = m_store.readChunks(jobId, request, [&](Chunk&& c) { return sink.add(c); }); !st) return st;
   return sink.finish();
+}
+
+Status LocalBackendClient::writeCheckpoint(const std::string& jobId, std::int64_t step, const std::string& path) {
+  std::error_code ec;
+  const auto total = std::filesystem::file_size(path, ec);
+  if (ec) return ioError("cannot size the checkpoint '" + path + "': " + ec.message());
+  auto upload = m_store.checkpoints().begin(jobId, step, total);
+  if (!upload) return upload.status();
+  std::ifstream in(path, std::ios::binary);
+  std::vector<char> buffer(std::size_t(1) << 20);
+  std::uint64_t offset = 0;
+  while (offset < total) {
+    in.read(buffer.data(), std::streamsize(buffer.size()));
+    const auto n = std::size_t(in.gcount());
+    if (n == 0) return ioError("cannot read the checkpoint '" + path + "'");
+    PFLOW_TRY(upload.value()->append(offset, buffer.data(), n));
+    offset += n;
+  }
+  return upload.value()->commit().status();
+}
+
+Result<std::int64_t> LocalBackendClient::readCheckpoint(const std::string& jobId, const std::string& path) {
+  auto latest = m_store.checkpoints().latest(jobId);
+  if (!latest) return latest.status();
+  std::error_code ec;
+  std::filesystem::copy_file(latest->path, path, std::filesystem::copy_options::overwrite_existing, ec);
+  if (ec) return ioError("cannot copy '" + latest->path + "' to '" + path + "': " + ec.message());
+  return latest->step;
 }
 
 }  // namespace pflow::backend

@@ -200,4 +200,14 @@ grpc::ServerUnaryReactor* SnapshotService::AppendProbes(grpc::CallbackServerCont
   return reactor;
 }
 
+grpc::ServerReadReactor<v1::CheckpointChunk>* SnapshotService::WriteCheckpoint(grpc::CallbackServerContext* context,
+                                                                              v1::WriteCheckpointResponse* response) {
+  return newCheckpointUpload(m_store.checkpoints(), *m_executor, context, response);
+}
+
+grpc::ServerWriteReactor<v1::CheckpointChunk>* SnapshotService::ReadCheckpoint(grpc::CallbackServerContext*,
+                                                                              const v1::ReadCheckpointRequest* request) {
+  return newCheckpointDownload(m_store.checkpoints(), *m_executor, *request);
+}
+
 }  // namespace pflow::backend

@@ -4,6 +4,8 @@
 //  * ReadSnapshot: SnapshotStreamer (ServerWriteReactor): reads the next chunk (<= 1 MiB, on the executor) only
 //    after the previous write completed, so a stream holds one chunk in memory whatever the snapshot's size.
 //  * ListSnapshots, AppendProbes: unary (DefaultReactor), the store's work on the executor.
+//  * WriteCheckpoint, ReadCheckpoint: the same two stream shapes over the store's CheckpointStore
+//    (CheckpointStreams.cc): one chunk in memory at a time, file work on the executor.
 // Reactions never block: HDF5 work runs on a small executor owned by the service (which must outlive the server).
 #pragma once
 #include <grpcpp/grpcpp.h>
@@ -31,10 +33,21 @@ class SnapshotService final : public v1::SnapshotService::CallbackService {
                                                            const v1::ReadSnapshotRequest* request) override;
   grpc::ServerUnaryReactor* AppendProbes(grpc::CallbackServerContext* context, const v1::AppendProbesRequest* request,
                                          v1::AppendProbesResponse* response) override;
+  grpc::ServerReadReactor<v1::CheckpointChunk>* WriteCheckpoint(grpc::CallbackServerContext* context,
+                                                               v1::WriteCheckpointResponse* response) override;
+  grpc::ServerWriteReactor<v1::CheckpointChunk>* ReadCheckpoint(grpc::CallbackServerContext* context,
+                                                               const v1::ReadCheckpointRequest* request) override;
 
  private:
   SnapshotStore& m_store;
   std::unique_ptr<TaskPool> m_executor;
 };
+
+// CheckpointStreams.cc: the reactors of WriteCheckpoint and ReadCheckpoint.
+grpc::ServerReadReactor<v1::CheckpointChunk>* newCheckpointUpload(CheckpointStore& store, TaskPool& executor,
+                                                                  grpc::CallbackServerContext* context,
+                                                                  v1::WriteCheckpointResponse* response);
+grpc::ServerWriteReactor<v1::CheckpointChunk>* newCheckpointDownload(CheckpointStore& store, TaskPool& executor,
+                                                                     const v1::ReadCheckpointRequest& request);
 
 }  // namespace pflow::backend

@@ -167,7 +167,7 @@ Status validateJobId(const std::string& jobId) {
   return Status::ok();
 }
 
-static std::uint64_t fileSystemFreeBytes(const std::string& folder) {
+std::uint64_t fileSystemFreeBytes(const std::string& folder) {
   struct statvfs v {};
   if (::statvfs(folder.c_str(), &v) != 0) return std::numeric_limits<std::uint64_t>::max();  // unknown: not refused here
   return std::uint64_t(v.f_bavail) * std::uint64_t(v.f_frsize);
@@ -189,7 +189,11 @@ Result<std::unique_ptr<SnapshotStore>> SnapshotStore::open(const StoreOptions& o
   if (removed > 0) spdlog::info("removed {} scratch file(s) of unfinished ingests in {}", removed, scratch.string());
   StoreOptions o = options;
   if (!o.freeBytes) o.freeBytes = fileSystemFreeBytes;
-  return std::unique_ptr<SnapshotStore>(new SnapshotStore(std::move(o)));
+  auto checkpoints = CheckpointStore::open({(fs::path(o.dataDir) / "checkpoints").string(), o.reserveBytes, o.freeBytes});
+  if (!checkpoints) return checkpoints.status();
+  std::unique_ptr<SnapshotStore> store(new SnapshotStore(std::move(o)));
+  store->m_checkpoints = std::move(checkpoints).value();
+  return store;
 }
 
 SnapshotStore::~SnapshotStore() = default;

@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "backend/CheckpointStore.h"
 #include "backend/SnapshotChunks.h"
 #include "backend/store/SnapshotFile.h"
 #include "common/Status.h"
@@ -129,6 +130,8 @@ class SnapshotStore {
   // Streams a snapshot through `sink`, one chunk (<= 1 MiB of data) at a time; stops at the first error.
   Status readChunks(const std::string& jobId, const ReadRequest& request, const std::function<Status(Chunk&&)>& sink);
 
+  // The jobs' checkpoints, in <data>/checkpoints (CheckpointStore.h).
+  CheckpointStore& checkpoints() { return *m_checkpoints; }
   double gridCellSize() const { return m_options.gridCellSize; }
   const std::string& dataDir() const { return m_options.dataDir; }
   std::string jobFile(const std::string& jobId) const;  // <data>/<job>.h5
@@ -156,6 +159,7 @@ class SnapshotStore {
   void closeIdleFiles(const Job* keep);
 
   StoreOptions m_options;
+  std::unique_ptr<CheckpointStore> m_checkpoints;
   std::mutex m_mutex;  // m_jobs, m_serial, m_claimedBytes
   std::map<std::string, std::shared_ptr<Job>> m_jobs;
   std::uint64_t m_serial = 0;
@@ -165,5 +169,7 @@ class SnapshotStore {
 
 // OK when jobId is 1..128 characters of [A-Za-z0-9._-], not starting with '.' (no path separators).
 Status validateJobId(const std::string& jobId);
+// The bytes free for unprivileged writers on the file system holding `folder` (statvfs; the largest value when unknown).
+std::uint64_t fileSystemFreeBytes(const std::string& folder);
 
 }  // namespace pflow::backend

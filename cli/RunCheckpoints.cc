@@ -36,21 +36,14 @@ Result<RunCheckpoints> RunCheckpoints::open(const RunOptions& o, const std::stri
   RunCheckpoints c;
   if (resume && resume->precision != precision)
     return invalidArgument("pflow run --resume: the checkpoint was taken in " + resume->precision + " precision, this run is " + precision);
-  c.m_on = o.checkpointEvery > 0 || o.checkpointWallSeconds > 0 || everySeconds > 0;
-  c.m_everySeconds = everySeconds;
-  c.m_nextTime = everySeconds;
-  while (everySeconds > 0 && c.m_nextTime <= time) c.m_nextTime += everySeconds;
-  c.m_everySteps = o.checkpointEvery;
-  c.m_wallSeconds = o.checkpointWallSeconds;
-  c.m_lastStep = step;
-  c.m_lastWall = std::chrono::steady_clock::now();
+  c.m_schedule = compute::CheckpointSchedule(o.checkpointEvery, everySeconds, o.checkpointWallSeconds, step, time);
   if (!o.checkpointPath.empty()) {
     c.m_path = o.checkpointPath;
   } else {
     const fs::path p(output);
     c.m_path = (p.parent_path() / (p.stem().string() + ".ckpt.h5")).string();
   }
-  if (!c.m_on) return c;
+  if (!c.m_schedule.on()) return c;
   if (resume) {
     c.m_data = *resume;
     c.m_data.state = {};

@@ -8,6 +8,7 @@
 #include "backend/store/CheckpointFile.h"
 #include "cli/RunCommand.h"
 #include "common/Log.h"
+#include "compute/sim/CheckpointSchedule.h"
 #include "compute/sim/PhaseTimers.h"
 #include "frontend/SceneLoader.h"
 
@@ -26,29 +27,19 @@ class RunCheckpoints {
   // A checkpoint of `sim` if one is due and the step just ended with a cell sort (Simulation, SphSimulation).
   template <class Sim>
   Status maybeWrite(const Sim& sim, compute::PhaseTimers& timers) {
-    if (!m_on || !sim.justRebuilt()) return Status::ok();
-    const bool bySteps = m_everySteps > 0 && sim.stepCount() - m_lastStep >= m_everySteps;
-    const bool byTime = m_everySeconds > 0 && sim.time() >= m_nextTime;
-    const bool byWall = m_wallSeconds > 0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - m_lastWall).count() >= m_wallSeconds;
-    if (!bySteps && !byTime && !byWall) return Status::ok();
+    if (!m_schedule.on() || !sim.justRebuilt() || !m_schedule.due(sim.stepCount(), sim.time())) return Status::ok();
     auto t = timers.time(compute::Phase::kOutput);
     auto state = sim.state();
     if (!state) return state.status();
     m_data.state = std::move(state).value();
     PFLOW_TRY(backend::writeCheckpoint(m_path, m_data));
-    m_lastStep = sim.stepCount();
-    m_lastWall = std::chrono::steady_clock::now();
-    while (m_everySeconds > 0 && m_nextTime <= sim.time()) m_nextTime += m_everySeconds;
+    m_schedule.taken(sim.stepCount(), sim.time());
     spdlog::info("checkpoint at step {} (t = {:.6g} s) in {}", sim.stepCount(), sim.time(), m_path);
     return Status::ok();
   }
 
  private:
-  bool m_on = false;
-  std::int64_t m_everySteps = 0, m_lastStep = 0;
-  double m_wallSeconds = 0;
-  double m_everySeconds = 0, m_nextTime = 0;  // output.checkpoint_interval: the next multiple of it [s]
-  std::chrono::steady_clock::time_point m_lastWall;
+  compute::CheckpointSchedule m_schedule;
   std::string m_path;
   backend::CheckpointData m_data;  // the scene's text and folder, the solver and precision; the state per write
 };

@@ -145,6 +145,7 @@ Lease Manager::leaseFor(const Job& job) const {
   for (const std::string& node : nodesOf(job)) l.nodeHosts[node] = pflow::hostOf(m_inventory.agentAddress(node));
   l.managerAddress = m_options.managerAddress;
   l.backendAddress = m_options.backendAddress;
+  l.attempt = job.attempts > 0 ? job.attempts : 1;
   return l;
 }
 

@@ -83,6 +83,7 @@ pflow::agent::v1::Lease toProto(const Lease& l) {
   for (const auto& [node, host] : l.nodeHosts) (*p.mutable_node_hosts())[node] = host;
   p.set_manager_address(l.managerAddress);
   p.set_backend_address(l.backendAddress);
+  p.set_attempt(l.attempt);
   return p;
 }
 

@@ -104,6 +104,7 @@ struct Lease {
   std::map<std::string, std::string> nodeHosts;   // node -> host, for a hostfile
   std::string managerAddress;
   std::string backendAddress;
+  int attempt = 1;  // the job's attempts: > 1 after a requeue (the worker resumes from its last checkpoint)
 };
 
 // ---- requests ----------------------------------------------------------------------------------------------------

@@ -21,16 +21,6 @@ constexpr const char* kFormat = "pflow-checkpoint";
 constexpr std::int64_t kVersion = 1;
 constexpr const char* kParticles = "particles";
 
-// The file's bytes on the disk before it is renamed into place (and the folder's entry after).
-Status syncPath(const std::string& path, bool directory) {
-  const int fd = ::open(path.c_str(), directory ? O_RDONLY | O_DIRECTORY : O_RDONLY);
-  if (fd < 0) return ioError("cannot open '" + path + "' to flush it to disk");
-  const int rc = ::fsync(fd);
-  ::close(fd);
-  if (rc != 0) return ioError("cannot flush '" + path + "' to disk (fsync)");
-  return Status::ok();
-}
-
 template <class T>
 Status attr(hid_t obj, const char* name, T value, const std::string& file) {
   if constexpr (std::is_same_v<T, double>) return writeScalarAttr(obj, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, value, file, "/");
@@ -84,6 +74,15 @@ Result<T> readAttr(hid_t obj, const char* name, const std::string& file) {
 
 std::string previousCheckpointPath(const std::string& path) { return path + ".1"; }
 
+Status syncPath(const std::string& path, bool directory) {
+  const int fd = ::open(path.c_str(), directory ? O_RDONLY | O_DIRECTORY : O_RDONLY);
+  if (fd < 0) return ioError("cannot open '" + path + "' to flush it to disk");
+  const int rc = ::fsync(fd);
+  ::close(fd);
+  if (rc != 0) return ioError("cannot flush '" + path + "' to disk (fsync)");
+  return Status::ok();
+}
+
 Status writeCheckpoint(const std::string& path, const CheckpointData& data) {
   std::lock_guard<std::recursive_mutex> lock(hdf5Mutex());
   quietHdf5();
@@ -110,8 +109,10 @@ Status writeCheckpoint(const std::string& path, const CheckpointData& data) {
   return syncPath(dir.empty() ? "." : dir.string(), true);
 }
 
-Result<CheckpointData> readCheckpoint(const std::string& path) {
-  std::lock_guard<std::recursive_mutex> lock(hdf5Mutex());
+namespace {
+
+// Opens a checkpoint and checks its format and version (under the HDF5 lock, held by the caller).
+Result<Hid> openCheckpoint(const std::string& path) {
   quietHdf5();
   std::error_code ec;
   if (!fs::exists(path, ec)) return Status(StatusCode::kNotFound, "no checkpoint at '" + path + "'");
@@ -127,6 +128,40 @@ Result<CheckpointData> readCheckpoint(const std::string& path) {
   if (version.value() != kVersion)
     return invalidArgument("'" + path + "' is a checkpoint of format version " + std::to_string(version.value()) + "; this pflow reads version " +
                            std::to_string(kVersion));
+  return f;
+}
+
+}  // namespace
+
+Result<CheckpointHeader> readCheckpointHeader(const std::string& path) {
+  std::lock_guard<std::recursive_mutex> lock(hdf5Mutex());
+  auto f = openCheckpoint(path);
+  if (!f) return f.status();
+  hid_t root = f->get();
+  CheckpointHeader h;
+  for (auto [name, out] : {std::pair<const char*, std::string*>{"solver", &h.solver}, {"precision", &h.precision}}) {
+    auto v = readStringAttr(root, name, path, "/");
+    if (!v) return v.status();
+    *out = v.value();
+  }
+  auto step = readAttr<std::int64_t>(root, "step", path);
+  auto time = readAttr<double>(root, "time", path);
+  auto particles = readAttr<std::int64_t>(root, "particles", path);
+  if (!step) return step.status();
+  if (!time) return time.status();
+  if (!particles) return particles.status();
+  h.step = step.value();
+  h.time = time.value();
+  h.particles = particles.value();
+  return h;
+}
+
+Result<CheckpointData> readCheckpoint(const std::string& path) {
+  std::lock_guard<std::recursive_mutex> lock(hdf5Mutex());
+  auto opened = openCheckpoint(path);
+  if (!opened) return opened.status();
+  Hid f = std::move(opened).value();
+  hid_t root = f.get();
   CheckpointData d;
   for (auto [name, out] : {std::pair<const char*, std::string*>{"solver", &d.solver}, {"precision", &d.precision}, {"scene", &d.sceneText},
                            {"scene_dir", &d.sceneDir}, {"scene_file", &d.sceneFile}}) {

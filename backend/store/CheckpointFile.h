@@ -9,6 +9,7 @@
 // Written to PATH.tmp, flushed to disk (fsync), then renamed over PATH after the previous PATH became PATH.1: the
 // last two are kept, and a file cut off mid-write is never under either name.
 #pragma once
+#include <cstdint>
 #include <string>
 
 #include "common/Status.h"
@@ -23,7 +24,19 @@ struct CheckpointData {
   compute::SimulationState state;  // compute/sim/SimulationState.h
 };
 
+// What a checkpoint's root attributes say, without reading its particles (the back-end's check of an upload).
+struct CheckpointHeader {
+  std::string solver, precision;
+  std::int64_t step = 0;
+  double time = 0;  // s
+  std::int64_t particles = 0;
+};
+
 Status writeCheckpoint(const std::string& path, const CheckpointData& data);
+// A file's bytes (or a folder's entries) flushed to the disk (fsync): before a rename puts it in place, and after.
+Status syncPath(const std::string& path, bool directory);
+// INVALID_ARGUMENT for a file that is not a pflow checkpoint of this format version; NOT_FOUND for no file.
+Result<CheckpointHeader> readCheckpointHeader(const std::string& path);
 Result<CheckpointData> readCheckpoint(const std::string& path);
 // PATH, else (unreadable: cut off, corrupted, missing) PATH.1, saying why PATH was passed over in `skipped`.
 Result<CheckpointData> readLatestCheckpoint(const std::string& path, std::string* skipped = nullptr);

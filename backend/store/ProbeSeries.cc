@@ -74,10 +74,34 @@ Result<std::uint64_t> appendProbeSeries(std::int64_t file, const ProbeSeries& s,
   for (auto& n : stored.value())
     if (n != "time") names.push_back(std::move(n));
   if (names != s.names) return invalidArgument(path + ": the probes sent are not the ones in /probes (names or order differ)");
-  auto samples = appendTo(group.get(), "time", s.time, path);
+  // A resumed run (a requeued job going on from its checkpoint) samples again from the checkpoint's time: samples
+  // at or before the last time storedRows are dropped, so the series keeps one sample per time.
+  std::uint64_t storedRows = 0;
+  double lastTime = 0;
+  {
+    Hid set = datasetHid(H5Dopen2(group.get(), "time", H5P_DEFAULT));
+    if (!set.valid()) return h5Error(path, "cannot open /probes/time");
+    auto rows = checkShape(set.get(), 1, path, "/probes/time");
+    if (!rows) return rows.status();
+    storedRows = rows.value();
+    if (storedRows > 0)
+      if (Status st = readRowsOf(set.get(), storedRows - 1, 1, H5T_NATIVE_DOUBLE, &lastTime, path, "/probes/time"); !st) return st;
+  }
+  std::size_t skip = 0;
+  while (storedRows > 0 && skip < s.time.size() && s.time[skip] <= lastTime) ++skip;
+  if (skip == s.time.size()) return storedRows;
+  const ProbeSeries* sending = &s;
+  ProbeSeries later;
+  if (skip > 0) {
+    later = s;
+    later.time.erase(later.time.begin(), later.time.begin() + std::ptrdiff_t(skip));
+    for (auto& v : later.values) v.erase(v.begin(), v.begin() + std::ptrdiff_t(skip));
+    sending = &later;
+  }
+  auto samples = appendTo(group.get(), "time", sending->time, path);
   if (!samples) return samples.status();
   for (std::size_t k = 0; k < s.names.size(); ++k)
-    if (auto n = appendTo(group.get(), s.names[k], s.values[k], path); !n) return n.status();
+    if (auto n = appendTo(group.get(), s.names[k], sending->values[k], path); !n) return n.status();
   return samples.value();
 }
 

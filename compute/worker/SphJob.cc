@@ -9,6 +9,7 @@
 #include "compute/mpi/MpiDomain.h"
 #include "compute/sph/SphSimulation.h"
 #include "compute/worker/SnapshotSinks.h"
+#include "compute/worker/JobCheckpoints.h"
 #include "compute/worker/WorkerRun.h"
 
 namespace pflow::worker {
@@ -55,6 +56,10 @@ int runSphRank(const WorkerOptions& o, int rank, int ranks, const frontend::Load
                                    device.kind + ":" + std::to_string(device.index) + "; " + std::to_string(ranks) + " rank(s))";
   spdlog::info("job {}: rank {} of {}: {} of {} SPH particles ({} fluid), executor {}", o.jobId, rank, ranks, sim.numParticles(), particles,
                sim.fluidParticles(), executorNote);
+  JobCheckpoints checkpoints(o, "sph", sim.precisionName(), scene.checkpointInterval, lead, all);
+  auto resumed = checkpoints.resume(sim);
+  if (!resumed) return fail(3, "resuming from the job's checkpoint: " + resumed.status().message());
+  const std::int64_t firstStep = sim.stepCount();
 
   std::unique_ptr<SnapshotSink> sink;
   Status opened;
@@ -84,7 +89,8 @@ int runSphRank(const WorkerOptions& o, int rank, int ranks, const frontend::Load
     if (s.isOk()) s = sendProbes();
     return all.agree(s);
   };
-  if (Status s = write(); !s.isOk()) return fail(2, s.message());
+  if (!resumed.value())  // a resumed run's snapshot of this step is on the back-end already
+    if (Status s = write(); !s.isOk()) return fail(2, s.message());
 
   const double duration = cfg.sim.duration;
   sim.scheduleOutput(cfg.sim.snapshotInterval, duration);
@@ -93,11 +99,12 @@ int runSphRank(const WorkerOptions& o, int rank, int ranks, const frontend::Load
   auto lastPost = start - std::chrono::hours(1);
   bool cancelled = false;
   auto seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
-  auto rate = [&](const SphSimulation& s, double wall) { return wall > 0 ? particles * double(s.stepCount()) / wall : 0; };
+  auto rate = [&](const SphSimulation& s, double wall) { return wall > 0 ? particles * double(s.stepCount() - firstStep) / wall : 0; };
   auto observer = [&](const SphSimulation& s) -> Status {
     probes.sample(s);  // collective
     if (s.outputDue())
       if (Status st = write(); !st.isOk()) return st;
+    checkpoints.maybeTake(s, sim.timers());
     if (stopAgreed(progress.cancelRequested(), domain)) {
       cancelled = true;
       return Status(StatusCode::kCancelled, "cancelled at step " + std::to_string(s.stepCount()));

@@ -29,6 +29,10 @@ struct WorkerOptions {
   // pauses; at the end, how long to wait for the back-end before the job fails.
   double spoolBytes = double(std::uint64_t(1) << 30);
   double spoolCloseWait = 600;  // [s]
+  // Checkpoints to the back-end (JobCheckpoints.h): every this many seconds of wall clock (0: only the scene's
+  // output.checkpoint_interval); --resume: go on from the job's last checkpoint (the agent passes it on a requeue).
+  double checkpointWallSeconds = 600;
+  bool resume = false;
 };
 
 // "node:gpu:0,node:cpu:1" -> devices; errors name the entry.

@@ -30,6 +30,7 @@
 #include "common/rpc/Rpc.h"
 #include "compute/mpi/MpiDomain.h"
 #include "compute/dem/Simulation.h"
+#include "compute/worker/JobCheckpoints.h"
 #include "compute/worker/SnapshotSinks.h"
 #include "compute/worker/WorkerOptions.h"
 #include "compute/worker/WorkerRun.h"
@@ -84,6 +85,10 @@ int runRank(const worker::WorkerOptions& o, int rank, int ranks) {
                                    (domain ? std::string(", ") + domain->strategyName() + " decomposition" : "") + ")";
   spdlog::info("job {}: rank {} of {}: {} of {} particles, executor {}", o.jobId, rank, ranks, sim.numParticles(),
                particles, executorNote);
+  worker::JobCheckpoints checkpoints(o, "dem", sim.engine().precisionName(), scene.value().checkpointInterval, lead, all);
+  auto resumed = checkpoints.resume(sim);
+  if (!resumed) return fail(3, "resuming from the job's checkpoint: " + resumed.status().message());
+  const std::int64_t firstStep = sim.stepCount();
 
   // The sink lives on rank 0; its failures are agreed on (the other ranks would wait in the next collective).
   std::unique_ptr<worker::SnapshotSink> sink;
@@ -101,7 +106,8 @@ int runRank(const worker::WorkerOptions& o, int rank, int ranks) {
     compute::ParticleSnapshot snap = sim.snapshot(fields);
     return all.agree(lead ? sink->write(snap) : Status::ok());
   };
-  if (Status s = write(); !s.isOk()) return fail(2, s.message());
+  if (!resumed.value())  // a resumed run's snapshot of this step is on the back-end already
+    if (Status s = write(); !s.isOk()) return fail(2, s.message());
 
   const double duration = cfg.sim.duration, interval = cfg.sim.snapshotInterval;
   const auto totalSteps = std::int64_t(std::llround(duration / sim.dt()));
@@ -110,10 +116,11 @@ int runRank(const worker::WorkerOptions& o, int rank, int ranks) {
   const auto start = std::chrono::steady_clock::now();
   auto lastPost = start - std::chrono::hours(1);
   bool cancelled = false;
-  auto rate = [&](const compute::Simulation& s, double wall) { return wall > 0 ? particles * double(s.stepCount()) / wall : 0; };
+  auto rate = [&](const compute::Simulation& s, double wall) { return wall > 0 ? particles * double(s.stepCount() - firstStep) / wall : 0; };
   auto observer = [&](const compute::Simulation& s) -> Status {
     if (s.outputDue())
       if (Status st = write(); !st.isOk()) return st;
+    checkpoints.maybeTake(s, sim.timers());
     if (worker::stopAgreed(progress.cancelRequested(), domain)) {
       cancelled = true;
       return Status(StatusCode::kCancelled, "cancelled at step " + std::to_string(s.stepCount()));
@@ -172,6 +179,11 @@ int main(int argc, char** argv) {
   app.add_option("--spool-wait", o.spoolCloseWait, "at the end, seconds to wait for the back-end to take the spool")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--checkpoint-wall", o.checkpointWallSeconds,
+                 "seconds of wall clock between checkpoints sent to the back-end (0: only the scene's output.checkpoint_interval)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  app.add_flag("--resume", o.resume, "go on from the job's last checkpoint on the back-end (the agent passes it when the job was requeued)");
   app.add_option("--log-level", logLevel, "trace, debug, info, warn, error")->capture_default_str();
   try {
     app.parse(argc, argv);

@@ -28,6 +28,7 @@ Result<Lease> fromProto(const pflow::agent::v1::Lease& in) {
   lease.modelUri = in.model_uri();
   lease.managerAddress = in.manager_address();
   lease.backendAddress = in.backend_address();
+  lease.attempt = in.attempt() > 0 ? in.attempt() : 1;
   lease.nodeHosts.insert(in.node_hosts().begin(), in.node_hosts().end());
   for (int i = 0; i < in.devices_size(); ++i) {
     const cv1::DeviceRef& d = in.devices(i);

@@ -37,6 +37,7 @@ std::vector<std::string> workerCommand(const Lease& lease, const std::vector<Dev
   }
   if (!lease.backendAddress.empty()) {
     args.insert(args.end(), {"--backend", lease.backendAddress});
+    if (lease.attempt > 1) args.push_back("--resume");  // from the job's last checkpoint on the back-end
   }
   std::string devices;
   for (const DeviceRef& d : rankDevices) {

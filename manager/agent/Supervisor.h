@@ -33,6 +33,7 @@ struct Lease {
   std::map<std::string, std::string> nodeHosts;  // node -> host for the hostfile
   std::string managerAddress;
   std::string backendAddress;
+  int attempt = 1;  // > 1: the manager requeued the job; the worker resumes from its last checkpoint (--resume)
 };
 
 // How the agent launches workers.

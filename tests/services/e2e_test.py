@@ -6,8 +6,9 @@ driven by the `pflow` CLI. Each scenario is one function; run all (default) or s
   cancel       cancel mid-run ends the workers within seconds and frees the device
   queue        a second job waits while the device is busy and starts when it frees
   restart      killing the manager mid-job and restarting it keeps the job and its state; the job finishes
-  killworker   killing a worker requeues its job, which starts again; killing it on its last attempt fails it with
-               the reason and frees the device
+  killworker   killing a worker requeues its job, which goes on from its last checkpoint on the back-end; killing it
+               on its last attempt fails it with the reason and frees the device
+  resume       a job killed after a checkpoint goes on from it and ends bit for bit as an uninterrupted `pflow run`
   multinode    two agents (node-a on 127.0.0.1, node-b on 127.0.0.2) and one job across both through mpirun + hostfile
   errors       unknown ids, double cancel, missing steps, a back-end that is down: clear errors, exit codes
   sph          an SPH dam break (solver: sph) submitted, followed and fetched: the same particles, probe series and
@@ -246,6 +247,10 @@ def killworker():
     try:
         job = s.submit(LONG)
         s.wait_state(job, {"running"})
+        log = os.path.join(s.dir, "agent-node-a", job + ".log")
+        end = time.time() + 60  # the first checkpoint on the back-end (the scene takes one every 0.05 s simulated)
+        while time.time() < end and "on the back-end" not in open(log).read():
+            time.sleep(0.3)
         first = kill_workers(job)
         end, last = time.time() + 60, None
         while time.time() < end:
@@ -256,6 +261,13 @@ def killworker():
         assert last["attempts"] == 2 and last["state"] == "running", last
         assert last["max_attempts"] == 2, last
         assert "requeued" in last["reason"] and "attempt 1 of 2" in last["reason"], last
+        # The second attempt went on from the job's last checkpoint on the back-end (the scene checkpoints every
+        # 0.05 s of simulated time), not from the start.
+        end = time.time() + 30
+        while time.time() < end and "resumed from its checkpoint" not in open(log).read():
+            time.sleep(0.3)
+        text = open(log).read()
+        assert "resumed from its checkpoint at step" in text, text[-3000:]
         jobs = s.cli("jobs").stdout
         assert "2/2" in jobs, jobs
         second = kill_workers(job)
@@ -264,6 +276,41 @@ def killworker():
         assert final["state"] == "failed", final
         assert "attempt 2 of 2" in final["reason"] and "signal 9" in final["reason"], final
         assert s.device_states() == ["free"], s.device_states()
+    finally:
+        s.close()
+
+
+def resume():
+    # A job killed after its first checkpoint goes on from it on the next attempt and ends with the same particles,
+    # bit for bit, as an uninterrupted `pflow run` of the scene.
+    s = Stack()
+    try:
+        scene = os.path.join(s.dir, "resume_scene.yaml")
+        text = open(SCENE).read().replace("duration: 0.03", "duration: 0.4").replace("snapshot_interval: 0.01", "snapshot_interval: 0.1")
+        with open(scene, "w") as f:
+            f.write(text + "output:\n  checkpoint_interval: 0.05\n")
+        job = s.submit(scene)
+        s.wait_state(job, {"running"})
+        log = os.path.join(s.dir, "agent-node-a", job + ".log")
+        end = time.time() + 60
+        while time.time() < end and "on the back-end" not in open(log).read():
+            time.sleep(0.1)
+        kill_workers(job)
+        final = s.wait_state(job, {"succeeded", "failed", "cancelled"}, timeout=120)
+        assert final["state"] == "succeeded", final
+        assert final["attempts"] == 2, final
+        assert "resumed from its checkpoint at step" in open(log).read()
+        out = os.path.join(s.dir, "fetched.h5")
+        s.cli("fetch", job, "--last", "-o", out)
+        ref = os.path.join(s.dir, "ref.h5")
+        subprocess.run([PFLOW, "run", scene, "-o", ref, "--progress", "0"], check=True, capture_output=True, env=ENV)
+        with h5py.File(out) as a, h5py.File(ref) as b:
+            sa, sb = max(a["snapshots"], key=int), max(b["snapshots"], key=int)
+            assert sa == sb, (sa, sb)
+            ga, gb = a["snapshots"][sa], b["snapshots"][sb]
+            oa, ob = np.argsort(ga["id"][...]), np.argsort(gb["id"][...])
+            assert np.array_equal(ga["position"][...][oa], gb["position"][...][ob]), "positions differ after the resume"
+            assert np.array_equal(ga["velocity"][...][oa], gb["velocity"][...][ob]), "velocities differ after the resume"
     finally:
         s.close()
 
@@ -341,7 +388,7 @@ def sph():
         s.close()
 
 
-SCENARIOS = [equivalence, cancel, queue, restart, killworker, multinode, errors, sph]
+SCENARIOS = [equivalence, cancel, queue, restart, killworker, resume, multinode, errors, sph]
 
 if __name__ == "__main__":
     wanted = sys.argv[3:] or [f.__name__ for f in SCENARIOS]
