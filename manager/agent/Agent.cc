@@ -35,6 +35,10 @@ Agent::Agent(AgentOptions options, std::unique_ptr<DeviceProbe> probe, std::shar
   if (m_registry) m_reporter = std::thread([this] { reporterLoop(); });
   m_supervisor = std::make_unique<Supervisor>([this](const WorkerExit& x) { onWorkerExit(x); },
                                               m_options.launch.graceSeconds);
+  // Workers an earlier run of this agent started and that outlived it: stopped now, reported after the first
+  // heartbeat (so the manager knows this agent's new address before it requeues and places their jobs again; they go
+  // on from their checkpoints), so that none holds a device nobody accounts for.
+  m_orphans = stopOrphans(m_options.launch.workdir, m_options.launch.graceSeconds);
 }
 
 Agent::~Agent() {
@@ -175,6 +179,12 @@ Status Agent::heartbeatOnce() {
   Result<HeartbeatReply> reply = m_registry->heartbeat(heartbeatPayload());
   if (!reply) return reply.status();
   handleHeartbeatReply(reply.value());
+  std::vector<WorkerExit> orphans;
+  {
+    std::lock_guard lock(m_mutex);
+    orphans.swap(m_orphans);
+  }
+  for (const WorkerExit& x : orphans) onWorkerExit(x);
   return Status::ok();
 }
 

@@ -60,7 +60,8 @@ struct DeviceStatus {
 
 class Agent {
  public:
-  // `registry` may be null: the agent then runs standalone (no heartbeats, exits only logged).
+  // `registry` may be null: the agent then runs standalone (no heartbeats, exits only logged). Workers left running by
+  // an earlier run of the agent (pid files in the workdir) are stopped and their exits reported (stopOrphans).
   Agent(AgentOptions options, std::unique_ptr<DeviceProbe> probe, std::shared_ptr<RegistryClient> registry);
   ~Agent();  // shutdown(5)
   Agent(const Agent&) = delete;
@@ -111,6 +112,7 @@ class Agent {
 
   mutable std::mutex m_mutex;            // jobs, interval, flags
   std::map<std::string, Lease> m_jobs;   // running jobs
+  std::vector<WorkerExit> m_orphans;     // workers of an earlier run of the agent, stopped; reported after a heartbeat
   double m_interval;
   bool m_quit = false;
   bool m_shutDown = false;

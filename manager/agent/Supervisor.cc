@@ -9,6 +9,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
+#include <iterator>
+#include <thread>
 #include <cctype>
 #include <cerrno>
 #include <cstdlib>
@@ -170,11 +173,14 @@ std::string lastErrorLine(const std::string& logPath, long long fromOffset) {
 }
 
 // --- processes ---------------------------------------------------------------------------------------------------------
-int signalSession(int sid, int sig) {
-  if (sid <= 1) return 0;
-  int count = 0;
+namespace {
+
+// f(pid, state) for every process of session `sid` (from /proc).
+template <class F>
+void forSession(int sid, F&& f) {
+  if (sid <= 1) return;
   DIR* proc = opendir("/proc");
-  if (!proc) return 0;
+  if (!proc) return;
   while (dirent* e = readdir(proc)) {
     char* end = nullptr;
     const long pid = std::strtol(e->d_name, &end, 10);
@@ -188,10 +194,82 @@ int signalSession(int sid, int sig) {
     char state = 0;
     long ppid = 0, pgrp = 0, session = 0;
     fields >> state >> ppid >> pgrp >> session;
-    if (fields && session == sid && ::kill(static_cast<pid_t>(pid), sig) == 0) ++count;
+    if (fields && session == sid) f(static_cast<pid_t>(pid), state);
   }
   closedir(proc);
+}
+
+// Live (not zombie) processes of session `sid`.
+int liveInSession(int sid) {
+  int n = 0;
+  forSession(sid, [&](pid_t, char state) { n += state != 'Z' && state != 'X'; });
+  return n;
+}
+
+// Whether process `pid` is alive and its command line names job `jobId` (a pid file is not trusted on its own: the
+// pid may have been reused since).
+bool runsJob(int pid, const std::string& jobId) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/cmdline", std::ios::binary);
+  std::string cmd((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::vector<std::string> args;
+  std::size_t start = 0;
+  for (std::size_t i = 0; i <= cmd.size(); ++i)
+    if (i == cmd.size() || cmd[i] == '\0') {
+      args.push_back(cmd.substr(start, i - start));
+      start = i + 1;
+    }
+  for (std::size_t i = 0; i + 1 < args.size(); ++i)
+    if (args[i] == "--job-id" && args[i + 1] == jobId) return liveInSession(pid) > 0;
+  return false;
+}
+
+}  // namespace
+
+int signalSession(int sid, int sig) {
+  int count = 0;
+  forSession(sid, [&](pid_t pid, char) { count += ::kill(pid, sig) == 0; });
   return count;
+}
+
+std::string pidFilePath(const std::string& workdir, const std::string& jobId) {
+  return (std::filesystem::path(workdir) / (jobId + ".pid")).string();
+}
+
+std::vector<WorkerExit> stopOrphans(const std::string& workdir, double graceSeconds) {
+  std::vector<WorkerExit> out;
+  std::error_code ec;
+  if (workdir.empty() || !std::filesystem::is_directory(workdir, ec)) return out;
+  for (const auto& entry : std::filesystem::directory_iterator(workdir, ec)) {
+    if (entry.path().extension() != ".pid") continue;
+    const std::string jobId = entry.path().stem().string();
+    int pid = 0;
+    std::ifstream(entry.path()) >> pid;
+    WorkerExit x;
+    x.jobId = jobId;
+    x.pid = pid;
+    x.signal = SIGKILL;
+    x.exitCode = 128 + SIGKILL;
+    if (pid > 1 && runsJob(pid, jobId)) {
+      const auto start = std::chrono::steady_clock::now();
+      signalSession(pid, SIGTERM);
+      while (liveInSession(pid) > 0 &&
+             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() < graceSeconds)
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      if (liveInSession(pid) > 0) {
+        signalSession(pid, SIGKILL);
+        x.killed = true;
+      }
+      x.stopRequested = true;
+      x.reason = "stopped when its agent restarted: the worker (pid " + std::to_string(pid) + ") outlived the agent that started it";
+      spdlog::warn("job {}: {}", jobId, x.reason);
+    } else {
+      x.reason = "its worker (pid " + std::to_string(pid) + ") ended while its agent was down (exit code unknown)";
+      spdlog::warn("job {}: {}", jobId, x.reason);
+    }
+    std::filesystem::remove(entry.path(), ec);
+    out.push_back(std::move(x));
+  }
+  return out;
 }
 
 namespace {
@@ -305,6 +383,12 @@ Result<int> Supervisor::start(const LaunchPlan& plan) {
 
   Child c;
   c.pid = pid;
+  c.pidPath = pidFilePath(dir.string(), plan.jobId);
+  {  // for an agent restarted while the worker runs (stopOrphans)
+    std::ofstream pidFile(c.pidPath, std::ios::trunc);
+    pidFile << pid << "\n";
+    if (!pidFile.flush()) spdlog::warn("job {}: cannot write {}", plan.jobId, c.pidPath);
+  }
   c.logPath = plan.logPath;
   c.logOffset = offset;
   c.started = std::chrono::steady_clock::now();
@@ -369,6 +453,8 @@ void Supervisor::reaperLoop() {
         int status = 0;
         ::waitpid(c.pid, &status, 0);
         c.exited = true;
+        std::error_code rm;
+        std::filesystem::remove(c.pidPath, rm);
         WorkerExit x;
         x.jobId = it->first;
         x.pid = c.pid;

@@ -118,6 +118,7 @@ class Supervisor {
   using SteadyTime = std::chrono::steady_clock::time_point;
   struct Child {
     int pid = 0;
+    std::string pidPath;  // <workdir>/<job>.pid while it runs
     std::string logPath;
     long long logOffset = 0;
     SteadyTime started;
@@ -140,5 +141,13 @@ class Supervisor {
 
 // Signals every process whose session id is `sid` (read from /proc); returns how many were signalled.
 int signalSession(int sid, int sig);
+
+// <workdir>/<job>.pid: the worker's pid (its session id), written at start and removed when it is reaped.
+std::string pidFilePath(const std::string& workdir, const std::string& jobId);
+// An agent that starts again finds the pid files of the workers its previous run started: each worker still running
+// (its command line names the job) is stopped like stop() would (SIGTERM to its session, SIGKILL after
+// `graceSeconds`); each one gone is reported as ended while the agent was down. One exit per pid file (code 137,
+// the reason saying which), the files removed. The manager requeues such jobs (they resume from their checkpoints).
+std::vector<WorkerExit> stopOrphans(const std::string& workdir, double graceSeconds);
 
 }  // namespace pflow::agent

@@ -4,7 +4,15 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <chrono>
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <thread>
 #include <cstdlib>
 #include <mutex>
 #include <optional>
@@ -317,6 +325,52 @@ TEST_F(SupervisorTest, WritesTheHostfile) {
   ASSERT_TRUE(m_sup.start(p));
   ASSERT_TRUE(waitExit("hosts"));
   EXPECT_EQ(testing::readFile(p.hostfilePath), "a slots=1\nb slots=2\n");
+}
+
+// An agent started again finds the pid files its earlier run left: a worker still running (its command line names
+// the job) is stopped (SIGTERM to its session) and reported; a pid that is gone, or that another program now holds,
+// is reported as ended while the agent was down, and that program is left alone.
+TEST(StopOrphans, StopsWorkersThatOutlivedTheirAgentAndReportsEveryPidFile) {
+  TempDir dir;
+  const pid_t orphan = ::fork();
+  ASSERT_GE(orphan, 0);
+  if (orphan == 0) {
+    ::setsid();
+    ::execl("/bin/sh", "sh", "-c", "sleep 30", "pflow-worker", "--job-id", "job-orphan", static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // exec'd
+  std::ofstream(pidFilePath(dir.path(), "job-orphan")) << orphan << "\n";
+  std::ofstream(pidFilePath(dir.path(), "job-gone")) << 999999 << "\n";
+  std::ofstream(pidFilePath(dir.path(), "job-other")) << ::getpid() << "\n";  // alive, but not that job's worker
+  const auto exits = stopOrphans(dir.path(), 5);
+  ASSERT_EQ(exits.size(), 3u);
+  for (const WorkerExit& x : exits) {
+    EXPECT_EQ(x.exitCode, 137) << x.jobId;
+    if (x.jobId == "job-orphan") {
+      EXPECT_NE(x.reason.find("outlived the agent"), std::string::npos) << x.reason;
+      EXPECT_FALSE(x.killed);  // SIGTERM was enough
+    } else {
+      EXPECT_NE(x.reason.find("ended while its agent was down"), std::string::npos) << x.jobId << ": " << x.reason;
+    }
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(orphan, &status, 0), orphan);
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM);
+  EXPECT_EQ(::kill(::getpid(), 0), 0);  // this process was left alone
+  EXPECT_FALSE(std::filesystem::exists(pidFilePath(dir.path(), "job-orphan")));
+  EXPECT_TRUE(stopOrphans(dir.path(), 5).empty());
+}
+
+// The supervisor writes a worker's pid file while it runs and removes it once the worker is reaped.
+TEST_F(SupervisorTest, PidFileWhileTheWorkerRuns) {
+  ASSERT_TRUE(m_sup.start(plan("pidfile", "sleep 0.5; exit 0")));
+  std::ifstream in(pidFilePath(m_dir.path(), "pidfile"));
+  int pid = 0;
+  in >> pid;
+  EXPECT_GT(pid, 1);
+  ASSERT_TRUE(waitExit("pidfile"));
+  EXPECT_FALSE(std::filesystem::exists(pidFilePath(m_dir.path(), "pidfile")));
 }
 
 }  // namespace

@@ -9,6 +9,8 @@ driven by the `pflow` CLI. Each scenario is one function; run all (default) or s
   killworker   killing a worker requeues its job, which goes on from its last checkpoint on the back-end; killing it
                on its last attempt fails it with the reason and frees the device
   resume       a job killed after a checkpoint goes on from it and ends bit for bit as an uninterrupted `pflow run`
+  agentrestart an agent killed while its worker runs: started again, it stops the worker and the job goes on from its
+               checkpoint, ending bit for bit as an uninterrupted run
   multinode    two agents (node-a on 127.0.0.1, node-b on 127.0.0.2) and one job across both through mpirun + hostfile
   errors       unknown ids, double cancel, missing steps, a back-end that is down: clear errors, exit codes
   sph          an SPH dam break (solver: sph) submitted, followed and fetched: the same particles, probe series and
@@ -280,37 +282,79 @@ def killworker():
         s.close()
 
 
+def write_resume_scene(s):
+    """The service scene run for 0.4 s with a checkpoint every 0.05 s (simulated): long enough to interrupt."""
+    scene = os.path.join(s.dir, "resume_scene.yaml")
+    text = open(SCENE).read().replace("duration: 0.03", "duration: 0.4").replace("snapshot_interval: 0.01", "snapshot_interval: 0.1")
+    with open(scene, "w") as f:
+        f.write(text + "output:\n  checkpoint_interval: 0.05\n")
+    return scene
+
+
+def wait_for_log(log, text, timeout=60):
+    end = time.time() + timeout
+    while time.time() < end and (not os.path.exists(log) or text not in open(log).read()):
+        time.sleep(0.1)
+    assert text in open(log).read(), open(log).read()[-3000:]
+
+
+def assert_same_as_run(s, job, scene):
+    """The job's last snapshot equals an uninterrupted `pflow run` of the scene's, bit for bit."""
+    out = os.path.join(s.dir, "fetched.h5")
+    s.cli("fetch", job, "--last", "-o", out)
+    ref = os.path.join(s.dir, "ref.h5")
+    subprocess.run([PFLOW, "run", scene, "-o", ref, "--progress", "0"], check=True, capture_output=True, env=ENV)
+    with h5py.File(out) as a, h5py.File(ref) as b:
+        sa, sb = max(a["snapshots"], key=int), max(b["snapshots"], key=int)
+        assert sa == sb, (sa, sb)
+        ga, gb = a["snapshots"][sa], b["snapshots"][sb]
+        oa, ob = np.argsort(ga["id"][...]), np.argsort(gb["id"][...])
+        assert np.array_equal(ga["position"][...][oa], gb["position"][...][ob]), "positions differ after the resume"
+        assert np.array_equal(ga["velocity"][...][oa], gb["velocity"][...][ob]), "velocities differ after the resume"
+
+
 def resume():
     # A job killed after its first checkpoint goes on from it on the next attempt and ends with the same particles,
     # bit for bit, as an uninterrupted `pflow run` of the scene.
     s = Stack()
     try:
-        scene = os.path.join(s.dir, "resume_scene.yaml")
-        text = open(SCENE).read().replace("duration: 0.03", "duration: 0.4").replace("snapshot_interval: 0.01", "snapshot_interval: 0.1")
-        with open(scene, "w") as f:
-            f.write(text + "output:\n  checkpoint_interval: 0.05\n")
+        scene = write_resume_scene(s)
         job = s.submit(scene)
         s.wait_state(job, {"running"})
         log = os.path.join(s.dir, "agent-node-a", job + ".log")
-        end = time.time() + 60
-        while time.time() < end and "on the back-end" not in open(log).read():
-            time.sleep(0.1)
+        wait_for_log(log, "on the back-end")
         kill_workers(job)
         final = s.wait_state(job, {"succeeded", "failed", "cancelled"}, timeout=120)
         assert final["state"] == "succeeded", final
         assert final["attempts"] == 2, final
         assert "resumed from its checkpoint at step" in open(log).read()
-        out = os.path.join(s.dir, "fetched.h5")
-        s.cli("fetch", job, "--last", "-o", out)
-        ref = os.path.join(s.dir, "ref.h5")
-        subprocess.run([PFLOW, "run", scene, "-o", ref, "--progress", "0"], check=True, capture_output=True, env=ENV)
-        with h5py.File(out) as a, h5py.File(ref) as b:
-            sa, sb = max(a["snapshots"], key=int), max(b["snapshots"], key=int)
-            assert sa == sb, (sa, sb)
-            ga, gb = a["snapshots"][sa], b["snapshots"][sb]
-            oa, ob = np.argsort(ga["id"][...]), np.argsort(gb["id"][...])
-            assert np.array_equal(ga["position"][...][oa], gb["position"][...][ob]), "positions differ after the resume"
-            assert np.array_equal(ga["velocity"][...][oa], gb["velocity"][...][ob]), "velocities differ after the resume"
+        assert_same_as_run(s, job, scene)
+    finally:
+        s.close()
+
+
+def agentrestart():
+    # The agent dies (SIGKILL) while its worker runs on; started again, it stops the worker it finds, reports it, and
+    # the manager requeues the job, which goes on from its checkpoint and ends as an uninterrupted run.
+    s = Stack()
+    try:
+        scene = write_resume_scene(s)
+        job = s.submit(scene)
+        s.wait_state(job, {"running"})
+        log = os.path.join(s.dir, "agent-node-a", job + ".log")
+        wait_for_log(log, "on the back-end")
+        s.kill("agent-node-a")
+        workers = subprocess.run(["pgrep", "-f", "pflow-worker --job-id %s" % job], capture_output=True, text=True).stdout.split()
+        assert workers, "the worker should outlive its agent"
+        s.start_agent("node-a", "127.0.0.1")
+        final = s.wait_state(job, {"succeeded", "failed", "cancelled"}, timeout=120)
+        assert final["state"] == "succeeded", final
+        assert final["attempts"] == 2, final
+        assert "restarted" in open(os.path.join(s.dir, "logs", "agent-node-a.log")).read()
+        for pid in workers:  # the first attempt's worker is gone
+            assert not os.path.exists("/proc/%s" % pid) or "Z" in open("/proc/%s/stat" % pid).read().split(")")[-1][:3], pid
+        assert "resumed from its checkpoint at step" in open(log).read()
+        assert_same_as_run(s, job, scene)
     finally:
         s.close()
 
@@ -388,7 +432,7 @@ def sph():
         s.close()
 
 
-SCENARIOS = [equivalence, cancel, queue, restart, killworker, resume, multinode, errors, sph]
+SCENARIOS = [equivalence, cancel, queue, restart, killworker, resume, agentrestart, multinode, errors, sph]
 
 if __name__ == "__main__":
     wanted = sys.argv[3:] or [f.__name__ for f in SCENARIOS]
