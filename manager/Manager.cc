@@ -405,7 +405,7 @@ Result<HeartbeatReply> Manager::heartbeat(const HeartbeatInfo& hb) {
   return reply;
 }
 
-Result<bool> Manager::reportProgress(const std::string& jobId, const Progress& p, const std::string& message) {
+Result<bool> Manager::reportProgress(const std::string& jobId, const Progress& p, const std::string& message, int attempt) {
   ErrorList errors;
   if (jobId.empty()) errors.add("job_id", "is empty");
   if (p.step < 0) errors.add("progress.step", "is negative (" + std::to_string(p.step) + ")");
@@ -421,6 +421,7 @@ Result<bool> Manager::reportProgress(const std::string& jobId, const Progress& p
   if (!j) return notFound("no job '" + jobId + "'");
   if (isFinal(j->state)) return true;  // a stray worker of an ended job: tell it to stop
   if (j->state == JobState::kRequeued) return true;  // a worker of the attempt that was given up: stop
+  if (j->attempts > 0 && (attempt > 0 ? attempt : 1) != j->attempts) return true;  // a worker of an earlier attempt
   if (j->state == JobState::kQueued)
     return failedPrecondition("job " + jobId + " is queued: it has no worker that could report progress");
 

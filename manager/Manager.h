@@ -72,7 +72,8 @@ class Manager {
   Result<HeartbeatReply> heartbeat(const HeartbeatInfo& hb);
   // Records progress (STARTING -> RUNNING on the first report) and fills in the rate and ETA when the worker
   // left them 0. Returns whether the worker should stop (the job is cancelling, or already ended).
-  Result<bool> reportProgress(const std::string& jobId, const Progress& progress, const std::string& message);
+  // `attempt`: the reporting worker's (0 = 1); a worker of an earlier attempt is answered "stop" and not recorded.
+  Result<bool> reportProgress(const std::string& jobId, const Progress& progress, const std::string& message, int attempt = 0);
   // Exit code 0 -> SUCCEEDED; a cancelling job -> CANCELLED; a worker killed by SIGKILL/SIGTERM/SIGHUP/SIGINT or
   // exiting with 2 (a service out of reach, an I/O error) -> REQUEUED while attempts are left; otherwise FAILED with
   // the reason. Frees the devices.

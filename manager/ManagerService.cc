@@ -167,7 +167,7 @@ grpc::ServerUnaryReactor* NodeRegistryImpl::Heartbeat(grpc::CallbackServerContex
 
 grpc::ServerUnaryReactor* NodeRegistryImpl::ReportProgress(grpc::CallbackServerContext* ctx, const v1::ReportProgressRequest* req,
                                                            v1::ReportProgressResponse* resp) {
-  auto cancel = m_manager.reportProgress(req->job_id(), fromProto(req->progress()), req->message());
+  auto cancel = m_manager.reportProgress(req->job_id(), fromProto(req->progress()), req->message(), req->attempt());
   if (cancel) resp->set_cancel(cancel.value());
   return finishNow(ctx, rpc::toGrpc(cancel.status()));
 }

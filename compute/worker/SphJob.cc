@@ -94,7 +94,7 @@ int runSphRank(const WorkerOptions& o, int rank, int ranks, const frontend::Load
 
   const double duration = cfg.sim.duration;
   sim.scheduleOutput(cfg.sim.snapshotInterval, duration);
-  ProgressReporter progress(lead ? o.managerAddress : std::string(), o.jobId, o.progressInterval);
+  ProgressReporter progress(lead ? o.managerAddress : std::string(), o.jobId, o.progressInterval, o.attempt);
   const auto start = std::chrono::steady_clock::now();
   auto lastPost = start - std::chrono::hours(1);
   bool cancelled = false;

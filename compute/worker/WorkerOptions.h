@@ -33,6 +33,7 @@ struct WorkerOptions {
   // output.checkpoint_interval); --resume: go on from the job's last checkpoint (the agent passes it on a requeue).
   double checkpointWallSeconds = 600;
   bool resume = false;
+  int attempt = 1;  // the job's attempt (the lease's): sent with progress, so a worker of an earlier one is told to stop
 };
 
 // "node:gpu:0,node:cpu:1" -> devices; errors name the entry.

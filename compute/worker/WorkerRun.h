@@ -27,7 +27,8 @@ extern volatile std::sig_atomic_t g_stopSignal;
 // loop: the loop posts the latest numbers (no wait) and reads the manager's last cancel answer.
 class ProgressReporter {
  public:
-  ProgressReporter(const std::string& address, std::string jobId, double interval) : m_jobId(std::move(jobId)), m_interval(interval) {
+  ProgressReporter(const std::string& address, std::string jobId, double interval, int attempt = 1)
+      : m_jobId(std::move(jobId)), m_interval(interval), m_attempt(attempt) {
     if (address.empty()) return;
     m_stub = manager::v1::NodeRegistry::NewStub(rpc::makeChannel(address));
     m_thread = std::thread([this] { run(); });
@@ -71,6 +72,7 @@ class ProgressReporter {
     req.set_job_id(m_jobId);
     *req.mutable_progress() = p;
     req.set_message(message);
+    req.set_attempt(m_attempt);
     manager::v1::ReportProgressResponse resp;
     auto ctx = rpc::contextWithDeadline(5);
     const grpc::Status s = m_stub->ReportProgress(ctx.get(), req, &resp);
@@ -85,6 +87,7 @@ class ProgressReporter {
 
   std::string m_jobId;
   double m_interval;
+  int m_attempt;
   std::unique_ptr<manager::v1::NodeRegistry::Stub> m_stub;
   std::mutex m_mu;
   std::condition_variable m_cv;

@@ -112,7 +112,7 @@ int runRank(const worker::WorkerOptions& o, int rank, int ranks) {
   const double duration = cfg.sim.duration, interval = cfg.sim.snapshotInterval;
   const auto totalSteps = std::int64_t(std::llround(duration / sim.dt()));
   sim.scheduleOutput(interval, double(totalSteps) * sim.dt());  // snapshot times kept if reduce_dt halves dt
-  ProgressReporter progress(lead ? o.managerAddress : std::string(), o.jobId, o.progressInterval);
+  ProgressReporter progress(lead ? o.managerAddress : std::string(), o.jobId, o.progressInterval, o.attempt);
   const auto start = std::chrono::steady_clock::now();
   auto lastPost = start - std::chrono::hours(1);
   bool cancelled = false;
@@ -183,6 +183,9 @@ int main(int argc, char** argv) {
                  "seconds of wall clock between checkpoints sent to the back-end (0: only the scene's output.checkpoint_interval)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--attempt", o.attempt, "the job's attempt (the agent passes the lease's after a requeue)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000));
   app.add_flag("--resume", o.resume, "go on from the job's last checkpoint on the back-end (the agent passes it when the job was requeued)");
   app.add_option("--log-level", logLevel, "trace, debug, info, warn, error")->capture_default_str();
   try {

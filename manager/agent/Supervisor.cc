@@ -42,6 +42,7 @@ std::vector<std::string> workerCommand(const Lease& lease, const std::vector<Dev
     args.insert(args.end(), {"--backend", lease.backendAddress});
     if (lease.attempt > 1) args.push_back("--resume");  // from the job's last checkpoint on the back-end
   }
+  if (lease.attempt > 1) args.insert(args.end(), {"--attempt", std::to_string(lease.attempt)});
   std::string devices;
   for (const DeviceRef& d : rankDevices) {
     if (!devices.empty()) devices += ',';

@@ -387,6 +387,15 @@ TEST_F(ManagerTest, LostNodeRequeuesItsJobsOntoFreeDevices) {
   EXPECT_EQ(again.devices.front().node, "b");
   EXPECT_NE(again.reason.find("node a lost"), std::string::npos) << "why attempt 1 ended stays visible";
   EXPECT_EQ(job(jc->id).state, JobState::kQueued);
+  // Progress of the first attempt's worker (still alive somewhere) is answered "stop" and not recorded; the second's is.
+  auto stale = manager->reportProgress(ja->id, {999, 1000, 0.9, 1.0, 0, 0}, "", 1);
+  ASSERT_TRUE(stale);
+  EXPECT_TRUE(*stale);
+  EXPECT_NE(job(ja->id).progress.step, 999);
+  auto current = manager->reportProgress(ja->id, {7, 1000, 0.07, 1.0, 0, 0}, "", 2);
+  ASSERT_TRUE(current);
+  EXPECT_FALSE(*current);
+  EXPECT_EQ(job(ja->id).progress.step, 7);
   // Node a comes back listing the old worker: told to stop; its exit report names a node the job no longer runs on.
   auto hb = manager->heartbeat(nodeBeat("a", 1, 0, 80ull << 30, {ja->id}));
   ASSERT_TRUE(hb);
