@@ -14,6 +14,7 @@
 #include "compute/sph/SphEngine.h"
 #include "compute/sph/SphFields.h"
 #include "compute/sph/SphKernels.h"
+#include "compute/sph/SphRateLists.h"
 
 namespace pflow::compute::sph {
 
@@ -51,6 +52,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     if (m_ref.bytes() < std::size_t(m_n) * sizeof(Vec3d)) m_ref.resize(std::size_t(m_n) * sizeof(Vec3d) * 5 / 4 + sizeof(Vec3d));
     m_mem.copyWithin(m_ref.data(), ptr<SphField::Position>(), std::size_t(m_n) * sizeof(Vec3d));
     m_wetStale = true;
+    m_listStale = true;
     m_sorted = true;
   }
 
@@ -67,6 +69,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     sizeLocalBuffers();
     splitBoundary();
     m_wetStale = true;
+    m_listStale = true;
   }
   bool cellKeys(const CellGrid& grid, std::vector<std::uint32_t>& cells) override {
     sizeLocalBuffers();
@@ -95,6 +98,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
   void dropGhosts() override {
     m_numBoundary = 0;
     m_rows.dropGhosts();
+    m_listStale = true;
   }
 
   void computeRates(RateSet set) override {
@@ -123,6 +127,13 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     k.wet = m_wet.as<std::uint8_t>();
     // The step loop computes rates only while no particle has moved half the skin since the sort (SphSimulation::rates).
     k.margin = R(0.5 * m_setup.skin * 1.001 + 1e-5 * m_setup.grid.cellSize);
+    // The neighbour lists, built by the first pass over every row after a sort (the ghosts packed too).
+    if (m_listStale && set == RateSet::kAll && m_n <= Index(kernels::kMaxListedRow)) buildLists(k);
+    if (!m_listStale) {
+      k.list = m_list.as<std::uint32_t>();
+      k.listCount = m_listCount.as<std::uint32_t>();
+      k.listLayout = m_listLayout;
+    }
     const bool mirror = m_setup.mirror.any;
     if (set == RateSet::kAll || (m_numBoundary == 0 && set == RateSet::kInterior)) {
       m_exec.forEach(m_owned, k);
@@ -200,6 +211,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     Status st = m_rows.loadState(s, kMigrate | kCheckpoint);
     sizeLocalBuffers();
     m_wetStale = true;
+    m_listStale = true;
     return st;
   }
 
@@ -226,7 +238,10 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
   using Rows = LocalRows<Exec, Store>;
   Rows& rows() override { return m_rows; }
   const Rows& rows() const override { return m_rows; }
-  void localRowsChanged() override { sizeLocalBuffers(); }
+  void localRowsChanged() override {
+    sizeLocalBuffers();
+    m_listStale = true;
+  }
   template <SphField F> typename Store::template Type<F>* ptr() { return m_fields.template ptr<F>(); }
   template <SphField F> const typename Store::template Type<F>* cptr() const { return m_fields.template ptr<F>(); }
 
@@ -261,6 +276,32 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
                                m_packRow.as<kernels::RateRow<R>>(), m_packState.as<kernels::RateState<R>>(),
                                m_packPm.as<kernels::RatePm<R>>()};
     m_exec.forEach(to - from, compute::kernels::Offset<kernels::PackRates<R>>{pack, from});
+  }
+
+  // Each owned particle's candidates within the support plus the skin, in the walk's order (SphRateLists.h), with the
+  // capacity grown to the largest count when it did not suffice.
+  void buildLists(const kernels::Interact<R>& k) {
+    const Index n = m_owned;
+    const double reach = double(m_kernel.support()) + m_setup.skin;
+    kernels::BuildRateLists<R> b{m_setup.grid, k.cellStart, k.home, k.row, R(reach * reach * (1 + 1e-4)), k.wet,
+                                 k.ghostCellStart, k.ghostItems, k.ghostBase, k.gid};
+    for (int attempt = 0; attempt < 2; ++attempt) {
+      if (m_listCount.bytes() < std::size_t(std::max<Index>(n, 1)) * 4) m_listCount.resize(std::size_t(std::max<Index>(n, 1)) * 5);
+      const std::size_t entries = std::size_t(std::max<Index>(n, 1)) * m_listCapacity;
+      if (m_list.bytes() < entries * 4) m_list.resize(entries * 4 + entries);
+      b.capacity = m_listCapacity;
+      b.layout = Exec::kColumnMajorLists ? ListLayout::columnMajor(n) : ListLayout::rowMajor(m_listCapacity);
+      b.list = m_list.as<std::uint32_t>();
+      b.count = m_listCount.as<std::uint32_t>();
+      m_exec.forEach(n, b);
+      const auto most = std::uint32_t(m_exec.maxOf(n, kernels::ListCountOf{b.count}));
+      if (most <= m_listCapacity) {
+        m_listLayout = b.layout;
+        m_listStale = false;
+        return;
+      }
+      m_listCapacity = most + most / 5 + 4;
+    }
   }
 
   // Which boundary particles can have fluid neighbours until the next sort (MarkWet), after each sort and halo.
@@ -392,6 +433,11 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
   Buffer m_wet{m_mem, 0};  // MarkWet, per owned particle
   Buffer m_packRow{m_mem, 0}, m_packState{m_mem, 0}, m_packPm{m_mem, 0};  // PackRates, per local row
   bool m_wetStale = true;
+  // Neighbour lists (buildLists): stale after every sort, halo and load; entries per particle.
+  Buffer m_list{m_mem, 0}, m_listCount{m_mem, 0};
+  std::uint32_t m_listCapacity = 0;
+  ListLayout m_listLayout;
+  bool m_listStale = true;
   bool m_sorted = false;  // cellStart and the wet flags exist from the first sortByCell
   Index m_numBoundary = 0;
 };

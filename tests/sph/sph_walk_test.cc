@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "compute/sph/SphKernels.h"
+#include "compute/sph/SphRateLists.h"
 
 using namespace pflow;
 using namespace pflow::compute;
@@ -37,7 +38,7 @@ Outputs<R> runPass(const sph::kernels::Interact<R>& base, R margin, Index n) {
 }
 
 // How many particles' rates differ between the full walk and one that skips with `marginOfSkin` times half the skin
-// as its margin (and 1e-5 of a cell for rounding).
+// as its margin (and 1e-5 of a cell for rounding); a negative `marginOfSkin`: the pass over neighbour lists instead.
 template <class R>
 int differingRates(unsigned seed, double marginOfSkin) {
   const double h = 0.01, skin = 0.25 * h, cs = h + skin / 2;
@@ -100,7 +101,34 @@ int differingRates(unsigned seed, double marginOfSkin) {
                                Kernel<R>::make(KernelKind::kWendlandC2, 3, h), params, Vec3<R>{R(0), R(0), R(-9.81)},
                                nullptr, nullptr, nullptr};
   const Outputs<R> full = runPass(k, R(-1), n);
-  const Outputs<R> pruned = runPass(k, R(0.5 * skin * marginOfSkin + 1e-5 * cs), n);
+  Outputs<R> pruned;
+  if (marginOfSkin >= 0) {
+    pruned = runPass(k, R(0.5 * skin * marginOfSkin + 1e-5 * cs), n);
+  } else {  // the neighbour lists instead of the walk: built from the packed rows at the sort (positions = home)
+    std::vector<sph::kernels::RateRow<R>> atSort(n);
+    sph::kernels::PackRates<R> packAtSort = pack;
+    packAtSort.pos = home.data();
+    packAtSort.row = atSort.data();
+    for (Index i = 0; i < n; ++i) packAtSort(i);
+    const double reach = 2 * h + skin;
+    sph::kernels::BuildRateLists<R> build{grid, cellStart.data(), home.data(), atSort.data(), R(reach * reach * (1 + 1e-4))};
+    std::uint32_t capacity = 0;
+    std::vector<std::uint32_t> list, count(n);
+    for (int attempt = 0; attempt < 2; ++attempt) {
+      list.assign(std::size_t(n) * std::max<std::uint32_t>(capacity, 1), 0);
+      build.capacity = capacity;
+      build.layout = ListLayout::columnMajor(n);  // the GPU's layout
+      build.list = list.data();
+      build.count = count.data();
+      for (Index a = 0; a < n; ++a) build(a);
+      capacity = *std::max_element(count.begin(), count.end());
+    }
+    sph::kernels::Interact<R> withLists = k;
+    withLists.list = list.data();
+    withLists.listCount = count.data();
+    withLists.listLayout = build.layout;
+    pruned = runPass(withLists, R(-1), n);
+  }
   int differ = 0, neighbours = 0;
   for (Index a = 0; a < n; ++a) {
     differ += full.drho[a] != pruned.drho[a] || full.visc[a] != pruned.visc[a] || full.acc[a].x != pruned.acc[a].x ||
@@ -117,6 +145,12 @@ TEST(SphWalk, SkippedCellsHoldNoNeighbourDouble) {
 
 TEST(SphWalk, SkippedCellsHoldNoNeighbourFloat) {
   for (unsigned seed : {4u, 5u, 6u}) EXPECT_EQ(differingRates<float>(seed, 1.001), 0) << "seed " << seed;
+}
+
+// The neighbour lists (SphRateLists.h) built at the sort give the walk's rates bit for bit after the particles moved.
+TEST(SphWalk, NeighbourListsGiveTheWalksRates) {
+  for (unsigned seed : {7u, 8u}) EXPECT_EQ(differingRates<double>(seed, -1.0), 0) << "seed " << seed;
+  for (unsigned seed : {9u, 10u}) EXPECT_EQ(differingRates<float>(seed, -1.0), 0) << "seed " << seed;
 }
 
 // The check is sharp: skipping as if no particle had moved drops real neighbours of some that did.
