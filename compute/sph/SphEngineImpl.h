@@ -127,9 +127,10 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     k.wet = m_wet.as<std::uint8_t>();
     // The step loop computes rates only while no particle has moved half the skin since the sort (SphSimulation::rates).
     k.margin = R(0.5 * m_setup.skin * 1.001 + 1e-5 * m_setup.grid.cellSize);
-    // The neighbour lists, built by the first pass over every row after a sort (the ghosts packed too).
-    if (m_listStale && set == RateSet::kAll && m_n <= Index(kernels::kMaxListedRow)) buildLists(k);
-    if (!m_listStale) {
+    // The neighbour lists (SphSetup::neighbourLists), built by the first pass over every row after a sort (the ghosts
+    // packed too).
+    if (m_setup.neighbourLists && m_listStale && set == RateSet::kAll && m_n <= Index(kernels::kMaxListedRow)) buildLists(k);
+    if (m_setup.neighbourLists && !m_listStale) {
       k.list = m_list.as<std::uint32_t>();
       k.listCount = m_listCount.as<std::uint32_t>();
       k.listLayout = m_listLayout;
