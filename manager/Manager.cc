@@ -128,13 +128,8 @@ void Manager::requeueOrFailLocked(const Job& job, const std::string& why, std::o
     return;
   }
   Job next = job;
-  if (Status s = JobTable::transition(next, JobState::kRequeued, why + " (" + attempt + "; requeued)", m_clock.now()); !s) {
-    spdlog::error("manager: {}", s.message());
-    return;
-  }
-  if (exitCode) next.exitCode = *exitCode;
-  next.message.clear();
-  (void)commitLocked(std::move(next), "requeued: " + why + " (" + attempt + ")");
+  next.message.clear();  // the last attempt's progress message
+  endLocked(next, JobState::kRequeued, why + " (" + attempt + "; requeued)", exitCode, "requeued: " + why + " (" + attempt + ")");
 }
 
 Lease Manager::leaseFor(const Job& job) const {

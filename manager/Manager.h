@@ -113,6 +113,7 @@ class Manager {
   Status commitLocked(Job next, const std::string& event);
   // The job table and the watchers only (no store, no leases): for progress between saves.
   void publishLocked(const Job& next, const std::string& event);
+  // The transition to `to` (a final state, or REQUEUED), stored and published.
   void endLocked(const Job& job, JobState to, const std::string& reason, std::optional<int> exitCode, const std::string& event);
   // A failure a new attempt may not repeat: REQUEUED while the job has attempts left, else FAILED ("attempt N of M").
   void requeueOrFailLocked(const Job& job, const std::string& why, std::optional<int> exitCode);

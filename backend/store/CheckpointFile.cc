@@ -83,9 +83,10 @@ Status syncPath(const std::string& path, bool directory) {
   return Status::ok();
 }
 
-Status writeCheckpoint(const std::string& path, const CheckpointData& data) {
+Status writeCheckpoint(const std::string& path, const CheckpointData& data, bool scratch) {
   std::lock_guard<std::recursive_mutex> lock(hdf5Mutex());
   quietHdf5();
+  if (scratch) return writeFile(path, data);
   const std::string tmp = path + ".tmp";
   if (const fs::path parent = fs::path(path).parent_path(); !parent.empty()) {
     std::error_code ec;

@@ -32,7 +32,9 @@ struct CheckpointHeader {
   std::int64_t particles = 0;
 };
 
-Status writeCheckpoint(const std::string& path, const CheckpointData& data);
+// `scratch`: a copy only on its way elsewhere (the worker's, sent to the back-end, which makes it durable): written
+// in place, neither flushed to disk nor rotated.
+Status writeCheckpoint(const std::string& path, const CheckpointData& data, bool scratch = false);
 // A file's bytes (or a folder's entries) flushed to the disk (fsync): before a rename puts it in place, and after.
 Status syncPath(const std::string& path, bool directory);
 // INVALID_ARGUMENT for a file that is not a pflow checkpoint of this format version; NOT_FOUND for no file.

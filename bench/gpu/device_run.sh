@@ -4,12 +4,7 @@
 # Usage (from the repository root on the device machine):
 #   bash bench/gpu/device_run.sh [tests] [sanitize] [bench] [scaling] [largest] [cpu] [cpuab] [layouts] [mpi] [model] [accuracy] [sph] [sph3d] [sphmirror] [sphmpi] [sphflow] [sphtarget]
 # Logs and JSON go to $OUT (or ./out).
-set -uo pipefail
-OUT=${OUT:-out}
-mkdir -p "$OUT"
-tar xzf .gpuz/b.tgz
-source .gpu/env.sh
-B=.gpu/bin
+source "$(dirname "$0")/setup.sh"
 # Settled small beds kept for every pflow-bench call of this machine (pflow-bench --base-cache): each bed is
 # settled once per call, not once per stage. Outside $OUT: they need not come back.
 BEDS=${BEDS:-/tmp/pflow-beds}
@@ -19,8 +14,6 @@ stages=("$@")
 has() { local s; for s in "${stages[@]}"; do [[ $s == "$1" ]] && return 0; done; return 1; }
 summary=()
 nvidia-smi --query-gpu=name,memory.total,clocks.max.sm,driver_version --format=csv,noheader | tee "$OUT/gpu.txt"
-dev=$(nvidia-smi --query-gpu=name --format=csv,noheader | head -1)
-commit=$(cat .gpuz/commit 2>/dev/null || echo unknown)
 
 if has tests; then
   for t in cuda_executor_test; do
@@ -41,9 +34,8 @@ if has sanitize; then
 fi
 bw=0
 if has bench || has cpu || has scaling || has largest; then
-  "$B/pflow-gpu-bandwidth" > "$OUT/bandwidth.json" 2>&1
+  bw=$(copy_bandwidth)
   summary+=("bandwidth $(cat "$OUT/bandwidth.json")")
-  bw=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["memcpy_gb_per_s"])' "$OUT/bandwidth.json" 2>/dev/null || echo 0)
 fi
 if has bench; then
   # One settled 200 000-sphere bed per polydispersity, tiled up to each size (bench/README.md).
@@ -200,8 +192,7 @@ fi
 # SPH in 3D: SPHERIC test 2 (examples/dam_break_3d.yaml) run to 1 s with its probes at 0.02 m, and
 # pflow-sph-bench's throughput at SPH_SPACINGS (0.0064 m: about 5 million particles).
 if has sph3d; then
-  "$B/pflow-gpu-bandwidth" > "$OUT/bandwidth.json" 2>&1
-  bw=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["memcpy_gb_per_s"])' "$OUT/bandwidth.json" 2>/dev/null || echo 0)
+  bw=$(copy_bandwidth)
   for prec in ${SPH_PRECISIONS:-float double}; do
     timeout 300 "$B/pflow-sph-bench" --executor cuda --precision $prec --spacing "${SPH_SPACINGS:-0.02,0.01,0.0064}" \
       --warmup "${SPH_WARMUP:-10}" --steps "${SPH_STEPS:-50}" --copy-bandwidth "$bw" --device "$dev" --commit "$commit" \
@@ -231,8 +222,7 @@ if has sphmirror; then
     --out "$OUT/sph_mirror" > "$OUT/sph_study_mirror.log" 2>&1
   summary+=("sph study mirror rc=$? $((SECONDS - start))s" "$(grep -E '^mirror|^experiment' "$OUT/sph_study_mirror.log")")
   sed 's/^sph:$/sph:\n  boundary: mirror/' examples/dam_break_3d.yaml > "$OUT/dam_break_3d_mirror.yaml"
-  "$B/pflow-gpu-bandwidth" > "$OUT/bandwidth.json" 2>&1
-  bw=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["memcpy_gb_per_s"])' "$OUT/bandwidth.json" 2>/dev/null || echo 0)
+  bw=$(copy_bandwidth)
   timeout 300 "$B/pflow-sph-bench" --scene "$OUT/dam_break_3d_mirror.yaml" --executor cuda --precision float \
     --spacing "${SPH_MIRROR_SPACINGS:-0.01,0.0064,0.0055}" --warmup 10 --steps 50 --copy-bandwidth "$bw" --device "$dev" --commit "$commit" \
     >> "$OUT/sph_bench_mirror.jsonl" 2>> "$OUT/sph_bench_mirror.log"
@@ -268,8 +258,7 @@ if has sphmpi; then
   start=$SECONDS
   timeout 300 "$B/sph_gpu_test" > "$OUT/sph_gpu_test.log" 2>&1
   summary+=("sph_gpu_test rc=$? $((SECONDS - start))s $(grep -E '^\[  (PASSED|FAILED)|largest CPU-GPU' "$OUT/sph_gpu_test.log" | tr '\n' ' ')")
-  "$B/pflow-gpu-bandwidth" > "$OUT/bandwidth.json" 2>&1
-  bw=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["memcpy_gb_per_s"])' "$OUT/bandwidth.json" 2>/dev/null || echo 0)
+  bw=$(copy_bandwidth)
   sb() {  # ranks, pflow-sph-bench options...
     local np=$1; shift
     timeout "${SPHMPI_TIMEOUT:-150}" mpirun --oversubscribe --bind-to none -np "$np" "$B/pflow-sph-bench" --executor cuda --precision float \
@@ -298,8 +287,7 @@ fi
 # floor), and SPHERIC test 2 run by `pflow run` at dp 6.4 mm (4.07e6 particles, float) to SPHFLOW_END s with its
 # probes (robustness: Verlet left the density bounds at 0.31 s there).
 if has sphflow; then
-  "$B/pflow-gpu-bandwidth" > "$OUT/bandwidth.json" 2>&1
-  bw=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["memcpy_gb_per_s"])' "$OUT/bandwidth.json" 2>/dev/null || echo 0)
+  bw=$(copy_bandwidth)
   for sp in ${SPHFLOW_SPACINGS:-0.0064}; do
     timeout 200 "$B/pflow-sph-bench" --executor cuda --precision float --integrator velocity_verlet --spacing "$sp" --advance 0.32 \
       --warmup 10 --steps 100 --copy-bandwidth "$bw" --device "$dev" --commit "$commit" >> "$OUT/sph_flow.jsonl" 2>> "$OUT/sph_flow.log"
@@ -325,8 +313,7 @@ fi
 if has sphtarget; then
   export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
   ngpu=$(nvidia-smi -L | wc -l)
-  "$B/pflow-gpu-bandwidth" > "$OUT/bandwidth.json" 2>&1
-  bw=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["memcpy_gb_per_s"])' "$OUT/bandwidth.json" 2>/dev/null || echo 0)
+  bw=$(copy_bandwidth)
   st() {  # ranks, pflow-sph-bench options...
     local np=$1; shift
     timeout "${SPHT_TIMEOUT:-200}" mpirun --oversubscribe --bind-to none -np "$np" "$B/pflow-sph-bench" --executor cuda --precision float \

@@ -2,16 +2,11 @@
 # A source-level Nsight Compute profile of the SPH rates pass (SPHERIC test 2, float, velocity Verlet), on the
 # device machine: per-SASS-instruction counts (executed warp instructions, active threads) with the CUDA line each
 # comes from (the build has -lineinfo), and the pass's summary sections. Run from the repository root there:
-#   bash bench/gpu/profile_rates.sh [spacing] [kernel-regex] [extra pflow-sph-bench options...]
+#   bash bench/gpu/profile_rates.sh [spacing] [kernel name] [extra pflow-sph-bench options...]
 # Writes $OUT/rates.ncu-rep, $OUT/rates_source.csv (the source page), $OUT/rates_details.txt.
-set -uo pipefail
-OUT=${OUT:-out}
-mkdir -p "$OUT"
-tar xzf .gpuz/b.tgz
-source .gpu/env.sh
-B=.gpu/bin
+source "$(dirname "$0")/setup.sh"
 sp=${1:-0.0064}
-kernel=${2:-regex:forEach.*Interact}
+kernel=${2:-forEachKernelCap64}  # ncu matches the function's base name: the register-capped launcher of the rates pass
 shift 2 2>/dev/null || shift $#
 NCU=$(command -v ncu || ls /usr/local/cuda/bin/ncu 2>/dev/null || echo ncu)
 # The 40th launch of the pass: past the block-size tuning (the first launches of a kernel try 64..512 threads).

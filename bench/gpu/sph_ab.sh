@@ -4,16 +4,8 @@
 # from rest at SPH_AB_SPACING (default 0.006 m) and in the flow (after 0.32 s) at SPH_AB_FLOW_SPACING (default 0.01 m),
 # twice each, interleaved; then the last binary in the flow with the skins in SPH_AB_SKINS. JSON lines and logs to $OUT.
 #   bash bench/gpu/sph_ab.sh pflow-sph-bench-base pflow-sph-bench
-set -uo pipefail
-OUT=${OUT:-out}
-mkdir -p "$OUT"
-tar xzf .gpuz/b.tgz
-source .gpu/env.sh
-B=.gpu/bin
-dev=$(nvidia-smi --query-gpu=name --format=csv,noheader | head -1)
-commit=$(cat .gpuz/commit 2>/dev/null || echo unknown)
-"$B/pflow-gpu-bandwidth" > "$OUT/bandwidth.json" 2>&1 || true
-bw=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["memcpy_gb_per_s"])' "$OUT/bandwidth.json" 2>/dev/null || echo 0)
+source "$(dirname "$0")/setup.sh"
+bw=$(copy_bandwidth)
 rest=${SPH_AB_SPACING:-0.006}
 flow=${SPH_AB_FLOW_SPACING:-0.01}
 one() {  # label binary options...

@@ -98,7 +98,7 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void forCellMergedById(std::uint32_t c, const
 // than 27 cells of the whole support), and without ghosts each of the 25 rows of 5 cells along x around a's home
 // cell is one contiguous range of rows (cells are numbered x fastest): no per-cell loop. Rows, and cells at the
 // ends of a row, that lie farther than the support from a even when their particles have moved `margin` out of
-// them are not walked (walkGap: 81 of the 125 cells for a particle at the centre of its cell).
+// them are not walked (walkGap: 81 of the 125 cells for a particle at the centre of its cell, skin 0.15 or 0.25 h).
 // How far a's offset o (from the low corner of its home cell, along one axis) lies from the cells d away along
 // that axis, widened by `margin` on both sides (a particle listed there is within margin of its cell). The grid's
 // first and last cells along the axis also list the particles beyond it (CellGrid::coords clamps): open there.
@@ -142,7 +142,7 @@ struct Interact {
   R margin = R(-1);
   // Neighbour lists (SphRateLists.h; null: walk the cells): a's candidates within the support plus the skin at the
   // last sort, in the walk's order, each as (row << 5) | its row of cells (RateListEntry), so a particle evaluates
-  // the same pairs in the same order as the walk and tests about a fifth as many candidates.
+  // the same pairs in the same order as the walk and tests only the candidates listed.
   const std::uint32_t* list = nullptr;
   const std::uint32_t* listCount = nullptr;
   ListLayout listLayout;

@@ -3,7 +3,7 @@
 // keeping each candidate within the support plus the skin. Until the next sort no two particles come closer by more
 // than the skin (the step loop sorts again before any particle moves half of it), so every pair within the support
 // is listed, and the pass (kernels::Interact) evaluates exactly the walk's pairs in the walk's order: the same sums,
-// bit for bit, while testing about a fifth of the candidates.
+// bit for bit, while testing only the listed candidates.
 #pragma once
 #include <cstdint>
 

@@ -11,14 +11,14 @@ namespace fs = std::filesystem;
 
 JobCheckpoints::JobCheckpoints(const WorkerOptions& o, const char* solver, const char* precision, double everySeconds, bool lead,
                                compute::Domain& all)
-    : m_jobId(o.jobId), m_solver(solver), m_precision(precision), m_lead(lead), m_resume(o.resume), m_all(all),
-      m_everySeconds(everySeconds), m_wallSeconds(o.checkpointWallSeconds) {
+    : m_jobId(o.jobId), m_solver(solver), m_precision(precision), m_lead(lead), m_resume(o.resume), m_all(all) {
   // Checkpoints need the back-end (a file output is a local run's: `pflow run --checkpoint-every`).
+  const double wallSeconds = o.backendAddress.empty() ? 0 : o.checkpointWallSeconds;
   if (o.backendAddress.empty()) {
-    m_everySeconds = m_wallSeconds = 0;
+    everySeconds = 0;
     m_resume = false;
   }
-  m_schedule = compute::CheckpointSchedule(0, m_everySeconds, m_wallSeconds, 0, 0.0);
+  m_schedule = compute::CheckpointSchedule(0, everySeconds, wallSeconds, 0, 0.0);
   if (!m_lead || (!m_schedule.on() && !m_resume)) return;
   m_backend = backend::makeGrpcBackendClient(o.backendAddress);
   const fs::path scene = fs::path(o.modelDir) / "scene.yaml";
@@ -33,16 +33,15 @@ JobCheckpoints::JobCheckpoints(const WorkerOptions& o, const char* solver, const
   // A local file per job and process (the back-end gets its bytes), in the temporary folder.
   m_path = (fs::temp_directory_path() / ("pflow-" + m_jobId + "-" + std::to_string(::getpid()) + ".ckpt.h5")).string();
   if (m_schedule.on())
-    spdlog::info("job {}: checkpoints to the back-end every {}{}{}", m_jobId, m_wallSeconds > 0 ? std::to_string(m_wallSeconds) + " s of wall clock" : "",
-                 m_wallSeconds > 0 && m_everySeconds > 0 ? " and every " : "",
-                 m_everySeconds > 0 ? std::to_string(m_everySeconds) + " s of simulated time" : "");
+    spdlog::info("job {}: checkpoints to the back-end every {}{}{}", m_jobId, wallSeconds > 0 ? fmt::format("{:g} s of wall clock", wallSeconds) : "",
+                 wallSeconds > 0 && everySeconds > 0 ? " and every " : "",
+                 everySeconds > 0 ? fmt::format("{:g} s of simulated time", everySeconds) : "");
 }
 
 JobCheckpoints::~JobCheckpoints() {
   if (m_path.empty()) return;
   std::error_code ec;
   fs::remove(m_path, ec);
-  fs::remove(backend::previousCheckpointPath(m_path), ec);
 }
 
 std::optional<backend::CheckpointData> JobCheckpoints::fetch() {
@@ -75,7 +74,7 @@ void JobCheckpoints::send(compute::SimulationState state) {
   const std::int64_t step = state.step;
   const double time = state.time;
   m_data.state = std::move(state);
-  Status s = backend::writeCheckpoint(m_path, m_data);
+  Status s = backend::writeCheckpoint(m_path, m_data, /*scratch=*/true);  // the back-end's copy is the durable one
   m_data.state = {};
   if (s.isOk()) s = m_backend->writeCheckpoint(m_jobId, step, m_path);
   if (!s.isOk()) {

@@ -40,7 +40,7 @@ class JobCheckpoints {
     if (m_all.sum(data ? 1.0 : 0.0) == 0) return false;
     static const compute::SimulationState kNone;
     PFLOW_TRY(sim.resume(data ? data->state : kNone));
-    m_schedule = compute::CheckpointSchedule(0, m_everySeconds, m_wallSeconds, sim.stepCount(), sim.time());
+    m_schedule.taken(sim.stepCount(), sim.time());  // the next one counted from the resume point
     if (m_lead) spdlog::info("job {} resumed from its checkpoint at step {} (t = {:.6g} s)", m_jobId, sim.stepCount(), sim.time());
     return true;
   }
@@ -69,7 +69,6 @@ class JobCheckpoints {
   std::string m_jobId, m_solver, m_precision, m_path;
   bool m_lead, m_resume;
   compute::Domain& m_all;
-  double m_everySeconds = 0, m_wallSeconds = 0;
   compute::CheckpointSchedule m_schedule;
   backend::CheckpointData m_data;  // the scene and the run's kind; the state per checkpoint
   std::unique_ptr<backend::BackendClient> m_backend;

@@ -339,10 +339,17 @@ TEST(StopOrphans, StopsWorkersThatOutlivedTheirAgentAndReportsEveryPidFile) {
     ::execl("/bin/sh", "sh", "-c", "sleep 30", "pflow-worker", "--job-id", "job-orphan", static_cast<char*>(nullptr));
     ::_exit(127);
   }
+  const pid_t other = ::fork();  // a program that now holds a pid a file names: alive, but not that job's worker
+  ASSERT_GE(other, 0);
+  if (other == 0) {
+    ::setsid();
+    ::execl("/bin/sh", "sh", "-c", "sleep 30", "pflow-worker", "--job-id", "job-elsewhere", static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
   std::this_thread::sleep_for(std::chrono::milliseconds(200));  // exec'd
   std::ofstream(pidFilePath(dir.path(), "job-orphan")) << orphan << "\n";
   std::ofstream(pidFilePath(dir.path(), "job-gone")) << 999999 << "\n";
-  std::ofstream(pidFilePath(dir.path(), "job-other")) << ::getpid() << "\n";  // alive, but not that job's worker
+  std::ofstream(pidFilePath(dir.path(), "job-other")) << other << "\n";
   const auto exits = stopOrphans(dir.path(), 5);
   ASSERT_EQ(exits.size(), 3u);
   for (const WorkerExit& x : exits) {
@@ -357,7 +364,9 @@ TEST(StopOrphans, StopsWorkersThatOutlivedTheirAgentAndReportsEveryPidFile) {
   int status = 0;
   ASSERT_EQ(::waitpid(orphan, &status, 0), orphan);
   EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM);
-  EXPECT_EQ(::kill(::getpid(), 0), 0);  // this process was left alone
+  EXPECT_EQ(::waitpid(other, &status, WNOHANG), 0) << "the other program was stopped";  // still running
+  ::kill(-other, SIGKILL);
+  ::waitpid(other, &status, 0);
   EXPECT_FALSE(std::filesystem::exists(pidFilePath(dir.path(), "job-orphan")));
   EXPECT_TRUE(stopOrphans(dir.path(), 5).empty());
 }

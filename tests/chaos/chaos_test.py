@@ -12,6 +12,7 @@ over, snapshots compared, snapshots missing or different (must be 0).
   chaos_test.py BIN_DIR SRC_DIR [SECONDS [SEED [JOBS]]]      (deploy/test.sh: 120 s; longer by argument)
 """
 import collections
+import json
 import os
 import random
 import re
@@ -43,7 +44,6 @@ def jobs_state(s, jobs):
     r = s.cli("jobs", "--all", "--json", check=False)
     if r.returncode != 0:
         return None
-    import json
     return {j["id"]: j["state"] for j in json.loads(r.stdout) if j["id"] in jobs}
 
 

@@ -313,48 +313,48 @@ def assert_same_as_run(s, job, scene):
         assert np.array_equal(ga["velocity"][...][oa], gb["velocity"][...][ob]), "velocities differ after the resume"
 
 
+def run_interrupted(s, interrupt):
+    """Submits the resume scene and calls interrupt(job) after the job's first checkpoint: the job must go on from it
+    on its second attempt and end with the same particles, bit for bit, as an uninterrupted `pflow run`."""
+    scene = write_resume_scene(s)
+    job = s.submit(scene)
+    s.wait_state(job, {"running"})
+    log = os.path.join(s.dir, "agent-node-a", job + ".log")
+    wait_for_log(log, "on the back-end")
+    interrupt(job)
+    final = s.wait_state(job, {"succeeded", "failed", "cancelled"}, timeout=120)
+    assert final["state"] == "succeeded", final
+    assert final["attempts"] == 2, final
+    assert "resumed from its checkpoint at step" in open(log).read()
+    assert_same_as_run(s, job, scene)
+
+
 def resume():
-    # A job killed after its first checkpoint goes on from it on the next attempt and ends with the same particles,
-    # bit for bit, as an uninterrupted `pflow run` of the scene.
+    # A job killed after its first checkpoint goes on from it on the next attempt.
     s = Stack()
     try:
-        scene = write_resume_scene(s)
-        job = s.submit(scene)
-        s.wait_state(job, {"running"})
-        log = os.path.join(s.dir, "agent-node-a", job + ".log")
-        wait_for_log(log, "on the back-end")
-        kill_workers(job)
-        final = s.wait_state(job, {"succeeded", "failed", "cancelled"}, timeout=120)
-        assert final["state"] == "succeeded", final
-        assert final["attempts"] == 2, final
-        assert "resumed from its checkpoint at step" in open(log).read()
-        assert_same_as_run(s, job, scene)
+        run_interrupted(s, kill_workers)
     finally:
         s.close()
 
 
 def agentrestart():
     # The agent dies (SIGKILL) while its worker runs on; started again, it stops the worker it finds, reports it, and
-    # the manager requeues the job, which goes on from its checkpoint and ends as an uninterrupted run.
+    # the manager requeues the job, which goes on from its checkpoint.
     s = Stack()
-    try:
-        scene = write_resume_scene(s)
-        job = s.submit(scene)
-        s.wait_state(job, {"running"})
-        log = os.path.join(s.dir, "agent-node-a", job + ".log")
-        wait_for_log(log, "on the back-end")
+    orphans = []
+
+    def restart_agent(job):
         s.kill("agent-node-a")
-        workers = subprocess.run(["pgrep", "-f", "pflow-worker --job-id %s" % job], capture_output=True, text=True).stdout.split()
-        assert workers, "the worker should outlive its agent"
+        orphans.extend(subprocess.run(["pgrep", "-f", "pflow-worker --job-id %s" % job], capture_output=True, text=True).stdout.split())
+        assert orphans, "the worker should outlive its agent"
         s.start_agent("node-a", "127.0.0.1")
-        final = s.wait_state(job, {"succeeded", "failed", "cancelled"}, timeout=120)
-        assert final["state"] == "succeeded", final
-        assert final["attempts"] == 2, final
+
+    try:
+        run_interrupted(s, restart_agent)
         assert "restarted" in open(os.path.join(s.dir, "logs", "agent-node-a.log")).read()
-        for pid in workers:  # the first attempt's worker is gone
+        for pid in orphans:  # the first attempt's worker is gone
             assert not os.path.exists("/proc/%s" % pid) or "Z" in open("/proc/%s/stat" % pid).read().split(")")[-1][:3], pid
-        assert "resumed from its checkpoint at step" in open(log).read()
-        assert_same_as_run(s, job, scene)
     finally:
         s.close()
 
