@@ -125,6 +125,17 @@ Result<StoredCheckpoint> CheckpointStore::Upload::commit() {
   return StoredCheckpoint{last, header->step, header->time, m_total, {}};
 }
 
+Status CheckpointStore::remove(const std::string& jobId) {
+  PFLOW_TRY(validateJobId(jobId));
+  const std::string last = lastPath(m_options.dir, jobId);
+  for (const std::string& path : {last, previousCheckpointPath(last)}) {
+    std::error_code ec;
+    fs::remove(path, ec);
+    if (ec) return ioError("cannot delete '" + path + "': " + ec.message());
+  }
+  return Status::ok();
+}
+
 Result<StoredCheckpoint> CheckpointStore::latest(const std::string& jobId) const {
   PFLOW_TRY(validateJobId(jobId));
   const std::string last = lastPath(m_options.dir, jobId);

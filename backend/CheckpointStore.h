@@ -64,6 +64,8 @@ class CheckpointStore {
   Result<std::unique_ptr<Upload>> begin(const std::string& jobId, std::int64_t step, std::uint64_t totalBytes);
   // The job's last checkpoint that reads back (the one before when the last does not). NOT_FOUND when none does.
   Result<StoredCheckpoint> latest(const std::string& jobId) const;
+  // Deletes the job's checkpoints (the last and the one before); OK when there are none.
+  Status remove(const std::string& jobId);
   const std::string& dir() const { return m_options.dir; }
 
  private:

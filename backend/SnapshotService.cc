@@ -1,5 +1,6 @@
 // SnapshotService adapter. See SnapshotService.h.
 #include "backend/SnapshotService.h"
+#include "common/Log.h"
 
 #include <spdlog/spdlog.h>
 
@@ -85,8 +86,10 @@ class SnapshotIngest final : public grpc::ServerReadReactor<v1::SnapshotChunk> {
 // ReadSnapshot: open on the executor, then alternately read one chunk (executor) and write it (gRPC).
 class SnapshotStreamer final : public grpc::ServerWriteReactor<v1::SnapshotChunk> {
  public:
-  SnapshotStreamer(SnapshotStore& store, TaskPool& executor, const v1::ReadSnapshotRequest& request)
-      : m_store(store), m_executor(executor) {
+  // `authorize` runs first, on the executor: a failure ends the stream with it.
+  SnapshotStreamer(SnapshotStore& store, TaskPool& executor, const v1::ReadSnapshotRequest& request, std::function<Status()> authorize,
+                   std::string client)
+      : m_store(store), m_executor(executor), m_authorize(std::move(authorize)), m_client(std::move(client)) {
     m_request.step = request.which_case() == v1::ReadSnapshotRequest::kStep ? std::optional(request.step())
                                                                              : std::nullopt;  // last
     m_request.fields.assign(request.fields().begin(), request.fields().end());
@@ -106,6 +109,7 @@ class SnapshotStreamer final : public grpc::ServerWriteReactor<v1::SnapshotChunk
 
  private:
   void open() {
+    if (Status allowed = m_authorize(); !allowed) return finish(allowed);
     auto cursor = m_store.openRead(m_jobId, m_request);
     if (!cursor) return finish(cursor.status());
     m_cursor = std::move(cursor.value());
@@ -122,13 +126,22 @@ class SnapshotStreamer final : public grpc::ServerWriteReactor<v1::SnapshotChunk
   }
 
   void finish(const Status& st) {
-    if (!st && st.code() != StatusCode::kCancelled) spdlog::warn("ReadSnapshot: {}", st.toString());
+    if (!st && st.code() != StatusCode::kCancelled) {
+      // Any user may ask: one of them asking in a loop must not fill the log.
+      static log::RateLimit limit;
+      std::uint64_t leftOut = 0;
+      if (limit.allow(m_client, &leftOut))
+        spdlog::warn("ReadSnapshot from {}: {}{}", m_client, log::escaped(st.toString(), 300),
+                     leftOut ? " (" + std::to_string(leftOut) + " earlier lines from it left out)" : "");
+    }
     m_cursor.reset();
     Finish(rpc::toGrpc(st));
   }
 
   SnapshotStore& m_store;
   TaskPool& m_executor;
+  std::function<Status()> m_authorize;
+  std::string m_client;
   std::string m_jobId;
   ReadRequest m_request;
   std::unique_ptr<SnapshotCursor> m_cursor;
@@ -138,13 +151,20 @@ class SnapshotStreamer final : public grpc::ServerWriteReactor<v1::SnapshotChunk
 
 }  // namespace
 
-SnapshotService::SnapshotService(SnapshotStore& store, int workers)
-    : m_store(store), m_executor(std::make_unique<TaskPool>(workers)) {}
+SnapshotService::SnapshotService(SnapshotStore& store, int workers, JobAccess* access)
+    : m_store(store), m_executor(std::make_unique<TaskPool>(workers)), m_access(access) {}
+
+Status SnapshotService::mayRead(const std::string& peer, const std::string& token, const std::string& jobId) const {
+  if (rpc::defaultTransport().insecure || !rpc::nodeOfIdentity(peer).empty()) return Status::ok();
+  if (!m_access) return unavailable("this back-end has no manager to check readers with (start it with --manager)");
+  return m_access->mayRead(token, jobId);
+}
 
 SnapshotService::~SnapshotService() = default;
 
 grpc::ServerReadReactor<v1::SnapshotChunk>* SnapshotService::WriteSnapshot(grpc::CallbackServerContext* context,
                                                                           v1::WriteSnapshotResponse* response) {
+  if (Status who = rpc::requireNode(*context, "WriteSnapshot"); !who) return rpc::refuse<grpc::ServerReadReactor<v1::SnapshotChunk>>(rpc::toGrpc(who));
   return new SnapshotIngest(m_store, *m_executor, context, response);
 }
 
@@ -152,7 +172,11 @@ grpc::ServerUnaryReactor* SnapshotService::ListSnapshots(grpc::CallbackServerCon
                                                          const v1::ListSnapshotsRequest* request,
                                                          v1::ListSnapshotsResponse* response) {
   auto* reactor = context->DefaultReactor();
-  m_executor->post([this, reactor, request, response] {
+  m_executor->post([this, reactor, request, response, peer = rpc::peerIdentity(*context), token = rpc::bearerToken(*context)] {
+    if (Status allowed = mayRead(peer, token, request->job_id()); !allowed) {
+      reactor->Finish(rpc::toGrpc(allowed));
+      return;
+    }
     auto listing = m_store.list(request->job_id());
     if (!listing) {
       reactor->Finish(rpc::toGrpc(listing.status()));
@@ -170,14 +194,22 @@ grpc::ServerUnaryReactor* SnapshotService::ListSnapshots(grpc::CallbackServerCon
   return reactor;
 }
 
-grpc::ServerWriteReactor<v1::SnapshotChunk>* SnapshotService::ReadSnapshot(grpc::CallbackServerContext*,
+grpc::ServerWriteReactor<v1::SnapshotChunk>* SnapshotService::ReadSnapshot(grpc::CallbackServerContext* context,
                                                                           const v1::ReadSnapshotRequest* request) {
-  return new SnapshotStreamer(m_store, *m_executor, *request);
+  return new SnapshotStreamer(m_store, *m_executor, *request,
+                              [this, peer = rpc::peerIdentity(*context), token = rpc::bearerToken(*context), job = request->job_id()] {
+                                return mayRead(peer, token, job);
+                              },
+                              rpc::clientKey(*context));
 }
 
 grpc::ServerUnaryReactor* SnapshotService::AppendProbes(grpc::CallbackServerContext* context, const v1::AppendProbesRequest* request,
                                                         v1::AppendProbesResponse* response) {
   auto* reactor = context->DefaultReactor();
+  if (Status who = rpc::requireNode(*context, "AppendProbes"); !who) {
+    reactor->Finish(rpc::toGrpc(who));
+    return reactor;
+  }
   m_executor->post([this, context, reactor, request, response] {
     if (context->IsCancelled()) {  // the caller's deadline passed while the call waited for the executor
       reactor->Finish(grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, "AppendProbes waited past its deadline"));
@@ -202,12 +234,29 @@ grpc::ServerUnaryReactor* SnapshotService::AppendProbes(grpc::CallbackServerCont
 
 grpc::ServerReadReactor<v1::CheckpointChunk>* SnapshotService::WriteCheckpoint(grpc::CallbackServerContext* context,
                                                                               v1::WriteCheckpointResponse* response) {
+  if (Status who = rpc::requireNode(*context, "WriteCheckpoint"); !who) return rpc::refuse<grpc::ServerReadReactor<v1::CheckpointChunk>>(rpc::toGrpc(who));
   return newCheckpointUpload(m_store.checkpoints(), *m_executor, context, response);
 }
 
-grpc::ServerWriteReactor<v1::CheckpointChunk>* SnapshotService::ReadCheckpoint(grpc::CallbackServerContext*,
+grpc::ServerWriteReactor<v1::CheckpointChunk>* SnapshotService::ReadCheckpoint(grpc::CallbackServerContext* context,
                                                                               const v1::ReadCheckpointRequest* request) {
+  if (Status who = rpc::requireNode(*context, "ReadCheckpoint"); !who) return rpc::refuse<grpc::ServerWriteReactor<v1::CheckpointChunk>>(rpc::toGrpc(who));
   return newCheckpointDownload(m_store.checkpoints(), *m_executor, *request);
+}
+
+grpc::ServerUnaryReactor* SnapshotService::DeleteJobData(grpc::CallbackServerContext* context, const v1::DeleteJobDataRequest* request,
+                                                         v1::DeleteJobDataResponse*) {
+  auto* reactor = context->DefaultReactor();
+  if (Status who = rpc::requirePeer(*context, "DeleteJobData", rpc::kManagerIdentity); !who) {
+    reactor->Finish(rpc::toGrpc(who));
+    return reactor;
+  }
+  m_executor->post([this, reactor, request] {
+    const Status s = m_store.removeJob(request->job_id());
+    if (s) spdlog::info("deleted the data of job {}", request->job_id());
+    reactor->Finish(rpc::toGrpc(s));
+  });
+  return reactor;
 }
 
 }  // namespace pflow::backend

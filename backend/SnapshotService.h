@@ -7,6 +7,10 @@
 //  * WriteCheckpoint, ReadCheckpoint: the same two stream shapes over the store's CheckpointStore
 //    (CheckpointStreams.cc): one chunk in memory at a time, file work on the executor.
 // Reactions never block: HDF5 work runs on a small executor owned by the service (which must outlive the server).
+//
+// Who calls (docs/security.md): writes (snapshots, probes, checkpoints) and checkpoint reads come from nodes (their
+// workers' certificates); snapshot reads from nodes or from users whose token the manager accepts for the job
+// (JobAccess, asked on the executor). Without TLS nothing is verified (--insecure binds to loopback only).
 #pragma once
 #include <grpcpp/grpcpp.h>
 
@@ -14,6 +18,7 @@
 
 #include "common/TaskPool.h"
 
+#include "backend/JobAccess.h"
 #include "backend/SnapshotStore.h"
 #include "pflow/backend/v1/snapshot_service.grpc.pb.h"
 
@@ -22,7 +27,8 @@ namespace pflow::backend {
 
 class SnapshotService final : public v1::SnapshotService::CallbackService {
  public:
-  explicit SnapshotService(SnapshotStore& store, int workers = 2);
+  // `access`: how user reads are checked (may be null only without TLS); not owned.
+  explicit SnapshotService(SnapshotStore& store, int workers = 2, JobAccess* access = nullptr);
   ~SnapshotService() override;
 
   grpc::ServerReadReactor<v1::SnapshotChunk>* WriteSnapshot(grpc::CallbackServerContext* context,
@@ -37,10 +43,15 @@ class SnapshotService final : public v1::SnapshotService::CallbackService {
                                                                v1::WriteCheckpointResponse* response) override;
   grpc::ServerWriteReactor<v1::CheckpointChunk>* ReadCheckpoint(grpc::CallbackServerContext* context,
                                                                const v1::ReadCheckpointRequest* request) override;
+  grpc::ServerUnaryReactor* DeleteJobData(grpc::CallbackServerContext* context, const v1::DeleteJobDataRequest* request,
+                                          v1::DeleteJobDataResponse* response) override;
 
  private:
+  // Who may read job `jobId`: a node, or a user the manager lets read it. Blocking (JobAccess): on the executor.
+  Status mayRead(const std::string& peer, const std::string& token, const std::string& jobId) const;
   SnapshotStore& m_store;
   std::unique_ptr<TaskPool> m_executor;
+  JobAccess* m_access;
 };
 
 // CheckpointStreams.cc: the reactors of WriteCheckpoint and ReadCheckpoint.

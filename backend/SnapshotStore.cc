@@ -1,6 +1,8 @@
 // The back-end's snapshot store. See SnapshotStore.h.
 #include "backend/SnapshotStore.h"
 
+#include "common/Log.h"
+
 #include <spdlog/spdlog.h>
 #include <sys/statvfs.h>
 
@@ -157,12 +159,12 @@ class FileCursor final : public SnapshotCursor {
 Status validateJobId(const std::string& jobId) {
   if (jobId.empty()) return invalidArgument("job id is empty");
   if (jobId.size() > 128) return invalidArgument("job id is longer than 128 characters");
-  if (jobId.front() == '.') return invalidArgument("job id '" + jobId + "' starts with '.'");
+  if (jobId.front() == '.') return invalidArgument("job id '" + log::escaped(jobId) + "' starts with '.'");
   for (char c : jobId) {
     const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' ||
                     c == '_' || c == '-';
     if (!ok)
-      return invalidArgument("job id '" + jobId + "' has a character other than letters, digits, '.', '_' and '-'");
+      return invalidArgument("job id '" + log::escaped(jobId) + "' has a character other than letters, digits, '.', '_' and '-'");
   }
   return Status::ok();
 }
@@ -197,6 +199,33 @@ Result<std::unique_ptr<SnapshotStore>> SnapshotStore::open(const StoreOptions& o
 }
 
 SnapshotStore::~SnapshotStore() = default;
+
+Status SnapshotStore::removeJob(const std::string& jobId) {
+  if (Status st = validateJobId(jobId); !st) return st;
+  std::shared_ptr<Job> j;
+  {
+    std::lock_guard guard(m_mutex);
+    if (auto it = m_jobs.find(jobId); it != m_jobs.end()) j = it->second;
+  }
+  std::unique_lock<std::mutex> lock;
+  if (j) {
+    lock = std::unique_lock(j->mutex);
+    if (!j->receiving.empty()) return failedPrecondition("job '" + jobId + "' is receiving a snapshot now; delete it once it has ended");
+    j->writer.reset();
+    j->open = false;
+  }
+  const std::string h5 = jobFile(jobId);
+  for (const std::string& path : {h5, h5.substr(0, h5.size() - 3) + ".xmf"}) {
+    std::error_code ec;
+    fs::remove(path, ec);
+    if (ec) return ioError("cannot delete '" + path + "': " + ec.message());
+  }
+  if (j) {
+    std::lock_guard guard(m_mutex);
+    m_jobs.erase(jobId);
+  }
+  return m_checkpoints->remove(jobId);
+}
 
 std::string SnapshotStore::jobFile(const std::string& jobId) const {
   return (fs::path(m_options.dataDir) / (jobId + ".h5")).string();

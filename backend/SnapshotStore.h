@@ -127,6 +127,10 @@ class SnapshotStore {
   // Appends samples to the job's /probes (SnapshotWriter::appendProbes); creates the job on first use. Returns
   // the samples stored in all.
   Result<std::uint64_t> appendProbes(const std::string& jobId, const ProbeSeries& samples);
+  // Deletes everything stored for the job: <job>.h5, <job>.xmf and its checkpoints. FAILED_PRECONDITION while a
+  // snapshot of it is being received; OK when nothing was stored (deleting twice is not an error). Reads in progress
+  // keep the file they opened (POSIX unlink).
+  Status removeJob(const std::string& jobId);
   // Streams a snapshot through `sink`, one chunk (<= 1 MiB of data) at a time; stops at the first error.
   Status readChunks(const std::string& jobId, const ReadRequest& request, const std::function<Status(Chunk&&)>& sink);
 

@@ -35,15 +35,31 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   app.add_option("--port-file", portFile, "write the bound port to this file once serving");
   app.add_option("--log-level", level, "trace, debug, info, warn, error")->capture_default_str();
+  std::string manager;
+  app.add_option("--manager", manager, "HOST:PORT of the manager, which says which users may read which job (needed with TLS)");
+  pflow::rpc::TransportFlags transportFlags;
+  transportFlags.add(app);
   CLI11_PARSE(app, argc, argv);
   pflow::log::init("pflow-backend", level);
+  auto transport = transportFlags.resolve("backend");
+  if (!transport) {
+    spdlog::error("{}", transport.status().message());
+    return 1;
+  }
+  pflow::rpc::setDefaultTransport(transport.value());
+  std::unique_ptr<pflow::backend::JobAccess> access;
+  if (!manager.empty()) access = pflow::backend::makeManagerJobAccess(manager);
+  else if (!transport->insecure) {
+    spdlog::error("give --manager HOST:PORT: with TLS, users' reads are checked with the manager");
+    return 1;
+  }
 
   auto store = pflow::backend::SnapshotStore::open({dataDir, cellSize, maxOpen});
   if (!store) {
     spdlog::error("{}", store.status().toString());
     return 1;
   }
-  pflow::backend::SnapshotService service(*store.value());
+  pflow::backend::SnapshotService service(*store.value(), 2, access.get());
   auto server = pflow::rpc::ServerRunner::start(listen, {&service});
   if (!server) {
     spdlog::error("{}", server.status().toString());

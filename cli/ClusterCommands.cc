@@ -103,6 +103,7 @@ json toJson(const mv1::Job& j) {
     devices.push_back({{"node", d.node()}, {"index", d.index()}, {"kind", d.kind() == common::v1::DEVICE_KIND_GPU ? "gpu" : "cpu"}});
   return {{"id", j.id()},
           {"name", j.name()},
+          {"owner", j.owner()},
           {"state", stateName(j.state())},
           {"reason", j.reason()},
           {"particles", j.particles()},
@@ -158,9 +159,70 @@ void printJob(const mv1::Job& j) {
 
 }  // namespace
 
-void Endpoints::resolve() {
+Status Endpoints::resolve() {
   manager = resolveOne(manager, "PFLOW_MANAGER", "manager", "127.0.0.1:50051");
   backend = resolveOne(backend, "PFLOW_BACKEND", "backend", "127.0.0.1:50053");
+  token = resolveOne("", "PFLOW_TOKEN", "token", "");
+  if (!insecure) insecure = resolveOne("", "PFLOW_INSECURE", "insecure", "") == "1" || configValue("insecure") == "true";
+  ca = resolveOne(ca, "PFLOW_CA", "ca", "");
+  rpc::setCallToken(token);
+  if (insecure) {
+    rpc::setDefaultTransport(rpc::Transport::plaintext());
+    return Status::ok();
+  }
+  if (ca.empty())
+    return invalidArgument("no pflow CA to verify the services with: give --ca FILE, PFLOW_CA or `ca:` in ~/.config/pflow/config.yaml "
+                           "(deploy/local/start.sh writes one), or --insecure for a stack started with --insecure");
+  auto transport = rpc::Transport::caOnly(ca);
+  if (!transport) return transport.status();
+  rpc::setDefaultTransport(transport.value());
+  return Status::ok();
+}
+
+int manageUsers(const Endpoints& e, const UserOptions& o, bool asJson) {
+  auto stub = manager(e);
+  auto ctx = rpc::contextWithDeadline();
+  grpc::Status s;
+  if (o.action == "list") {
+    mv1::ListUsersResponse resp;
+    s = stub->ListUsers(ctx.get(), mv1::ListUsersRequest(), &resp);
+    if (!s.ok()) return report(s, "list users", e.manager);
+    if (asJson) {
+      json out = json::array();
+      for (const auto& u : resp.users()) out.push_back({{"name", u.name()}, {"admin", u.admin()}, {"created_at", u.created_at()}});
+      std::printf("%s\n", out.dump().c_str());
+    } else {
+      std::printf("%-24s %s\n", "NAME", "ADMIN");
+      for (const auto& u : resp.users()) std::printf("%-24s %s\n", u.name().c_str(), u.admin() ? "yes" : "no");
+    }
+    return 0;
+  }
+  if (o.action == "remove") {
+    mv1::RemoveUserRequest req;
+    req.set_name(o.name);
+    mv1::RemoveUserResponse resp;
+    s = stub->RemoveUser(ctx.get(), req, &resp);
+    if (!s.ok()) return report(s, "remove user " + o.name, e.manager);
+    std::printf(asJson ? "{\"removed\":\"%s\"}\n" : "removed user %s\n", o.name.c_str());
+    return 0;
+  }
+  mv1::UserTokenResponse resp;
+  if (o.action == "add") {
+    mv1::AddUserRequest req;
+    req.set_name(o.name);
+    req.set_admin(o.admin);
+    s = stub->AddUser(ctx.get(), req, &resp);
+  } else {
+    mv1::RotateTokenRequest req;
+    req.set_name(o.name);
+    s = stub->RotateToken(ctx.get(), req, &resp);
+  }
+  if (!s.ok()) return report(s, o.action + " user " + o.name, e.manager);
+  if (asJson) std::printf("%s\n", json{{"name", resp.name()}, {"token", resp.token()}}.dump().c_str());
+  else
+    std::printf("token of %s (shown once; give it to them, e.g. as PFLOW_TOKEN or `token:` in ~/.config/pflow/config.yaml):\n%s\n",
+                resp.name().c_str(), resp.token().c_str());
+  return 0;
 }
 
 int submitJob(const Endpoints& e, const SubmitOptions& o, bool json) {
@@ -206,8 +268,9 @@ int listJobs(const Endpoints& e, bool all, bool json) {
   mv1::ListJobsRequest req;
   req.set_active_only(!all);
   mv1::ListJobsResponse resp;
-  auto ctx = rpc::contextWithDeadline();
-  if (grpc::Status s = manager(e)->ListJobs(ctx.get(), req, &resp); !s.ok()) return report(s, "jobs", e.manager);
+  auto stub = manager(e);
+  if (grpc::Status s = rpc::retryIdempotent([&](grpc::ClientContext* ctx) { return stub->ListJobs(ctx, req, &resp); }); !s.ok())
+    return report(s, "jobs", e.manager);
   if (json) {
     nlohmann::json out = nlohmann::json::array();
     for (const auto& j : resp.jobs()) out.push_back(toJson(j));
@@ -228,8 +291,9 @@ int showJob(const Endpoints& e, const std::string& id, bool json) {
   mv1::GetJobRequest req;
   req.set_id(id);
   mv1::Job job;
-  auto ctx = rpc::contextWithDeadline();
-  if (grpc::Status s = manager(e)->GetJob(ctx.get(), req, &job); !s.ok()) return report(s, "job " + id, e.manager);
+  auto stub = manager(e);
+  if (grpc::Status s = rpc::retryIdempotent([&](grpc::ClientContext* ctx) { return stub->GetJob(ctx, req, &job); }); !s.ok())
+    return report(s, "job " + id, e.manager);
   if (json) std::printf("%s\n", toJson(job).dump().c_str());
   else printJob(job);
   return kExitOk;
@@ -237,8 +301,10 @@ int showJob(const Endpoints& e, const std::string& id, bool json) {
 
 int listNodes(const Endpoints& e, bool json) {
   mv1::ListNodesResponse resp;
-  auto ctx = rpc::contextWithDeadline();
-  if (grpc::Status s = manager(e)->ListNodes(ctx.get(), mv1::ListNodesRequest(), &resp); !s.ok()) return report(s, "nodes", e.manager);
+  auto stub = manager(e);
+  if (grpc::Status s = rpc::retryIdempotent([&](grpc::ClientContext* ctx) { return stub->ListNodes(ctx, mv1::ListNodesRequest(), &resp); });
+      !s.ok())
+    return report(s, "nodes", e.manager);
   auto stateOf = [](mv1::DeviceState st) { return st == mv1::DEVICE_STATE_FREE ? "free" : st == mv1::DEVICE_STATE_BUSY ? "busy" : st == mv1::DEVICE_STATE_LOST ? "lost" : "?"; };
   if (json) {
     nlohmann::json out = nlohmann::json::array();
@@ -278,10 +344,22 @@ int cancelJob(const Endpoints& e, const std::string& id, bool json) {
   return kExitOk;
 }
 
+int deleteJob(const Endpoints& e, const std::string& id, bool json) {
+  mv1::DeleteJobRequest req;
+  req.set_id(id);
+  mv1::DeleteJobResponse resp;
+  auto ctx = rpc::contextWithDeadline(60);  // the back-end deletes the job's files first
+  if (grpc::Status s = manager(e)->DeleteJob(ctx.get(), req, &resp); !s.ok()) return report(s, "delete " + id, e.manager);
+  if (json) std::printf("%s\n", json::object({{"deleted", id}}).dump().c_str());
+  else std::printf("job %s deleted, with its snapshots and checkpoints\n", id.c_str());
+  return kExitOk;
+}
+
 int watchJob(const Endpoints& e, const std::string& id, bool json) {
   mv1::WatchJobRequest req;
   req.set_id(id);
   grpc::ClientContext ctx;  // no deadline: a watch lasts as long as the job (the stream ends with it)
+  rpc::addBearer(ctx, e.token);
   auto stub = manager(e);
   auto reader = stub->WatchJob(&ctx, req);
   mv1::JobEvent ev;

@@ -8,12 +8,27 @@
 #include <string>
 #include <vector>
 
+#include "common/Status.h"
+
 namespace pflow::cli {
 
+// Where the services are and how to reach them. The user's token comes from PFLOW_TOKEN, else `token:` in the config
+// file; the pflow CA that verifies the services from --ca, PFLOW_CA or `ca:`; plaintext only with --insecure (or
+// PFLOW_INSECURE=1, `insecure: true`), for a stack started with --insecure.
 struct Endpoints {
   std::string manager;  // flag value; empty = resolve
   std::string backend;
-  void resolve();
+  std::string ca;
+  bool insecure = false;
+  std::string token;    // resolved
+  // Resolves the addresses, the token and the transport, and installs them for every call of this process.
+  Status resolve();
+};
+
+struct UserOptions {
+  std::string action;  // add, rotate, remove, list
+  std::string name;
+  bool admin = false;
 };
 
 struct SubmitOptions {
@@ -40,7 +55,11 @@ int listJobs(const Endpoints& e, bool all, bool json);
 int showJob(const Endpoints& e, const std::string& id, bool json);
 int listNodes(const Endpoints& e, bool json);
 int cancelJob(const Endpoints& e, const std::string& id, bool json);
+// Deletes a finished job and its files on the back-end (its owner or an admin).
+int deleteJob(const Endpoints& e, const std::string& id, bool json);
 int watchJob(const Endpoints& e, const std::string& id, bool json);
 int fetchSnapshot(const Endpoints& e, const FetchOptions& o, bool json);
+// pflow admin user add|rotate|remove|list: prints a new token once (add, rotate).
+int manageUsers(const Endpoints& e, const UserOptions& o, bool json);
 
 }  // namespace pflow::cli

@@ -36,6 +36,8 @@ int exitCodeFor(const Status& s) {
     case StatusCode::kResourceExhausted: return kExitRefused;
     case StatusCode::kCancelled: return kExitCancelled;
     case StatusCode::kAlreadyExists: return kExitInvalid;
+    case StatusCode::kUnauthenticated:
+    case StatusCode::kPermissionDenied: return kExitDenied;
     default: return kExitSimulation;
   }
 }

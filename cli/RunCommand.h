@@ -48,7 +48,7 @@ struct RunSummary {
 // non-finite: the message names the particle, step and quantity).
 // Cluster commands add: 4 a service is unreachable, 5 refused (too few free devices with --no-wait), 6 the watched
 // job was cancelled (a failed job gives 3).
-enum ExitCode { kExitOk = 0, kExitInvalid = 1, kExitIo = 2, kExitSimulation = 3, kExitUnavailable = 4, kExitRefused = 5, kExitCancelled = 6 };
+enum ExitCode { kExitOk = 0, kExitInvalid = 1, kExitIo = 2, kExitSimulation = 3, kExitUnavailable = 4, kExitRefused = 5, kExitCancelled = 6, kExitDenied = 7 };
 
 Result<RunSummary> runScene(const RunOptions& options);
 // "42.0 s", "3.5 min", "2.1 h": a duration for a progress line (every solver's driver).

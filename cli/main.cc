@@ -51,8 +51,23 @@ int main(int argc, char** argv) {
 
 #ifdef PFLOW_HAVE_SERVICES
   pflow::cli::Endpoints endpoints;
+  bool qjsonUsers = false;
   app.add_option("--manager", endpoints.manager, "manager host:port (else $PFLOW_MANAGER, the config file, 127.0.0.1:50051)");
   app.add_option("--backend", endpoints.backend, "back-end host:port (else $PFLOW_BACKEND, the config file, 127.0.0.1:50053)");
+  app.add_option("--ca", endpoints.ca, "the pflow CA certificate that verifies the services (else $PFLOW_CA, `ca:` in the config file)");
+  app.add_flag("--insecure", endpoints.insecure, "plaintext, for a stack started with --insecure (loopback only)");
+  pflow::cli::UserOptions users;
+  auto* adminCmd = app.add_subcommand("admin", "administration (admins only)")->require_subcommand(1);
+  auto* userCmd = adminCmd->add_subcommand("user", "users and their tokens")->require_subcommand(1);
+  auto* userAdd = userCmd->add_subcommand("add", "add a user and print its token (once)");
+  userAdd->add_option("name", users.name, "user name: 1-64 of [A-Za-z0-9._-]")->required();
+  userAdd->add_flag("--admin", users.admin, "the user is an admin (sees every job, manages users)");
+  auto* userRotate = userCmd->add_subcommand("rotate", "give a user a new token (the old one stops working) and print it");
+  userRotate->add_option("name", users.name, "user name")->required();
+  auto* userRemove = userCmd->add_subcommand("remove", "remove a user (its jobs stay)");
+  userRemove->add_option("name", users.name, "user name")->required();
+  auto* userList = userCmd->add_subcommand("list", "list the users");
+  for (auto* c : {userAdd, userRotate, userRemove, userList}) c->add_flag("--json", qjsonUsers, "print JSON");
   bool qjson = false, allJobs = false;
   std::string jobId;
   pflow::cli::SubmitOptions submit;
@@ -71,6 +86,9 @@ int main(int argc, char** argv) {
   jobCmd->add_flag("--json", qjson, "print JSON");
   auto* nodesCmd = app.add_subcommand("nodes", "list nodes and their devices (state, memory, load, job)");
   nodesCmd->add_flag("--json", qjson, "print JSON");
+  auto* deleteCmd = app.add_subcommand("delete", "delete a finished job and its snapshots and checkpoints");
+  deleteCmd->add_option("id", jobId, "job id")->required();
+  deleteCmd->add_flag("--json", qjson, "print JSON");
   auto* cancelCmd = app.add_subcommand("cancel", "cancel a job");
   cancelCmd->add_option("id", jobId, "job id")->required();
   cancelCmd->add_flag("--json", qjson, "print JSON");
@@ -94,15 +112,34 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   pflow::log::init("pflow", logLevel);
 #ifdef PFLOW_HAVE_SERVICES
-  endpoints.resolve();
+  const bool cluster = *submitCmd || *jobsCmd || *jobCmd || *nodesCmd || *cancelCmd || *deleteCmd || *watchCmd || *fetchCmd || *adminCmd;
+  if (cluster) {
+    if (pflow::Status s = endpoints.resolve(); !s) {
+      std::fprintf(stderr, "pflow: %s\n", s.message().c_str());
+      return pflow::cli::exitCodeFor(s);
+    }
+  }
+  if (*adminCmd) {
+    for (auto* c : {userAdd, userRotate, userRemove, userList})
+      if (c->parsed()) users.action = c->get_name();
+    return pflow::cli::manageUsers(endpoints, users, qjsonUsers);
+  }
   if (*submitCmd) return pflow::cli::submitJob(endpoints, submit, qjson);
   if (*jobsCmd) return pflow::cli::listJobs(endpoints, allJobs, qjson);
   if (*jobCmd) return pflow::cli::showJob(endpoints, jobId, qjson);
   if (*nodesCmd) return pflow::cli::listNodes(endpoints, qjson);
   if (*cancelCmd) return pflow::cli::cancelJob(endpoints, jobId, qjson);
+  if (*deleteCmd) return pflow::cli::deleteJob(endpoints, jobId, qjson);
   if (*watchCmd) return pflow::cli::watchJob(endpoints, jobId, qjson);
   if (*fetchCmd) {
-    if (fetchStep >= 0) fetch.step = fetchStep;
+    if (stepOpt->count() > 0) {
+      if (fetchStep < 0) {
+        std::fprintf(stderr, "pflow fetch: --step %lld: a step is >= 0 (leave --step out, or give --last, for the last snapshot)\n",
+                     static_cast<long long>(fetchStep));
+        return pflow::cli::kExitInvalid;
+      }
+      fetch.step = fetchStep;
+    }
     fetch.grid = !noGrid;
     fetch.probes = !noProbes;
     return pflow::cli::fetchSnapshot(endpoints, fetch, qjson);

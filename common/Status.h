@@ -20,6 +20,8 @@ enum class StatusCode {
   kAlreadyExists,
   kCancelled,
   kDeadlineExceeded,
+  kUnauthenticated,   // no credentials, or ones that are not valid
+  kPermissionDenied,  // valid credentials without the right to this
 };
 
 const char* statusCodeName(StatusCode code);
@@ -49,6 +51,8 @@ inline Status failedPrecondition(std::string m) { return {StatusCode::kFailedPre
 inline Status resourceExhausted(std::string m) { return {StatusCode::kResourceExhausted, std::move(m)}; }
 inline Status unavailable(std::string m) { return {StatusCode::kUnavailable, std::move(m)}; }
 inline Status alreadyExists(std::string m) { return {StatusCode::kAlreadyExists, std::move(m)}; }
+inline Status unauthenticated(std::string m) { return {StatusCode::kUnauthenticated, std::move(m)}; }
+inline Status permissionDenied(std::string m) { return {StatusCode::kPermissionDenied, std::move(m)}; }
 
 // A value or an error.
 template <class T>

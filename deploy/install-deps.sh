@@ -17,6 +17,7 @@ packages=(
   clang                             # libFuzzer for the scene-loader fuzz target (deploy/fuzz.sh)
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler   # services
   libsqlite3-dev sqlite3            # the manager's job store
+  libssl-dev openssl                # token hashes; the pflow CA and service certificates (deploy/local/certs.sh)
 )
 
 missing=()

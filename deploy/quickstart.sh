@@ -14,6 +14,7 @@ mkdir -p out/quickstart
 $pflow validate examples/hopper_discharge.yaml
 
 ./deploy/local/start.sh
+export PFLOW_CONFIG=${PFLOW_LOCAL:-$(pwd)/out/local}/config.yaml  # the stack's CA and admin token (start.sh)
 if [[ -z "${PFLOW_KEEP_STACK:-}" ]]; then trap ./deploy/local/stop.sh EXIT; fi
 $pflow nodes
 job=$($pflow submit examples/hopper_discharge.yaml --json | /usr/bin/python3 -c 'import json,sys; print(json.load(sys.stdin)["id"])')

@@ -52,6 +52,11 @@ struct LoadOptions {
   std::size_t maxTriangles = 20'000'000;
   // Most lattice sites one particle set may test against its region (the work of a thin region in large bounds).
   std::size_t maxLatticeSites = std::size_t(1) << 32;
+  // Files the scene names (meshes, particle CSV): confined to baseDir (the service: the scene's own upload; no absolute
+  // paths, no '..', no links out), and at most this size each. Every file is a regular file, confined or not.
+  bool confineFiles = false;
+  std::uintmax_t maxFileBytes = std::uintmax_t(1) << 31;
+  std::size_t maxSceneBytes = std::size_t(64) << 20;  // the YAML text
   // The accuracy study's table that simulation.accuracy.quantity must name a quantity of (null: the built-in
   // one; an empty table accepts any name, and validate says it has no proposal).
   const compute::AccuracyTable* accuracyTable = nullptr;

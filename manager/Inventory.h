@@ -17,7 +17,9 @@ namespace pflow::manager {
 
 class Inventory {
  public:
-  Inventory(const Clock& clock, double heartbeatTimeoutSeconds);
+  // A node lost for `forgetAfterSeconds` more (and holding no lease) leaves the inventory: `pflow nodes` stops listing
+  // it; it comes back with its next heartbeat.
+  Inventory(const Clock& clock, double heartbeatTimeoutSeconds, double forgetAfterSeconds = 600);
 
   // Checks a heartbeat's contents: a node name, an agent address, devices with distinct keys on that node and
   // non-negative indices. INVALID_ARGUMENT naming what is wrong.
@@ -28,7 +30,8 @@ class Inventory {
   bool heartbeat(const HeartbeatInfo& hb);
 
   // Marks nodes whose last heartbeat is older than the timeout as lost; returns the names of the newly lost ones.
-  std::vector<std::string> expireLost();
+  // Forgets lost nodes past forgetAfterSeconds whose devices hold no lease (their names go to `forgotten`).
+  std::vector<std::string> expireLost(std::vector<std::string>* forgotten = nullptr);
 
   bool isKnown(const std::string& node) const { return m_nodes.count(node) > 0; }
   bool isLost(const std::string& node) const;
@@ -53,6 +56,7 @@ class Inventory {
   };
   const Clock& m_clock;
   double m_timeout;
+  double m_forgetAfter;
   std::map<std::string, Node> m_nodes;
   std::map<DeviceKey, std::string> m_leases;  // device -> job id
 };

@@ -1,5 +1,7 @@
 #include "manager/JobStore.h"
 
+#include "manager/Sqlite.h"
+
 #include <sqlite3.h>
 
 #include <map>
@@ -9,7 +11,7 @@
 namespace pflow::manager {
 namespace {
 
-constexpr int kSchemaVersion = 3;  // 2: jobs.model; 3: the REQUEUED state, jobs.attempts and jobs.max_attempts
+constexpr int kSchemaVersion = 4;  // 2: jobs.model; 3: the REQUEUED state, jobs.attempts and jobs.max_attempts; 4: jobs.owner
 
 // The jobs table's columns and constraints (also the migration's new table).
 constexpr const char* kJobColumns = R"sql((
@@ -39,7 +41,8 @@ constexpr const char* kJobColumns = R"sql((
   progress_at REAL NOT NULL,
   message TEXT NOT NULL,
   attempts INTEGER NOT NULL DEFAULT 0,
-  max_attempts INTEGER NOT NULL DEFAULT 0))sql";
+  max_attempts INTEGER NOT NULL DEFAULT 0,
+  owner TEXT NOT NULL DEFAULT ''))sql";
 
 constexpr const char* kOtherTables = R"sql(
 CREATE TABLE IF NOT EXISTS job_devices(
@@ -60,30 +63,6 @@ constexpr const char* kOldColumns =
     "submitted_at, started_at, finished_at, exit_code, step, total_steps, sim_time, sim_duration, "
     "particle_steps_per_second, eta_seconds, progress_at, message";
 
-// A prepared statement that finalizes itself.
-class Stmt {
- public:
-  Stmt(sqlite3* db, const char* sql) { m_rc = sqlite3_prepare_v2(db, sql, -1, &m_s, nullptr); }
-  ~Stmt() { sqlite3_finalize(m_s); }
-  Stmt(const Stmt&) = delete;
-  Stmt& operator=(const Stmt&) = delete;
-  bool ok() const { return m_rc == SQLITE_OK; }
-  void text(int i, const std::string& v) { sqlite3_bind_text(m_s, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT); }
-  void i64(int i, std::int64_t v) { sqlite3_bind_int64(m_s, i, v); }
-  void real(int i, double v) { sqlite3_bind_double(m_s, i, v); }
-  int step() { return sqlite3_step(m_s); }
-  std::string colText(int i) const {
-    const auto* p = sqlite3_column_text(m_s, i);
-    return p ? std::string(reinterpret_cast<const char*>(p), static_cast<std::size_t>(sqlite3_column_bytes(m_s, i))) : std::string();
-  }
-  std::int64_t colI64(int i) const { return sqlite3_column_int64(m_s, i); }
-  double colReal(int i) const { return sqlite3_column_double(m_s, i); }
-
- private:
-  sqlite3_stmt* m_s = nullptr;
-  int m_rc = SQLITE_ERROR;
-};
-
 DeviceKind kindFromText(const std::string& s) { return s == "CPU" ? DeviceKind::kCpu : DeviceKind::kGpu; }
 
 }  // namespace
@@ -101,7 +80,7 @@ Result<std::unique_ptr<JobStore>> JobStore::open(const std::string& path) {
   if (path != ":memory:") {
     if (Status s = store->exec("PRAGMA journal_mode=WAL;"); !s) return s;
   }
-  const std::string schema = std::string("CREATE TABLE IF NOT EXISTS schema_info(version INTEGER NOT NULL);\n") +
+  const std::string schema = std::string("CREATE TABLE IF NOT EXISTS schema_info(version INTEGER NOT NULL, max_seq INTEGER NOT NULL DEFAULT 0);\n") +
                              "CREATE TABLE IF NOT EXISTS jobs" + kJobColumns + ";\n" + kOtherTables;
   for (const char* sql : {"PRAGMA synchronous=NORMAL;", "PRAGMA foreign_keys=ON;", schema.c_str()})
     if (Status s = store->exec(sql); !s) return s;
@@ -133,6 +112,19 @@ Result<std::unique_ptr<JobStore>> JobStore::open(const std::string& path) {
       if (Status s = store->exec("PRAGMA foreign_keys=ON;"); !s) return s;
       if (!migrated) return migrated;
       v = 3;
+    }
+    if (v == 3) {  // jobs.owner (jobs from before users existed belong to nobody: admins see them); schema_info.max_seq
+      const bool hasOwner = Stmt(db, "SELECT owner FROM jobs LIMIT 0").ok();  // a table rebuilt from version 2 has it
+      const bool hasMaxSeq = Stmt(db, "SELECT max_seq FROM schema_info LIMIT 0").ok();
+      const std::string sql = std::string("BEGIN IMMEDIATE; ") +
+                              (hasOwner ? "" : "ALTER TABLE jobs ADD COLUMN owner TEXT NOT NULL DEFAULT ''; ") +
+                              (hasMaxSeq ? "" : "ALTER TABLE schema_info ADD COLUMN max_seq INTEGER NOT NULL DEFAULT 0; ") +
+                              "UPDATE schema_info SET version = 4, max_seq = (SELECT IFNULL(MAX(seq), 0) FROM jobs); COMMIT;";
+      if (Status s = store->exec(sql.c_str()); !s) {
+        store->exec("ROLLBACK;");
+        return s;
+      }
+      v = 4;
     }
     if (v != kSchemaVersion)
       return failedPrecondition("job database " + path + " has schema version " + std::to_string(v) + "; this manager knows " +
@@ -172,8 +164,8 @@ Status JobStore::save(const Job& job) {
     Stmt st(m_db, R"sql(
 INSERT INTO jobs(seq, id, name, state, reason, scene_name, model_id, model_uri, particles, memory_bytes, max_devices, wait,
                  submitted_at, started_at, finished_at, exit_code, step, total_steps, sim_time, sim_duration,
-                 particle_steps_per_second, eta_seconds, progress_at, message, model, attempts, max_attempts)
-VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18, ?19, ?20, ?21, ?22, ?23, ?24, ?25, ?26, ?27)
+                 particle_steps_per_second, eta_seconds, progress_at, message, model, attempts, max_attempts, owner)
+VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18, ?19, ?20, ?21, ?22, ?23, ?24, ?25, ?26, ?27, ?28)
 ON CONFLICT(id) DO UPDATE SET
   name=excluded.name, state=excluded.state, reason=excluded.reason, scene_name=excluded.scene_name,
   model_id=excluded.model_id, model_uri=excluded.model_uri, particles=excluded.particles,
@@ -182,7 +174,7 @@ ON CONFLICT(id) DO UPDATE SET
   exit_code=excluded.exit_code, step=excluded.step, total_steps=excluded.total_steps, sim_time=excluded.sim_time,
   sim_duration=excluded.sim_duration, particle_steps_per_second=excluded.particle_steps_per_second,
   eta_seconds=excluded.eta_seconds, progress_at=excluded.progress_at, message=excluded.message, model=excluded.model,
-  attempts=excluded.attempts, max_attempts=excluded.max_attempts
+  attempts=excluded.attempts, max_attempts=excluded.max_attempts, owner=excluded.owner
 )sql");
     if (!st.ok()) return fail("preparing the job update");
     st.i64(1, job.seq);
@@ -212,7 +204,14 @@ ON CONFLICT(id) DO UPDATE SET
     st.text(25, job.model);
     st.i64(26, job.attempts);
     st.i64(27, job.maxAttempts);
+    st.text(28, job.owner);
     if (st.step() != SQLITE_DONE) return fail("saving job " + job.id);
+  }
+  {
+    Stmt seq(m_db, "UPDATE schema_info SET max_seq = MAX(max_seq, ?1)");
+    if (!seq.ok()) return fail("preparing the seq update");
+    seq.i64(1, job.seq);
+    if (seq.step() != SQLITE_DONE) return fail("recording the seq of job " + job.id);
   }
   {
     Stmt del(m_db, "DELETE FROM job_devices WHERE job_id = ?1");
@@ -246,7 +245,7 @@ Result<std::vector<Job>> JobStore::loadAll() const {
     Stmt st(m_db, R"sql(
 SELECT seq, id, name, state, reason, scene_name, model_id, model_uri, particles, memory_bytes, max_devices, wait,
        submitted_at, started_at, finished_at, exit_code, step, total_steps, sim_time, sim_duration,
-       particle_steps_per_second, eta_seconds, progress_at, message, model, attempts, max_attempts
+       particle_steps_per_second, eta_seconds, progress_at, message, model, attempts, max_attempts, owner
 FROM jobs ORDER BY seq)sql");
     if (!st.ok()) return error("preparing the job query");
     int rc;
@@ -281,6 +280,7 @@ FROM jobs ORDER BY seq)sql");
       j.model = st.colText(24);
       j.attempts = static_cast<int>(st.colI64(25));
       j.maxAttempts = static_cast<int>(st.colI64(26));
+      j.owner = st.colText(27);
       index[j.id] = jobs.size();
       jobs.push_back(std::move(j));
     }
@@ -296,6 +296,23 @@ FROM jobs ORDER BY seq)sql");
   }
   if (rc != SQLITE_DONE) return error("reading job devices");
   return jobs;
+}
+
+Status JobStore::remove(const std::string& id) {
+  Stmt st(m_db, "DELETE FROM jobs WHERE id = ?1");  // its device rows go with it (ON DELETE CASCADE)
+  if (!st.ok()) return error("preparing the job delete");
+  st.text(1, id);
+  if (st.step() != SQLITE_DONE) return error("deleting job " + id);
+  return Status::ok();
+}
+
+Result<std::int64_t> JobStore::maxSeqEver() const {
+  Stmt st(m_db, "SELECT max_seq FROM schema_info LIMIT 1");
+  if (!st.ok()) return error("preparing the seq query");
+  const int rc = st.step();
+  if (rc == SQLITE_ROW) return st.colI64(0);
+  if (rc == SQLITE_DONE) return std::int64_t(0);
+  return error("reading the largest seq");
 }
 
 Result<std::vector<std::pair<DeviceKey, std::string>>> JobStore::leases() const {

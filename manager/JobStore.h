@@ -27,6 +27,10 @@ class JobStore {
   Status save(const Job& job);
   // Every job, in submission order, with its devices in rank order.
   Result<std::vector<Job>> loadAll() const;
+  // Deletes a job and its device rows (`pflow delete`). The largest seq stays recorded (maxSeqEver).
+  Status remove(const std::string& id);
+  // The largest seq any job ever had, deleted ones included: new ids continue after it.
+  Result<std::int64_t> maxSeqEver() const;
   // Live leases: device -> job id (devices of jobs that hold them).
   Result<std::vector<std::pair<DeviceKey, std::string>>> leases() const;
 

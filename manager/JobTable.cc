@@ -33,8 +33,16 @@ Status JobTable::transition(Job& job, JobState to, const std::string& reason, do
 
 void JobTable::put(Job job) {
   m_bySeq[job.seq] = job.id;
+  raiseSeq(job.seq);
   const std::string id = job.id;
   m_jobs[id] = std::move(job);
+}
+
+void JobTable::erase(const std::string& id) {
+  auto it = m_jobs.find(id);
+  if (it == m_jobs.end()) return;
+  m_bySeq.erase(it->second.seq);
+  m_jobs.erase(it);
 }
 
 const Job* JobTable::find(const std::string& id) const {

@@ -8,6 +8,7 @@
 //   CANCELLING -> CANCELLED (worker exited, node lost, start failed)
 //   SUCCEEDED, FAILED, CANCELLED: final.
 #pragma once
+#include <algorithm>
 #include <map>
 #include <string>
 #include <vector>
@@ -34,12 +35,17 @@ class JobTable {
   std::vector<const Job*> queued() const;
   // Jobs that hold devices (starting, running, cancelling).
   std::vector<const Job*> holdingDevices() const;
-  std::int64_t maxSeq() const { return m_bySeq.empty() ? 0 : m_bySeq.rbegin()->first; }
+  // Removes a job (`pflow delete`); its seq stays used.
+  void erase(const std::string& id);
+  // The largest seq ever given (deleted jobs included, raiseSeq: the store remembers them), so ids never repeat.
+  std::int64_t maxSeq() const { return m_maxSeq; }
+  void raiseSeq(std::int64_t seq) { m_maxSeq = std::max(m_maxSeq, seq); }
   std::size_t size() const { return m_jobs.size(); }
 
  private:
   std::map<std::string, Job> m_jobs;
   std::map<std::int64_t, std::string> m_bySeq;
+  std::int64_t m_maxSeq = 0;
 };
 
 }  // namespace pflow::manager

@@ -7,9 +7,17 @@
 #include <set>
 
 #include "common/Address.h"
+#include "common/Log.h"
 
 namespace pflow::manager {
 namespace {
+
+// A job id as requests carry it: short and printable (the ids the manager makes are job-NNNNNN); never echoed raw.
+Status checkJobIdField(const std::string& id) {
+  if (id.empty()) return invalidArgument("job id is empty");
+  if (id.size() > 64 || !log::isPrintable(id)) return invalidArgument("job id '" + log::escaped(id, 64) + "' is not a job id (job-NNNNNN)");
+  return Status::ok();
+}
 
 std::string jobIdFor(std::int64_t seq) {
   char buf[32];
@@ -45,7 +53,7 @@ Manager::Manager(ManagerOptions options, const Clock& clock, JobStore& store, Ag
       m_store(store),
       m_agents(agents),
       m_frontend(frontend),
-      m_inventory(clock, m_options.heartbeatTimeoutSeconds) {}
+      m_inventory(clock, m_options.heartbeatTimeoutSeconds, m_options.forgetLostNodeSeconds) {}
 
 Result<std::unique_ptr<Manager>> Manager::create(ManagerOptions options, const Clock& clock, JobStore& store,
                                                  AgentClient& agents, FrontendClient& frontend) {
@@ -68,6 +76,9 @@ Result<std::unique_ptr<Manager>> Manager::create(ManagerOptions options, const C
     }
     m->m_jobs.put(std::move(j));
   }
+  auto maxSeq = store.maxSeqEver();
+  if (!maxSeq) return maxSeq.status();
+  m->m_jobs.raiseSeq(maxSeq.value());
   m->m_loadedAt = clock.now();
   spdlog::info("manager: loaded {} jobs from {} ({} queued, {} holding devices: they re-attach when their agents heartbeat)",
                m->m_jobs.size(), store.path(), queued, active);
@@ -89,7 +100,7 @@ Status Manager::commitLocked(Job next, const std::string& event) {
   }
   const Job* prev = m_jobs.find(next.id);
   if (!prev || prev->state != next.state)
-    spdlog::info("manager: {} {}{}", next.id, jobStateName(next.state), next.reason.empty() ? "" : " (" + next.reason + ")");
+    spdlog::info("manager: {} {}{}", next.id, jobStateName(next.state), next.reason.empty() ? "" : " (" + log::escaped(next.reason, 500) + ")");
   publishLocked(next, event);
   return Status::ok();
 }
@@ -234,12 +245,18 @@ Result<Job> Manager::submit(const SubmitRequest& req) {
   ErrorList errors;
   if (req.sceneYaml.empty()) errors.add("scene_yaml", "is empty: send the scene's YAML text");
   if (req.maxDevices < 0) errors.add("max_devices", "is negative (" + std::to_string(req.maxDevices) + "); 0 means no limit");
-  if (req.name.size() > 256) errors.add("name", "is longer than 256 characters");
+  for (const auto& [field, value] : {std::pair{"name", &req.name}, {"scene_name", &req.sceneName}}) {
+    if (value->size() > 256) errors.add(field, "is " + std::to_string(value->size()) + " bytes; the limit is 256");
+    else if (!log::isPrintable(*value)) errors.add(field, "'" + log::escaped(*value) + "' has characters other than printable ASCII");
+  }
+  if (req.files.size() > 1000) errors.add("files", std::to_string(req.files.size()) + " files; the limit is 1000");
   std::set<std::string> paths;
-  for (std::size_t i = 0; i < req.files.size(); ++i) {
+  for (std::size_t i = 0; i < req.files.size() && i < 1000; ++i) {
     const std::string path = "files[" + std::to_string(i) + "].path";
-    if (req.files[i].path.empty()) errors.add(path, "is empty");
-    else if (!paths.insert(req.files[i].path).second) errors.add(path, "repeats '" + req.files[i].path + "'");
+    const std::string& p = req.files[i].path;
+    if (p.empty()) errors.add(path, "is empty");
+    else if (p.size() > 256 || !log::isPrintable(p)) errors.add(path, "'" + log::escaped(p) + "': at most 256 printable ASCII characters");
+    else if (!paths.insert(p).second) errors.add(path, "repeats '" + p + "'");
   }
   if (!errors.empty()) return errors.toStatus("SubmitJob");
 
@@ -278,6 +295,7 @@ Result<Job> Manager::submit(const SubmitRequest& req) {
     j.model = model->model;
     j.maxDevices = req.maxDevices;
     j.maxAttempts = m_options.maxAttempts;
+    j.owner = req.owner;
     j.wait = req.wait;
     j.submittedAt = m_clock.now();
     j.progress.totalSteps = model->steps;
@@ -293,7 +311,7 @@ Result<Job> Manager::submit(const SubmitRequest& req) {
 }
 
 Result<Job> Manager::get(const std::string& id) const {
-  if (id.empty()) return invalidArgument("job id is empty");
+  if (Status bad = checkJobIdField(id); !bad) return bad;
   std::lock_guard lock(m_mu);
   const Job* j = m_jobs.find(id);
   if (!j) return notFound("no job '" + id + "'");
@@ -305,8 +323,66 @@ std::vector<Job> Manager::list(bool activeOnly) const {
   return m_jobs.list(activeOnly);
 }
 
+Status Manager::checkAccess(const Principal& who, const std::string& id) const {
+  if (Status bad = checkJobIdField(id); !bad) return bad;
+  std::lock_guard lock(m_mu);
+  const Job* j = m_jobs.find(id);
+  if (!j) return notFound("no job '" + id + "'");
+  if (!who.mayAccess(*j)) return permissionDenied("job " + id + " is not yours");
+  return Status::ok();
+}
+
+Result<Job> Manager::get(const Principal& who, const std::string& id) const {
+  if (Status s = checkAccess(who, id); !s) return s;
+  return get(id);
+}
+
+std::vector<Job> Manager::list(const Principal& who, bool activeOnly) const {
+  std::vector<Job> all = list(activeOnly);
+  std::erase_if(all, [&](const Job& j) { return !who.mayAccess(j); });
+  return all;
+}
+
+Result<Job> Manager::cancel(const Principal& who, const std::string& id) {
+  if (Status s = checkAccess(who, id); !s) return s;
+  return cancel(id);
+}
+
+Result<std::uint64_t> Manager::watch(const Principal& who, const std::string& id, EventCallback callback) {
+  if (Status s = checkAccess(who, id); !s) return s;
+  return watch(id, std::move(callback));
+}
+
+Status Manager::remove(const Principal& who, const std::string& id) {
+  if (Status s = checkAccess(who, id); !s) return s;
+  {
+    std::lock_guard lock(m_mu);
+    const Job* j = m_jobs.find(id);
+    if (!j) return notFound("no job '" + id + "'");
+    if (!isFinal(j->state))
+      return failedPrecondition("job " + id + " is " + jobStateName(j->state) + ": cancel it and delete it once it has ended");
+  }
+  // Outside the lock (a call with a deadline); the job is final, so nothing writes its data any more.
+  if (m_jobData)
+    if (Status s = m_jobData->deleteJobData(id); !s) return s;
+  std::lock_guard lock(m_mu);
+  if (!m_jobs.find(id)) return Status::ok();  // deleted meanwhile by another call
+  if (Status s = m_store.remove(id); !s) return s;
+  m_jobs.erase(id);
+  spdlog::info("manager: job {} deleted by {}", id, who.name);
+  return Status::ok();
+}
+
+Status Manager::checkJobOnNode(const std::string& jobId, const std::string& node) const {
+  std::lock_guard lock(m_mu);
+  const Job* j = m_jobs.find(jobId);
+  if (!j) return notFound("no job '" + jobId + "'");
+  if (!nodesOf(*j).count(node)) return permissionDenied("job " + jobId + " holds no device on node " + node);
+  return Status::ok();
+}
+
 Result<Job> Manager::cancel(const std::string& id) {
-  if (id.empty()) return invalidArgument("job id is empty");
+  if (Status bad = checkJobIdField(id); !bad) return bad;
   Actions actions;
   {
     std::lock_guard lock(m_mu);
@@ -341,7 +417,7 @@ Result<Job> Manager::cancel(const std::string& id) {
 }
 
 Result<std::uint64_t> Manager::watch(const std::string& id, EventCallback callback) {
-  if (id.empty()) return invalidArgument("job id is empty");
+  if (Status bad = checkJobIdField(id); !bad) return bad;
   std::lock_guard lock(m_mu);
   const Job* j = m_jobs.find(id);
   if (!j) return notFound("no job '" + id + "'");
@@ -402,7 +478,7 @@ Result<HeartbeatReply> Manager::heartbeat(const HeartbeatInfo& hb) {
 
 Result<bool> Manager::reportProgress(const std::string& jobId, const Progress& p, const std::string& message, int attempt) {
   ErrorList errors;
-  if (jobId.empty()) errors.add("job_id", "is empty");
+  if (Status bad = checkJobIdField(jobId); !bad) errors.add("job_id", bad.message());
   if (p.step < 0) errors.add("progress.step", "is negative (" + std::to_string(p.step) + ")");
   if (p.totalSteps < 0) errors.add("progress.total_steps", "is negative (" + std::to_string(p.totalSteps) + ")");
   if (!(p.time >= 0)) errors.add("progress.time", "is negative or not a number");
@@ -456,7 +532,8 @@ Result<bool> Manager::reportProgress(const std::string& jobId, const Progress& p
 }
 
 Status Manager::reportExit(const std::string& jobId, const std::string& node, int exitCode, const std::string& reason) {
-  if (jobId.empty()) return invalidArgument("ReportJobExit: job_id is empty");
+  if (Status bad = checkJobIdField(jobId); !bad) return invalidArgument("ReportJobExit: " + bad.message());
+  if (node.empty()) return invalidArgument("ReportJobExit: node is empty (the node whose worker exited)");
   Actions actions;
   {
     std::lock_guard lock(m_mu);
@@ -466,7 +543,7 @@ Status Manager::reportExit(const std::string& jobId, const std::string& node, in
     if (j->state == JobState::kRequeued) return Status::ok();  // the exit of an attempt already given up
     if (j->state == JobState::kQueued) return failedPrecondition("job " + jobId + " is queued: it has no worker that could exit");
     const auto nodes = nodesOf(*j);
-    if (!node.empty() && !nodes.count(node))
+    if (!nodes.count(node))
       return failedPrecondition("job " + jobId + " does not run on node '" + node + "' (it runs on " + describeDevices(j->devices) + ")");
     const std::string code = "exit code " + std::to_string(exitCode);
     if (j->state == JobState::kCancelling) {
@@ -492,8 +569,12 @@ Status Manager::reportExit(const std::string& jobId, const std::string& node, in
 
 void Manager::checkNodesLocked(Actions& actions) {
   const double now = m_clock.now();
-  for (const std::string& node : m_inventory.expireLost())
+  std::vector<std::string> forgotten;
+  for (const std::string& node : m_inventory.expireLost(&forgotten))
     spdlog::warn("manager: node {} lost: no heartbeat for more than {}", node, seconds(m_options.heartbeatTimeoutSeconds));
+  for (const std::string& node : forgotten)
+    spdlog::info("manager: node {} forgotten: lost for more than {} (it returns with its next heartbeat)", node,
+                 seconds(m_options.forgetLostNodeSeconds));
 
   std::vector<std::string> held;
   for (const Job* j : m_jobs.holdingDevices()) held.push_back(j->id);

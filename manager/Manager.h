@@ -25,6 +25,7 @@
 #include "manager/AgentClient.h"
 #include "manager/FrontendClient.h"
 #include "manager/Inventory.h"
+#include "manager/JobDataClient.h"
 #include "manager/JobStore.h"
 #include "manager/JobTable.h"
 #include "manager/Placement.h"
@@ -37,6 +38,7 @@ struct ManagerOptions {
   double heartbeatTimeoutSeconds = 15;   // a node silent this long is lost
   double heartbeatIntervalSeconds = 2;   // what agents are told to use
   double missingJobGraceSeconds = 15;    // a started job its agent's heartbeats stop listing fails after this long
+  double forgetLostNodeSeconds = 600;    // a node lost this much longer leaves `pflow nodes` (back at its next heartbeat)
   // Starts a job may have: when its node is lost, its agent stops listing its worker, or the worker is killed by a
   // signal or cannot reach a service (exit code 2), the job is REQUEUED until this many have failed, then FAILED.
   int maxAttempts = 3;
@@ -59,6 +61,21 @@ class Manager {
   Result<Job> submit(const SubmitRequest& request);
   Result<Job> get(const std::string& id) const;
   std::vector<Job> list(bool activeOnly) const;
+
+  // The same as `who` may see and do them (docs/security.md): a user its own jobs, an admin every job; another
+  // user's job is PERMISSION_DENIED (which says no more than that).
+  Result<Job> get(const Principal& who, const std::string& id) const;
+  std::vector<Job> list(const Principal& who, bool activeOnly) const;
+  Result<Job> cancel(const Principal& who, const std::string& id);
+  Result<std::uint64_t> watch(const Principal& who, const std::string& id, EventCallback callback);
+  // Deletes a finished job (`pflow delete`): its data on the back-end first (JobDataClient), then its record. Its
+  // owner or an admin; FAILED_PRECONDITION for a job that has not ended (cancel it first). When the back-end cannot
+  // delete, nothing is deleted. Its id is never given again.
+  Status remove(const Principal& who, const std::string& id);
+  // Where remove() deletes a job's data (main: the back-end; tests: a fake). Without one the record alone goes.
+  void setJobDataClient(JobDataClient* client) { m_jobData = client; }
+  // PERMISSION_DENIED unless job `jobId` holds a device on `node` (a node's worker reporting for it).
+  Status checkJobOnNode(const std::string& jobId, const std::string& node) const;
   // QUEUED -> CANCELLED; STARTING/RUNNING -> CANCELLING (the agent is asked to stop the worker). Cancelling a
   // cancelling or cancelled job again returns it unchanged; a succeeded or failed one is FAILED_PRECONDITION.
   Result<Job> cancel(const std::string& id);
@@ -85,6 +102,7 @@ class Manager {
   void tick();
 
   std::vector<NodeView> nodes() const;
+  double now() const { return m_clock.now(); }
   // The address leases carry for workers (main() sets it once the server's port is known when listening on :0).
   void setManagerAddress(const std::string& address);
 
@@ -121,6 +139,7 @@ class Manager {
   void checkNodesLocked(Actions& actions);
   Lease leaseFor(const Job& job) const;
   void stopAction(const Job& job, Actions& actions) const;
+  Status checkAccess(const Principal& who, const std::string& id) const;
   void runActions(Actions actions);
   void applyStart(const Action& a, const Result<std::int64_t>& result, Actions& more);
   void applyStop(const Action& a, const Status& result, Actions& more);
@@ -130,6 +149,7 @@ class Manager {
   JobStore& m_store;
   AgentClient& m_agents;
   FrontendClient& m_frontend;
+  JobDataClient* m_jobData = nullptr;
 
   mutable std::mutex m_mu;
   Inventory m_inventory;

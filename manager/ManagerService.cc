@@ -28,10 +28,15 @@ grpc::ServerUnaryReactor* finishNow(grpc::CallbackServerContext* ctx, const grpc
 // the newest, so a slow watcher cannot make the queue grow without bound.
 class WatchReactor final : public grpc::ServerWriteReactor<v1::JobEvent> {
  public:
-  WatchReactor(Manager& manager, const std::string& id) : m_manager(manager) {
+  WatchReactor(Manager& manager, const Result<Principal>& who, const std::string& id) : m_manager(manager) {
+    if (!who) {
+      std::lock_guard lock(m_mu);
+      finishLocked(rpc::toGrpc(who.status()));
+      return;
+    }
     // The callback may run right here (the job now) or on any thread later; gRPC runs no reaction (OnDone
     // included) before this handler has returned the reactor.
-    auto sub = manager.watch(id, [this](const JobEvent& e) { onEvent(e); });
+    auto sub = manager.watch(who.value(), id, [this](const JobEvent& e) { onEvent(e); });
     std::lock_guard lock(m_mu);
     if (!sub) {
       finishLocked(rpc::toGrpc(sub.status()));
@@ -58,7 +63,7 @@ class WatchReactor final : public grpc::ServerWriteReactor<v1::JobEvent> {
   }
 
   void OnDone() override {
-    m_manager.unwatch(m_sub);  // after this returns, onEvent is never called again
+    if (m_sub) m_manager.unwatch(m_sub);  // after this returns, onEvent is never called again
     delete this;
   }
 
@@ -110,10 +115,26 @@ class WatchReactor final : public grpc::ServerWriteReactor<v1::JobEvent> {
 
 // ---- ManagerService ----------------------------------------------------------------------------------------------
 
+Result<Principal> ManagerServiceImpl::caller(const grpc::CallbackServerContext* ctx) const {
+  auto user = m_users.authenticate(rpc::bearerToken(*ctx));
+  if (!user) return user.status();
+  return Principal::user(user->name, user->admin);
+}
+
+Result<Principal> ManagerServiceImpl::admin(const grpc::CallbackServerContext* ctx) const {
+  auto who = caller(ctx);
+  if (who && !who->admin) return permissionDenied("managing users needs an admin's token");
+  return who;
+}
+
 grpc::ServerUnaryReactor* ManagerServiceImpl::SubmitJob(grpc::CallbackServerContext* ctx, const v1::SubmitJobRequest* req,
                                                         v1::SubmitJobResponse* resp) {
-  return onPool(ctx, m_pool, [this, req, resp] {
-    auto job = m_manager.submit(fromProto(*req));
+  auto who = caller(ctx);
+  if (!who) return finishNow(ctx, rpc::toGrpc(who.status()));
+  return onPool(ctx, m_pool, [this, req, resp, owner = who->name] {
+    SubmitRequest r = fromProto(*req);
+    r.owner = owner;
+    auto job = m_manager.submit(r);
     if (!job) return rpc::toGrpc(job.status());
     *resp->mutable_job() = toProto(job.value());
     return grpc::Status::OK;
@@ -121,39 +142,122 @@ grpc::ServerUnaryReactor* ManagerServiceImpl::SubmitJob(grpc::CallbackServerCont
 }
 
 grpc::ServerUnaryReactor* ManagerServiceImpl::GetJob(grpc::CallbackServerContext* ctx, const v1::GetJobRequest* req, v1::Job* resp) {
-  auto job = m_manager.get(req->id());
+  auto who = caller(ctx);
+  if (!who) return finishNow(ctx, rpc::toGrpc(who.status()));
+  auto job = m_manager.get(who.value(), req->id());
   if (job) *resp = toProto(job.value());
   return finishNow(ctx, rpc::toGrpc(job.status()));
 }
 
 grpc::ServerUnaryReactor* ManagerServiceImpl::ListJobs(grpc::CallbackServerContext* ctx, const v1::ListJobsRequest* req,
                                                        v1::ListJobsResponse* resp) {
-  for (const Job& j : m_manager.list(req->active_only())) *resp->add_jobs() = toProto(j);
+  auto who = caller(ctx);
+  if (!who) return finishNow(ctx, rpc::toGrpc(who.status()));
+  for (const Job& j : m_manager.list(who.value(), req->active_only())) *resp->add_jobs() = toProto(j);
   return finishNow(ctx, grpc::Status::OK);
 }
 
 grpc::ServerUnaryReactor* ManagerServiceImpl::CancelJob(grpc::CallbackServerContext* ctx, const v1::CancelJobRequest* req, v1::Job* resp) {
-  return onPool(ctx, m_pool, [this, req, resp] {
-    auto job = m_manager.cancel(req->id());
+  auto who = caller(ctx);
+  if (!who) return finishNow(ctx, rpc::toGrpc(who.status()));
+  return onPool(ctx, m_pool, [this, req, resp, who = who.value()] {
+    auto job = m_manager.cancel(who, req->id());
     if (job) *resp = toProto(job.value());
     return rpc::toGrpc(job.status());
   });
 }
 
-grpc::ServerWriteReactor<v1::JobEvent>* ManagerServiceImpl::WatchJob(grpc::CallbackServerContext*, const v1::WatchJobRequest* req) {
-  return new WatchReactor(m_manager, req->id());
+grpc::ServerWriteReactor<v1::JobEvent>* ManagerServiceImpl::WatchJob(grpc::CallbackServerContext* ctx, const v1::WatchJobRequest* req) {
+  return new WatchReactor(m_manager, caller(ctx), req->id());
 }
 
 grpc::ServerUnaryReactor* ManagerServiceImpl::ListNodes(grpc::CallbackServerContext* ctx, const v1::ListNodesRequest*,
                                                         v1::ListNodesResponse* resp) {
+  auto who = caller(ctx);
+  if (!who) return finishNow(ctx, rpc::toGrpc(who.status()));
   for (const NodeView& n : m_manager.nodes()) *resp->add_nodes() = toProto(n);
+  return finishNow(ctx, grpc::Status::OK);
+}
+
+grpc::ServerUnaryReactor* ManagerServiceImpl::DeleteJob(grpc::CallbackServerContext* ctx, const v1::DeleteJobRequest* req,
+                                                        v1::DeleteJobResponse*) {
+  auto who = caller(ctx);
+  if (!who) return finishNow(ctx, rpc::toGrpc(who.status()));
+  return onPool(ctx, m_pool, [this, req, who = who.value()] { return rpc::toGrpc(m_manager.remove(who, req->id())); });
+}
+
+grpc::ServerUnaryReactor* ManagerServiceImpl::AddUser(grpc::CallbackServerContext* ctx, const v1::AddUserRequest* req,
+                                                      v1::UserTokenResponse* resp) {
+  auto who = admin(ctx);
+  if (!who) return finishNow(ctx, rpc::toGrpc(who.status()));
+  auto token = m_users.add(req->name(), req->admin(), m_manager.now());
+  if (!token) return finishNow(ctx, rpc::toGrpc(token.status()));
+  spdlog::info("manager: {} added user {}{}", who->name, req->name(), req->admin() ? " (admin)" : "");
+  resp->set_name(req->name());
+  resp->set_token(token.value());
+  return finishNow(ctx, grpc::Status::OK);
+}
+
+grpc::ServerUnaryReactor* ManagerServiceImpl::RotateToken(grpc::CallbackServerContext* ctx, const v1::RotateTokenRequest* req,
+                                                          v1::UserTokenResponse* resp) {
+  auto who = caller(ctx);
+  if (!who) return finishNow(ctx, rpc::toGrpc(who.status()));
+  if (!who->admin && who->name != req->name()) return finishNow(ctx, rpc::toGrpc(permissionDenied("a user may rotate only its own token")));
+  auto token = m_users.rotate(req->name());
+  if (!token) return finishNow(ctx, rpc::toGrpc(token.status()));
+  spdlog::info("manager: {} rotated the token of {}", who->name, req->name());
+  resp->set_name(req->name());
+  resp->set_token(token.value());
+  return finishNow(ctx, grpc::Status::OK);
+}
+
+grpc::ServerUnaryReactor* ManagerServiceImpl::RemoveUser(grpc::CallbackServerContext* ctx, const v1::RemoveUserRequest* req,
+                                                         v1::RemoveUserResponse*) {
+  auto who = admin(ctx);
+  if (!who) return finishNow(ctx, rpc::toGrpc(who.status()));
+  if (req->name() == who->name) return finishNow(ctx, rpc::toGrpc(failedPrecondition("an admin cannot remove itself")));
+  const Status s = m_users.remove(req->name());
+  if (s) spdlog::info("manager: {} removed user {}", who->name, req->name());
+  return finishNow(ctx, rpc::toGrpc(s));
+}
+
+grpc::ServerUnaryReactor* ManagerServiceImpl::ListUsers(grpc::CallbackServerContext* ctx, const v1::ListUsersRequest*,
+                                                        v1::ListUsersResponse* resp) {
+  auto who = admin(ctx);
+  if (!who) return finishNow(ctx, rpc::toGrpc(who.status()));
+  auto users = m_users.list();
+  if (!users) return finishNow(ctx, rpc::toGrpc(users.status()));
+  for (const User& u : users.value()) {
+    v1::User* p = resp->add_users();
+    p->set_name(u.name);
+    p->set_admin(u.admin);
+    p->set_created_at(u.createdAt);
+  }
   return finishNow(ctx, grpc::Status::OK);
 }
 
 // ---- NodeRegistry ------------------------------------------------------------------------------------------------
 
+Result<std::string> NodeRegistryImpl::callerNode(const grpc::CallbackServerContext* ctx) const {
+  if (!m_verifyNodes) return std::string();
+  const std::string identity = rpc::peerIdentity(*ctx);
+  const std::string node = rpc::nodeOfIdentity(identity);
+  if (node.empty())
+    return identity.empty() ? unauthenticated("NodeRegistry takes nodes only: no client certificate")
+                            : permissionDenied("NodeRegistry takes nodes only, not " + identity);
+  return node;
+}
+
+Status NodeRegistryImpl::checkNode(const grpc::CallbackServerContext* ctx, const std::string& node) const {
+  auto caller = callerNode(ctx);
+  if (!caller) return caller.status();
+  if (!caller->empty() && caller.value() != node) return permissionDenied("node " + caller.value() + " cannot speak for node '" + node + "'");
+  return Status::ok();
+}
+
 grpc::ServerUnaryReactor* NodeRegistryImpl::Heartbeat(grpc::CallbackServerContext* ctx, const v1::HeartbeatRequest* req,
                                                       v1::HeartbeatResponse* resp) {
+  if (Status s = checkNode(ctx, req->node()); !s) return finishNow(ctx, rpc::toGrpc(s));
   return onPool(ctx, m_pool, [this, req, resp] {
     auto hb = fromProto(*req);
     if (!hb) return rpc::toGrpc(hb.status());
@@ -167,6 +271,10 @@ grpc::ServerUnaryReactor* NodeRegistryImpl::Heartbeat(grpc::CallbackServerContex
 
 grpc::ServerUnaryReactor* NodeRegistryImpl::ReportProgress(grpc::CallbackServerContext* ctx, const v1::ReportProgressRequest* req,
                                                            v1::ReportProgressResponse* resp) {
+  auto node = callerNode(ctx);
+  if (!node) return finishNow(ctx, rpc::toGrpc(node.status()));
+  if (!node->empty())
+    if (Status s = m_manager.checkJobOnNode(req->job_id(), node.value()); !s) return finishNow(ctx, rpc::toGrpc(s));
   auto cancel = m_manager.reportProgress(req->job_id(), fromProto(req->progress()), req->message(), req->attempt());
   if (cancel) resp->set_cancel(cancel.value());
   return finishNow(ctx, rpc::toGrpc(cancel.status()));
@@ -174,6 +282,7 @@ grpc::ServerUnaryReactor* NodeRegistryImpl::ReportProgress(grpc::CallbackServerC
 
 grpc::ServerUnaryReactor* NodeRegistryImpl::ReportJobExit(grpc::CallbackServerContext* ctx, const v1::ReportJobExitRequest* req,
                                                           v1::ReportJobExitResponse*) {
+  if (Status s = checkNode(ctx, req->node()); !s) return finishNow(ctx, rpc::toGrpc(s));
   return onPool(ctx, m_pool, [this, req] {
     return rpc::toGrpc(m_manager.reportExit(req->job_id(), req->node(), req->exit_code(), req->reason()));
   });

@@ -50,6 +50,7 @@ mv1::Job toProto(const Job& j) {
   p.set_model(j.model);
   p.set_attempts(j.attempts);
   p.set_max_attempts(j.maxAttempts);
+  p.set_owner(j.owner);
   return p;
 }
 

@@ -94,6 +94,21 @@ struct Job {
   std::string model;                  // the least model chosen for the scene (BuiltModel::model)
   int attempts = 0;                   // how many times it was started (the current attempt's number once started)
   int maxAttempts = 0;                // the manager's --max-attempts when it was submitted (0: the manager's now)
+  std::string owner;                  // the user who submitted it ("" for jobs from before users existed: admins only)
+};
+
+// Who is calling (docs/security.md): a user (by bearer token), a node (its agent or workers, by certificate), or
+// one of the services. The adapters establish it; the Manager decides what it may do.
+struct Principal {
+  enum class Kind { kUser, kNode, kService } kind = Kind::kUser;
+  std::string name;    // the user's name, the node's name, or the service's identity
+  bool admin = false;  // users only: may see and touch every job, and manage users
+  static Principal user(std::string name, bool admin = false) { return {Kind::kUser, std::move(name), admin}; }
+  static Principal node(std::string name) { return {Kind::kNode, std::move(name), false}; }
+  static Principal service(std::string name) { return {Kind::kService, std::move(name), false}; }
+  // May see and touch `job`: its owner, an admin, or a service (the back-end checking on a user's behalf goes
+  // through the user's own principal).
+  bool mayAccess(const Job& job) const { return kind == Kind::kService || admin || (kind == Kind::kUser && job.owner == name); }
 };
 
 // What a job may use, as sent to the agent of its first device's node.
@@ -121,6 +136,7 @@ struct SubmitRequest {
   std::vector<AttachedFile> files;
   bool wait = false;
   int maxDevices = 0;
+  std::string owner;  // the submitting user
 };
 
 // The frontend's answer to a build: where the model is and how big it is.

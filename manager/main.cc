@@ -3,7 +3,11 @@
 #include <pthread.h>
 #include <unistd.h>
 
+#include <sys/stat.h>
+
 #include <atomic>
+#include <cstdio>
+#include <fstream>
 #include <chrono>
 #include <condition_variable>
 #include <csignal>
@@ -18,6 +22,7 @@
 #include "manager/JobStore.h"
 #include "manager/Manager.h"
 #include "manager/ManagerService.h"
+#include "manager/Users.h"
 
 namespace {
 
@@ -70,6 +75,10 @@ int main(int argc, char** argv) {
                  "seconds a started job may be missing from its agent's heartbeats before it is requeued")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  app.add_option("--forget-lost-after", options.forgetLostNodeSeconds,
+                 "seconds a lost node (holding no job) stays in `pflow nodes` before it is forgotten")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--max-attempts", options.maxAttempts,
                  "starts a job may have: a lost node, a vanished or killed worker requeues it until this many failed")
       ->capture_default_str()
@@ -79,6 +88,15 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(1, 256));
   app.add_option("--log-level", logLevel, "trace, debug, info, warn, error")->capture_default_str();
+  rpc::TransportFlags transportFlags;
+  transportFlags.add(app);
+  std::string adminTokenFile, addUser, rotateUser;
+  bool addAdmin = false;
+  app.add_option("--admin-token-file", adminTokenFile,
+                 "when the database has no users yet: make user 'admin' and write its token to this file (mode 0600)");
+  app.add_option("--add-user", addUser, "add this user to --db, print its token and exit (with --admin: an admin)");
+  app.add_flag("--admin", addAdmin, "with --add-user: the new user is an admin");
+  app.add_option("--rotate-token", rotateUser, "give this user of --db a new token, print it and exit (the old one stops working)");
   CLI11_PARSE(app, argc, argv);
 
   log::init("pflow-manager", logLevel);
@@ -98,6 +116,40 @@ int main(int argc, char** argv) {
     spdlog::error("{}", store.status().toString());
     return 1;
   }
+  auto users = UserStore::open(dbPath);
+  if (!users) {
+    spdlog::error("{}", users.status().toString());
+    return 1;
+  }
+  if (!addUser.empty() || !rotateUser.empty()) {  // local administration, then exit
+    auto token = !addUser.empty() ? users.value()->add(addUser, addAdmin, SystemClock().now()) : users.value()->rotate(rotateUser);
+    if (!token) {
+      std::fprintf(stderr, "pflow-manager: %s\n", token.status().message().c_str());
+      return 1;
+    }
+    std::printf("%s\n", token.value().c_str());
+    return 0;
+  }
+  if (!adminTokenFile.empty()) {
+    auto existing = users.value()->list();
+    if (existing && existing->empty()) {
+      auto token = users.value()->add("admin", true, SystemClock().now());
+      if (!token) {
+        spdlog::error("making the first admin: {}", token.status().toString());
+        return 1;
+      }
+      const mode_t old = ::umask(077);
+      std::ofstream(adminTokenFile) << token.value() << "\n";
+      ::umask(old);
+      spdlog::info("no users yet: made user 'admin'; its token is in {}", adminTokenFile);
+    }
+  }
+  auto transport = transportFlags.resolve("manager");
+  if (!transport) {
+    spdlog::error("{}", transport.status().message());
+    return 1;
+  }
+  rpc::setDefaultTransport(transport.value());
   if (advertise.empty()) {
     const std::string host = rpc::hostOf(listen);
     advertise = (host == "0.0.0.0" || host == "[::]" || host.empty() ? hostname() : host) + listen.substr(host.size());
@@ -106,6 +158,8 @@ int main(int argc, char** argv) {
   GrpcAgentClient agents;
   GrpcFrontendClient frontend(frontendAddress);
   options.backendAddress = backendAddress;
+  std::unique_ptr<JobDataClient> jobData;
+  if (!backendAddress.empty()) jobData = makeGrpcJobDataClient(backendAddress);
 
   options.managerAddress = advertise;
   auto manager = Manager::create(options, clock, *store.value(), agents, frontend);
@@ -113,9 +167,11 @@ int main(int argc, char** argv) {
     spdlog::error("{}", manager.status().toString());
     return 1;
   }
+  manager.value()->setJobDataClient(jobData.get());
   TaskPool pool(threads);
-  ManagerServiceImpl managerService(*manager.value(), pool);
-  NodeRegistryImpl registry(*manager.value(), pool);
+  TaskPool nodePool(std::max(2, threads / 2));  // heartbeats and exit reports: never behind user calls
+  ManagerServiceImpl managerService(*manager.value(), *users.value(), pool);
+  NodeRegistryImpl registry(*manager.value(), nodePool, !transport->insecure);
   auto server = rpc::ServerRunner::start(listen, {&managerService, &registry});
   if (!server) {
     spdlog::error("{}", server.status().toString());

@@ -1,5 +1,8 @@
 #include "common/rpc/Rpc.h"
 
+#include <atomic>
+#include <mutex>
+
 
 namespace pflow::rpc {
 
@@ -15,6 +18,8 @@ grpc::Status toGrpc(const Status& s) {
     case StatusCode::kAlreadyExists: return {C::ALREADY_EXISTS, s.message()};
     case StatusCode::kCancelled: return {C::CANCELLED, s.message()};
     case StatusCode::kDeadlineExceeded: return {C::DEADLINE_EXCEEDED, s.message()};
+    case StatusCode::kUnauthenticated: return {C::UNAUTHENTICATED, s.message()};
+    case StatusCode::kPermissionDenied: return {C::PERMISSION_DENIED, s.message()};
     case StatusCode::kIo:
     case StatusCode::kNumerical:
     case StatusCode::kInternal: return {C::INTERNAL, s.toString()};
@@ -35,25 +40,65 @@ Status fromGrpc(const grpc::Status& s, const std::string& what) {
     case C::ALREADY_EXISTS: return alreadyExists(msg);
     case C::CANCELLED: return {StatusCode::kCancelled, msg};
     case C::DEADLINE_EXCEEDED: return {StatusCode::kDeadlineExceeded, msg};
+    case C::UNAUTHENTICATED: return unauthenticated(msg);
+    case C::PERMISSION_DENIED: return permissionDenied(msg);
     default: return internalError(msg);
   }
 }
 
+namespace {
+std::mutex g_tokenMu;
+std::string g_token;
+std::atomic<int> g_keepaliveMillis{20000};
+}  // namespace
+
+int keepaliveMillis() { return g_keepaliveMillis.load(); }
+void setKeepaliveMillis(int millis) { g_keepaliveMillis = millis; }
+
+void setCallToken(std::string token) {
+  std::lock_guard lock(g_tokenMu);
+  g_token = std::move(token);
+}
+
+void addBearer(grpc::ClientContext& ctx, const std::string& token) {
+  // gRPC aborts the process on a header value outside printable ASCII: such a token is no token (the call is then
+  // UNAUTHENTICATED), never a crash.
+  for (char c : token)
+    if (c < 0x20 || c > 0x7e) return;
+  if (!token.empty()) ctx.AddMetadata("authorization", "Bearer " + token);
+}
+
+std::string bearerToken(const grpc::ServerContextBase& ctx) {
+  const auto& md = ctx.client_metadata();
+  const auto it = md.find("authorization");
+  if (it == md.end()) return {};
+  const std::string v(it->second.data(), it->second.size());
+  const std::string prefix = "Bearer ";
+  return v.rfind(prefix, 0) == 0 ? v.substr(prefix.size()) : std::string();
+}
+
 std::unique_ptr<grpc::ClientContext> contextWithDeadline(double seconds) {
   auto ctx = std::make_unique<grpc::ClientContext>();
+  {
+    std::lock_guard lock(g_tokenMu);
+    addBearer(*ctx, g_token);
+  }
   ctx->set_deadline(std::chrono::system_clock::now() +
                     std::chrono::duration_cast<std::chrono::system_clock::duration>(std::chrono::duration<double>(seconds)));
   return ctx;
 }
 
-std::shared_ptr<grpc::Channel> makeChannel(const std::string& address) {
+std::shared_ptr<grpc::Channel> makeChannel(const std::string& address) { return makeChannel(address, defaultTransport()); }
+
+std::shared_ptr<grpc::Channel> makeChannel(const std::string& address, const Transport& transport) {
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(64 << 20);
   args.SetMaxSendMessageSize(64 << 20);
-  args.SetInt(GRPC_ARG_KEEPALIVE_TIME_MS, 20000);
+  args.SetInt(GRPC_ARG_KEEPALIVE_TIME_MS, keepaliveMillis());
   args.SetInt(GRPC_ARG_KEEPALIVE_TIMEOUT_MS, 10000);
   args.SetInt(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS, 1);
-  return grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args);
+  args.SetInt(GRPC_ARG_HTTP2_MAX_PINGS_WITHOUT_DATA, 0);  // keep pinging an idle connection
+  return grpc::CreateCustomChannel(address, transport.channelCredentials(), args);
 }
 
 bool waitForConnected(const std::shared_ptr<grpc::Channel>& channel, double seconds) {
@@ -62,11 +107,23 @@ bool waitForConnected(const std::shared_ptr<grpc::Channel>& channel, double seco
 }
 
 Result<std::unique_ptr<ServerRunner>> ServerRunner::start(const std::string& address, const std::vector<grpc::Service*>& services) {
+  return start(address, services, defaultTransport());
+}
+
+Result<std::unique_ptr<ServerRunner>> ServerRunner::start(const std::string& address, const std::vector<grpc::Service*>& services,
+                                                          const Transport& transport) {
+  if (transport.insecure && !isLoopbackHost(hostOf(address)))
+    return invalidArgument("--listen " + address + ": a plaintext (--insecure) server listens on loopback only (127.0.0.1, ::1); "
+                           "use --tls-dir to serve other addresses");
   auto runner = std::unique_ptr<ServerRunner>(new ServerRunner());
   grpc::ServerBuilder builder;
-  builder.AddListeningPort(address, grpc::InsecureServerCredentials(), &runner->m_port);
+  builder.AddListeningPort(address, transport.serverCredentials(), &runner->m_port);
   builder.SetMaxReceiveMessageSize(64 << 20);
   builder.SetMaxSendMessageSize(64 << 20);
+  // Accept the clients' keep-alive pings (makeChannel), also between calls.
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS, 1);
+  builder.AddChannelArgument(GRPC_ARG_HTTP2_MIN_RECV_PING_INTERVAL_WITHOUT_DATA_MS, keepaliveMillis() / 2);
+  builder.AddChannelArgument(GRPC_ARG_HTTP2_MAX_PING_STRIKES, 0);
   for (grpc::Service* s : services) builder.RegisterService(s);
   runner->m_server = builder.BuildAndStart();
   if (!runner->m_server || runner->m_port == 0) return unavailable("cannot listen on " + address + " (address in use or not local?)");

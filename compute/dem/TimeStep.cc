@@ -38,7 +38,19 @@ double hertzContactTime(double effRadius, double effMass, double effModulus, dou
   return 2.868 * std::pow(effMass * effMass / (effRadius * effModulus * effModulus * approachSpeed), 0.2);
 }
 
+namespace {
+Result<TimeStepInfo> chooseTimeStepUnchecked(const RunConfig& c);
+}  // namespace
+
 Result<TimeStepInfo> chooseTimeStep(const RunConfig& c) {
+  auto info = chooseTimeStepUnchecked(c);
+  if (info)
+    if (Status s = checkStepCount(c.sim.duration, info->dt); !s) return s;
+  return info;
+}
+
+namespace {
+Result<TimeStepInfo> chooseTimeStepUnchecked(const RunConfig& c) {
   const ParticleInit& p = c.particles;
   const std::size_t n = p.size();
   const std::size_t nMat = c.materials.size();
@@ -141,5 +153,6 @@ Result<TimeStepInfo> chooseTimeStep(const RunConfig& c) {
   }
   return info;
 }
+}  // namespace
 
 }  // namespace pflow::compute

@@ -199,6 +199,22 @@ void validateMeshes(const RunConfig& c, ErrorList& e) {
   }
 }
 
+}  // namespace
+
+std::string stepCountProblem(double duration, double dt) {
+  if (!(dt > 0) || !(duration > 0)) return {};  // validate() names these
+  const double steps = duration / dt;
+  if (steps <= kMaxSteps) return {};
+  return num(duration) + " s at dt " + num(dt) + " s is " + num(steps) + " steps; a run may take at most " + num(kMaxSteps);
+}
+
+Status checkStepCount(double duration, double dt) {
+  const std::string problem = stepCountProblem(duration, dt);
+  return problem.empty() ? Status::ok() : invalidArgument("simulation.duration: " + problem);
+}
+
+namespace {
+
 void validateSimulation(const RunConfig& c, ErrorList& e) {
   const SimulationSettings& s = c.sim;
   finiteVec(e, "simulation.gravity", s.gravity);

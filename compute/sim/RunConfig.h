@@ -139,4 +139,12 @@ struct RunConfig {
   ErrorList validate() const;
 };
 
+// The most steps one run may take: step counts stay far inside int64, and `duration: 1e18` is an error, not an
+// overflow to zero steps (it would end "succeeded" without moving).
+inline constexpr double kMaxSteps = 1e12;
+// "" when duration / dt is at most kMaxSteps; else what is wrong (the step and the count), for simulation.duration.
+std::string stepCountProblem(double duration, double dt);
+// The same as a Status (INVALID_ARGUMENT naming simulation.duration).
+Status checkStepCount(double duration, double dt);
+
 }  // namespace pflow::compute

@@ -111,6 +111,8 @@ ErrorList SphConfig::validate(const SimulationSettings& sim) const {
   if (!e.empty()) return e;  // the checks below need a usable spacing and density
 
   const SphDerived d = derive(*this, sim);
+  if (d.c0 > 0 && d.h > 0)  // the first step's CFL limit (later ones may be shorter): a duration that overflows no count
+    if (std::string p = stepCountProblem(sim.duration, dt ? *dt : cfl * d.h / d.c0); !p.empty()) e.add("simulation.duration", p);
   if (fluidCount() == 0) e.add("fluid.blocks", "no fluid particles: every block is empty at sph.spacing " + num(spacing) + " m");
   for (std::size_t k = 0; k < fluidBlocks.size(); ++k) {
     const SphRegion& b = fluidBlocks[k];

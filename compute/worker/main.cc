@@ -188,6 +188,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 1000));
   app.add_flag("--resume", o.resume, "go on from the job's last checkpoint on the back-end (the agent passes it when the job was requeued)");
   app.add_option("--log-level", logLevel, "trace, debug, info, warn, error")->capture_default_str();
+  rpc::TransportFlags transportFlags;  // the agent passes its own: the worker presents its lead node's certificate
+  transportFlags.add(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -206,6 +208,11 @@ int main(int argc, char** argv) {
     code = fail(1, "--devices lists " + std::to_string(parsed.value().size()) + " device(s) for " + std::to_string(size) + " rank(s)");
   else if (o.backendAddress.empty() && o.output.empty()) code = fail(1, "give --backend or --output for the snapshots");
   else o.devices = parsed.value();
+  if (code == 0 && (!o.managerAddress.empty() || !o.backendAddress.empty())) {
+    auto transport = transportFlags.resolve("node-" + o.devices.front().node);
+    if (!transport) code = fail(1, transport.status().message());
+    else rpc::setDefaultTransport(transport.value());
+  }
 
   // Option errors are the same on every rank (same command line).
   if (code == 0) code = runRank(o, rank, size);

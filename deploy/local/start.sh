@@ -2,7 +2,10 @@
 # Starts the whole pflow stack on loopback: frontend, back-end, manager and one node agent, each a background
 # process with its log and pid under $PFLOW_LOCAL (default out/local). Stop it with deploy/local/stop.sh.
 #   ports: manager 50051, frontend 50052, back-end 50053, agent 50061 (override with PFLOW_*_PORT)
-# The CLI finds the manager and back-end at these defaults; nothing else to configure.
+# Mutual TLS between the services (docs/security.md): on first start it makes the pflow CA and the services'
+# certificates in $PFLOW_LOCAL/tls (deploy/local/certs.sh), and the manager makes user 'admin', whose token goes to
+# $PFLOW_LOCAL/admin.token. The CLI's settings (addresses, CA, token) go to $PFLOW_LOCAL/config.yaml, and to
+# ~/.config/pflow/config.yaml when that does not exist yet; else use PFLOW_CONFIG=$PFLOW_LOCAL/config.yaml.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 root=$(pwd)
@@ -23,17 +26,37 @@ start() {  # name, command...
   echo "local: started $name (pid $!, log $dir/logs/$name.log)"
 }
 
-start frontend "$bin/pflow-frontend" --listen "127.0.0.1:$fport" --models "$dir/models"
-start backend "$bin/pflow-backend" --listen "127.0.0.1:$bport" --data "$dir/snapshots"
+node=${PFLOW_NODE:-$(hostname -s)}
+tls="$dir/tls"
+"$root/deploy/local/certs.sh" "$tls" manager frontend backend "node:$node" | sed 's/^/local: /'
+start frontend "$bin/pflow-frontend" --listen "127.0.0.1:$fport" --models "$dir/models" --tls-dir "$tls"
+start backend "$bin/pflow-backend" --listen "127.0.0.1:$bport" --data "$dir/snapshots" --manager "127.0.0.1:$mport" --tls-dir "$tls"
 start manager "$bin/pflow-manager" --listen "127.0.0.1:$mport" --db "$dir/manager.db" \
-  --frontend "127.0.0.1:$fport" --backend "127.0.0.1:$bport"
-start agent "$bin/pflow-agent" --node "${PFLOW_NODE:-$(hostname -s)}" --listen "127.0.0.1:$aport" \
-  --manager "127.0.0.1:$mport" --workdir "$dir/agent" --worker "$bin/pflow-worker"
+  --frontend "127.0.0.1:$fport" --backend "127.0.0.1:$bport" --tls-dir "$tls" --admin-token-file "$dir/admin.token"
+start agent "$bin/pflow-agent" --node "$node" --listen "127.0.0.1:$aport" \
+  --manager "127.0.0.1:$mport" --workdir "$dir/agent" --worker "$bin/pflow-worker" --tls-dir "$tls"
+
+# The first admin's token: written by the manager on its first start.
+for _ in $(seq 1 100); do [[ -s "$dir/admin.token" ]] && break; sleep 0.1; done
+if [[ ! -s "$dir/admin.token" ]]; then
+  echo "local: the manager wrote no $dir/admin.token; logs in $dir/logs" >&2
+  exit 1
+fi
+umask 077
+printf 'manager: 127.0.0.1:%s\nbackend: 127.0.0.1:%s\nca: %s\ntoken: %s\n' "$mport" "$bport" "$tls/ca.crt" "$(cat "$dir/admin.token")" \
+  > "$dir/config.yaml"
+user_config="${HOME:-/nonexistent}/.config/pflow/config.yaml"
+if [[ ! -e "$user_config" && -n "${HOME:-}" && -z "${PFLOW_NO_USER_CONFIG:-}" ]]; then
+  mkdir -p "$(dirname "$user_config")" && cp "$dir/config.yaml" "$user_config"
+  echo "local: CLI settings (admin token) in $user_config"
+else
+  echo "local: CLI settings (admin token) in $dir/config.yaml: export PFLOW_CONFIG=$dir/config.yaml"
+fi
 
 # Ready when the manager lists the agent's node.
 for _ in $(seq 1 100); do
-  if "$bin/pflow" --manager "127.0.0.1:$mport" nodes --json 2>/dev/null | grep -q '"devices":\[{'; then
-    echo "local: stack ready (manager 127.0.0.1:$mport)"
+  if PFLOW_CONFIG="$dir/config.yaml" "$bin/pflow" nodes --json 2>/dev/null | grep -q '"devices":\[{'; then
+    echo "local: stack ready (manager 127.0.0.1:$mport, TLS)"
     exit 0
   fi
   sleep 0.2

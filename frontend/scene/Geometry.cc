@@ -249,7 +249,12 @@ std::optional<TriMesh> Loader::parseMesh(const Fields& f) {
     std::string name;
     if (!read(file->value, f.child("file"), file->loc, name)) return std::nullopt;
     m_files.push_back(name);
-    auto loaded = readMeshFile(resolvePath(name));
+    auto input = resolveInput(name);
+    if (!input) {
+      badValue(f.child("file"), input.status().message(), file->loc);
+      return std::nullopt;
+    }
+    auto loaded = readMeshFile(input.value());
     if (!loaded) {
       badValue(f.child("file"), loaded.status().message(), file->loc);
       return std::nullopt;

@@ -381,6 +381,35 @@ std::string Loader::resolvePath(const std::string& name) const {
   return (std::filesystem::path(m_options.baseDir) / p).string();
 }
 
+Result<std::string> Loader::resolveInput(const std::string& name) const {
+  namespace fs = std::filesystem;
+  if (name.empty()) return invalidArgument("the file name is empty");
+  const fs::path p(name);
+  if (m_options.confineFiles) {
+    if (p.is_absolute())
+      return invalidArgument("an absolute path is not allowed here: attach the file with the scene and name it relative to the scene");
+    for (const fs::path& part : p)
+      if (part == "..") return invalidArgument("'..' is not allowed here: name the file relative to the scene, inside its folder");
+  }
+  const std::string full = resolvePath(name);
+  std::error_code ec;
+  const fs::file_status st = fs::status(full, ec);
+  if (ec || !fs::exists(st)) return ioError("cannot open '" + name + "': no such file");
+  if (m_options.confineFiles) {
+    const fs::path base = fs::canonical(m_options.baseDir.empty() ? fs::path(".") : fs::path(m_options.baseDir), ec);
+    const fs::path real = fs::canonical(full, ec);
+    const std::string b = base.string() + "/";
+    if (ec || real.string().compare(0, b.size(), b) != 0)
+      return invalidArgument("'" + name + "' is a link out of the scene's folder: attach the file itself");
+  }
+  if (!fs::is_regular_file(st)) return invalidArgument("'" + name + "' is not a regular file (a folder, FIFO, socket or device)");
+  const std::uintmax_t bytes = fs::file_size(full, ec);
+  if (ec) return ioError("cannot read the size of '" + name + "': " + ec.message());
+  if (bytes > m_options.maxFileBytes)
+    return invalidArgument("'" + name + "' is " + std::to_string(bytes) + " bytes; the limit is " + std::to_string(m_options.maxFileBytes));
+  return full;
+}
+
 // ---- validate() findings -> YAML paths and marks ------------------------------------------------------------------
 
 // Strips the last `.name` or `[i]` component; false when nothing is left to strip.
@@ -480,6 +509,9 @@ void Loader::appendValidation(const ErrorList& found) {
 namespace {
 
 constexpr int kMaxNesting = 64;
+// Nodes a scene may expand to, aliases followed: a few aliases of aliases ("billion laughs") would otherwise make
+// every later walk over the document exponential. A scene with a million particles in a list is 1e6 + a few nodes.
+constexpr std::size_t kMaxExpandedNodes = 20'000'000;
 
 // Deepest nesting of flow collections ([..], {..}) and compact block sequences (`- - -`) in the text, so that
 // pathological input is refused before the YAML parser recurses into it. Quotes and comments are skipped.
@@ -523,8 +555,16 @@ int textNesting(const std::string& text, int& line) {
 
 }  // namespace
 
-// Refuses aliases that refer to a node containing them (a cycle) and nesting deeper than kMaxNesting.
+// Refuses aliases that refer to a node containing them (a cycle), nesting deeper than kMaxNesting, and documents that
+// expand (aliases followed) to more than kMaxExpandedNodes nodes.
 void Loader::checkStructure(const YAML::Node& node, const std::string& path, std::vector<YAML::Node>& ancestors) {
+  if (m_expandedNodes > kMaxExpandedNodes) return;
+  if (++m_expandedNodes > kMaxExpandedNodes) {
+    badValue(path, "the scene expands to more than " + std::to_string(kMaxExpandedNodes) +
+                       " values when its aliases ('*name') are followed; repeat less, or give the values once",
+             locOf(node));
+    return;
+  }
   if (!node.IsMap() && !node.IsSequence()) return;
   for (const YAML::Node& a : ancestors) {
     if (a.is(node)) {
@@ -552,6 +592,10 @@ void Loader::checkStructure(const YAML::Node& node, const std::string& path, std
 Result<LoadedScene> Loader::run(const std::string& yaml, const std::string& sourceName) {
   try {
     YAML::Node root;
+    if (yaml.size() > m_options.maxSceneBytes) {
+      error("", "the scene is " + std::to_string(yaml.size()) + " bytes; the limit is " + std::to_string(m_options.maxSceneBytes), {1, 1});
+      return m_errors.toStatus(sourceName);
+    }
     if (int line = 0; textNesting(yaml, line) > kMaxNesting) {
       error("", "the file is nested deeper than " + std::to_string(kMaxNesting) + " levels (brackets or '- ' items)", {line, 1});
       return m_errors.toStatus(sourceName);

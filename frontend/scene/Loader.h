@@ -216,8 +216,12 @@ class Loader {
 
   // A file name from the scene, resolved against the scene file's folder.
   std::string resolvePath(const std::string& name) const;
+  // A file the scene names, checked before it is read: a regular file (not a FIFO, device or folder) of at most
+  // LoadOptions::maxFileBytes; with confineFiles also relative, without '..', and not a link out of baseDir.
+  Result<std::string> resolveInput(const std::string& name) const;
 
   LoadOptions m_options;
+  std::size_t m_expandedNodes = 0;  // checkStructure: nodes visited, aliases followed
   ErrorList m_errors;
   RunConfig m_config;
   std::string m_outputFile;

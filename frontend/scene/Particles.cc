@@ -227,7 +227,12 @@ bool Loader::parseParticleList(const Fields& f, const Vec3d& v0, const Vec3d& w0
     std::string name;
     if (!read(file->value, f.child("file"), file->loc, name)) return false;
     m_files.push_back(name);
-    auto csv = readParticleCsv(resolvePath(name));
+    auto input = resolveInput(name);
+    if (!input) {
+      badValue(f.child("file"), input.status().message(), file->loc);
+      return false;
+    }
+    auto csv = readParticleCsv(input.value());
     if (!csv) {
       badValue(f.child("file"), csv.status().message(), file->loc);
       return false;

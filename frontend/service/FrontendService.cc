@@ -102,6 +102,8 @@ Status loadRequest(ModelStore& store, const std::string& yaml, const std::string
   out.stagingDir = staged.value();
   LoadOptions options;
   options.baseDir = out.stagingDir;
+  options.confineFiles = true;  // the scene's own upload, nothing else on this host
+  options.maxFileBytes = kMaxSceneBytes;
   out.scene = loadSceneFromString(yaml, name.empty() ? "scene.yaml" : name, options);
   return Status::ok();
 }
@@ -116,6 +118,10 @@ void removeStaging(const Loaded& l) {
 grpc::ServerUnaryReactor* FrontendServiceImpl::ValidateScene(grpc::CallbackServerContext* ctx, const v1::ValidateSceneRequest* req,
                                                              v1::ValidateSceneResponse* resp) {
   auto* reactor = ctx->DefaultReactor();
+  if (Status who = rpc::requirePeer(*ctx, "the frontend", rpc::kManagerIdentity); !who) {
+    reactor->Finish(rpc::toGrpc(who));
+    return reactor;
+  }
   Loaded l;
   Status s = loadRequest(m_store, req->scene_yaml(), req->scene_name(), req->files(), l);
   if (s.isOk()) {
@@ -138,6 +144,10 @@ grpc::ServerUnaryReactor* FrontendServiceImpl::ValidateScene(grpc::CallbackServe
 grpc::ServerUnaryReactor* FrontendServiceImpl::BuildScene(grpc::CallbackServerContext* ctx, const v1::BuildSceneRequest* req,
                                                           v1::BuildSceneResponse* resp) {
   auto* reactor = ctx->DefaultReactor();
+  if (Status who = rpc::requirePeer(*ctx, "the frontend", rpc::kManagerIdentity); !who) {
+    reactor->Finish(rpc::toGrpc(who));
+    return reactor;
+  }
   Loaded l;
   Status s = loadRequest(m_store, req->scene_yaml(), req->scene_name(), req->files(), l);
   if (s.isOk() && !l.scene) s = failedPrecondition(l.scene.status().message());
@@ -154,7 +164,7 @@ grpc::ServerUnaryReactor* FrontendServiceImpl::BuildScene(grpc::CallbackServerCo
       resp->set_model_id(stored.value().id);
       resp->set_model_uri(stored.value().dir);
       toProto(summary.value(), l.scene.value().config.sim.duration, resp->mutable_summary());
-      spdlog::info("built model {} ({} particles) from {}", stored.value().id, summary.value().particles, req->scene_name());
+      spdlog::info("built model {} ({} particles) from {}", stored.value().id, summary.value().particles, log::escaped(req->scene_name()));
     }
   }
   removeStaging(l);

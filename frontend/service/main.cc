@@ -21,8 +21,16 @@ int main(int argc, char** argv) {
   app.add_option("--listen", listen, "host:port to serve on")->capture_default_str();
   app.add_option("--models", models, "model store folder (workers must be able to read it)")->capture_default_str();
   app.add_option("--log-level", logLevel, "trace, debug, info, warn, error")->capture_default_str();
+  pflow::rpc::TransportFlags transportFlags;
+  transportFlags.add(app);
   CLI11_PARSE(app, argc, argv);
   pflow::log::init("frontend", logLevel);
+  auto transport = transportFlags.resolve("frontend");
+  if (!transport) {
+    spdlog::error("{}", transport.status().message());
+    return 2;
+  }
+  pflow::rpc::setDefaultTransport(transport.value());
 
   std::error_code ec;
   std::filesystem::create_directories(models, ec);

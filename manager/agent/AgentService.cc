@@ -18,6 +18,7 @@ grpc::ServerUnaryReactor* finish(grpc::CallbackServerContext* ctx, const Status&
 
 grpc::ServerUnaryReactor* AgentService::GetDevices(grpc::CallbackServerContext* ctx, const av1::GetDevicesRequest*,
                                                    av1::GetDevicesResponse* resp) {
+  if (Status who = rpc::requirePeer(*ctx, "the agent", rpc::kManagerIdentity); !who) return finish(ctx, who);
   resp->set_node(m_agent.node());
   for (const DeviceStatus& d : m_agent.devices()) toProto(d, m_agent.node(), resp->add_devices());
   return finish(ctx, Status::ok());
@@ -25,6 +26,8 @@ grpc::ServerUnaryReactor* AgentService::GetDevices(grpc::CallbackServerContext* 
 
 grpc::ServerUnaryReactor* AgentService::StartJob(grpc::CallbackServerContext* ctx, const av1::StartJobRequest* req,
                                                  av1::StartJobResponse* resp) {
+  // A lease starts a process on this node: only the manager may give one.
+  if (Status who = rpc::requirePeer(*ctx, "the agent", rpc::kManagerIdentity); !who) return finish(ctx, who);
   Result<Lease> lease = fromProto(req->lease());
   if (!lease) return finish(ctx, lease.status());
   Result<int> pid = m_agent.startJob(lease.value());
@@ -34,6 +37,7 @@ grpc::ServerUnaryReactor* AgentService::StartJob(grpc::CallbackServerContext* ct
 
 grpc::ServerUnaryReactor* AgentService::StopJob(grpc::CallbackServerContext* ctx, const av1::StopJobRequest* req,
                                                 av1::StopJobResponse*) {
+  if (Status who = rpc::requirePeer(*ctx, "the agent", rpc::kManagerIdentity); !who) return finish(ctx, who);
   return finish(ctx, m_agent.stopJob(req->job_id()));
 }
 

@@ -105,6 +105,7 @@ LaunchPlan planLaunch(const Lease& lease, const LaunchConfig& config, const std:
   }
   const auto worker = workerCommand(lease, plan.rankDevices, config.workerPath);
   argv.insert(argv.end(), worker.begin(), worker.end());
+  argv.insert(argv.end(), config.transportArgs.begin(), config.transportArgs.end());
   plan.argv = std::move(argv);
   return plan;
 }

@@ -40,6 +40,7 @@ struct Lease {
 struct LaunchConfig {
   std::string workdir = "/tmp/pflow-agent";  // <job>.log and <job>.hosts go here
   std::string workerPath = "pflow-worker";
+  std::vector<std::string> transportArgs;     // the agent's --tls-dir DIR or --insecure, passed on to its workers
   std::string mpirun = "mpirun";             // empty: run the worker command directly, no MPI (tests, debugging)
   std::vector<std::string> launcherPrefix;   // put in front of the whole command (e.g. a wrapper)
   std::string rshAgent;                      // --mca plm_rsh_agent (one-machine rehearsal); empty: Open MPI's ssh

@@ -63,6 +63,8 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   app.add_flag("--print-devices", printDevices, "print the devices this node would report and exit");
   app.add_option("--log-level", logLevel, "trace, debug, info, warn, error")->capture_default_str();
+  rpc::TransportFlags transportFlags;
+  transportFlags.add(app);
   CLI11_PARSE(app, argc, argv);
 
   log::init("pflow-agent " + node, logLevel);
@@ -77,6 +79,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   workdir = std::filesystem::absolute(workdir).string();
+  if (!transportFlags.tlsDir.empty()) transportFlags.tlsDir = std::filesystem::absolute(transportFlags.tlsDir).string();
 
   auto probe = agent::chooseProbe(forceCpu, cpuSlots);
   if (printDevices) {
@@ -87,6 +90,13 @@ int main(int argc, char** argv) {
     }
     return 0;
   }
+
+  auto transport = transportFlags.resolve("node-" + node);
+  if (!transport) {
+    spdlog::error("{}", transport.status().message());
+    return 1;
+  }
+  rpc::setDefaultTransport(transport.value());
 
   // SIGINT and SIGTERM are taken by sigwait below; every thread started from here on inherits the mask (workers get
   // a clean mask from the supervisor).
@@ -104,6 +114,7 @@ int main(int argc, char** argv) {
   options.launch.mpirun = mpirun;
   options.launch.rshAgent = rshAgent;
   options.launch.graceSeconds = grace;
+  options.launch.transportArgs = transportFlags.args();
   std::shared_ptr<agent::RegistryClient> registry;
   if (!manager.empty()) registry = std::make_shared<agent::GrpcRegistryClient>(manager);
   else spdlog::warn("no --manager: standalone (no heartbeats; exits are only logged)");

@@ -113,7 +113,7 @@ class TwoAgents : public ::testing::Test {
     plan.jobId = "agent-" + node;
     plan.logPath = m_dir / (plan.jobId + ".log");
     plan.env = {{"TMPDIR", m_dir.path()}};
-    plan.argv = {PFLOW_AGENT_BIN, "--node", node, "--listen", listen, "--manager", m_managerServer->address(),
+    plan.argv = {PFLOW_AGENT_BIN, "--insecure", "--node", node, "--listen", listen, "--manager", m_managerServer->address(),
                  "--workdir", m_dir / ("work-" + node), "--worker", m_worker, "--force-cpu", "--cpu-slots", "1",
                  "--rsh-agent", kRsh, "--heartbeat-interval", "0.2", "--grace", "3"};
     auto pid = m_agents->start(plan);

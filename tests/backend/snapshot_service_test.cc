@@ -351,7 +351,7 @@ struct Child {
 
 Child startBackend(const fs::path& data, const fs::path& portFile) {
   fs::remove(portFile);
-  std::vector<std::string> args = {PFLOW_BACKEND_EXE, "--listen", "127.0.0.1:0", "--data", data.string(),
+  std::vector<std::string> args = {PFLOW_BACKEND_EXE, "--insecure", "--listen", "127.0.0.1:0", "--data", data.string(),
                                    "--port-file", portFile.string(), "--log-level", "warn"};
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());

@@ -115,8 +115,7 @@ def main():
                 restart(s, "manager", s.start_manager, rng)
                 events.append("%s SIGKILL the manager, started again" % t)
             else:
-                restart(s, "backend", lambda: s.start("backend", [os.path.join(BIN, "pflow-backend"), "--listen", s.addr("backend"),
-                                                                  "--data", os.path.join(s.dir, "snapshots")]), rng)
+                restart(s, "backend", s.start_backend, rng)
                 events.append("%s SIGKILL the back-end, started again" % t)
             kills[what] += 1
         for e in events:

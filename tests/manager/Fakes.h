@@ -1,6 +1,9 @@
 // Fakes and builders for manager tests (Ray's fake_*_client / Mocker::GenNodeInfo style): no network.
 #pragma once
+#include <atomic>
+#include <chrono>
 #include <cstdio>
+#include <thread>
 #include <functional>
 #include <mutex>
 #include <optional>
@@ -9,6 +12,7 @@
 
 #include "manager/AgentClient.h"
 #include "manager/FrontendClient.h"
+#include "manager/JobDataClient.h"
 #include "manager/Types.h"
 
 namespace pflow::manager::testing {
@@ -70,6 +74,7 @@ class FakeAgentClient final : public AgentClient {
 class FakeFrontendClient final : public FrontendClient {
  public:
   Result<BuiltModel> buildScene(const std::string& yaml, const std::string& name, const std::vector<AttachedFile>&) override {
+    if (buildSeconds > 0) std::this_thread::sleep_for(std::chrono::duration<double>(buildSeconds));  // a slow build
     std::lock_guard lock(m_mu);
     if (unavailableError) return *unavailableError;
     if (yaml.find("invalid") != std::string::npos)
@@ -92,6 +97,22 @@ class FakeFrontendClient final : public FrontendClient {
   }
   int builds = 0;
   std::optional<Status> unavailableError;
+  std::atomic<double> buildSeconds{0};
+
+ private:
+  std::mutex m_mu;
+};
+
+// Deletes nothing, records what it was asked; `error` makes it fail.
+class FakeJobDataClient final : public JobDataClient {
+ public:
+  Status deleteJobData(const std::string& jobId) override {
+    std::lock_guard lock(m_mu);
+    deleted.push_back(jobId);
+    return error ? *error : Status::ok();
+  }
+  std::vector<std::string> deleted;
+  std::optional<Status> error;
 
  private:
   std::mutex m_mu;

@@ -36,8 +36,14 @@ class ManagerServiceTest : public ::testing::Test {
     ASSERT_TRUE(m);
     manager = std::move(m.value());
     pool = std::make_unique<TaskPool>(4);
-    managerService = std::make_unique<ManagerServiceImpl>(*manager, *pool);
-    registryService = std::make_unique<NodeRegistryImpl>(*manager, *pool);
+    auto u = UserStore::open(":memory:");
+    ASSERT_TRUE(u);
+    users = std::move(u.value());
+    auto token = users->add("alice", false, 0);
+    ASSERT_TRUE(token);
+    rpc::setCallToken(token.value());  // every call of this test is alice's
+    managerService = std::make_unique<ManagerServiceImpl>(*manager, *users, *pool);
+    registryService = std::make_unique<NodeRegistryImpl>(*manager, *pool, false);
     auto server = rpc::ServerRunner::start("127.0.0.1:0", {managerService.get(), registryService.get()});
     ASSERT_TRUE(server) << server.status().toString();
     runner = std::move(server.value());
@@ -49,6 +55,7 @@ class ManagerServiceTest : public ::testing::Test {
   void TearDown() override {
     runner->shutdown(1);
     pool.reset();
+    rpc::setCallToken("");
   }
 
   grpc::Status heartbeat(const std::string& node, int gpus, std::vector<std::string> running = {}, mv1::HeartbeatResponse* out = nullptr) {
@@ -175,6 +182,7 @@ class ManagerServiceTest : public ::testing::Test {
   std::unique_ptr<JobStore> store;
   std::unique_ptr<Manager> manager;
   std::unique_ptr<TaskPool> pool;
+  std::unique_ptr<UserStore> users;
   std::unique_ptr<ManagerServiceImpl> managerService;
   std::unique_ptr<NodeRegistryImpl> registryService;
   std::unique_ptr<rpc::ServerRunner> runner;

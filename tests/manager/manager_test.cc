@@ -293,7 +293,7 @@ TEST_F(ManagerTest, CancelFinishedOrUnknown) {
   ASSERT_TRUE(manager->heartbeat(nodeBeat("a", 1)));
   auto j = manager->submit(submitRequest(10));
   ASSERT_TRUE(j);
-  ASSERT_TRUE(manager->reportExit(j->id, "", 0, ""));
+  ASSERT_TRUE(manager->reportExit(j->id, "a", 0, ""));
   auto c = manager->cancel(j->id);
   EXPECT_EQ(c.status().code(), StatusCode::kFailedPrecondition);
   EXPECT_NE(c.status().message().find("already SUCCEEDED"), std::string::npos);

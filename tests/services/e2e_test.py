@@ -13,6 +13,7 @@ driven by the `pflow` CLI. Each scenario is one function; run all (default) or s
                checkpoint, ending bit for bit as an uninterrupted run
   multinode    two agents (node-a on 127.0.0.1, node-b on 127.0.0.2) and one job across both through mpirun + hostfile
   errors       unknown ids, double cancel, missing steps, a back-end that is down: clear errors, exit codes
+  users        users see only their own jobs, an admin all; tokens; `pflow delete` removes a job and its files
   sph          an SPH dam break (solver: sph) submitted, followed and fetched: the same particles, probe series and
                CSV as `pflow run`, and the fluid's grid fields
 """
@@ -38,6 +39,9 @@ SPH_SCENE = os.path.join(SRC, "tests/data/service_sph_scene.yaml")
 # Passive OpenMP waits: the workers' threads sleep instead of spinning when the machine is shared (a parallel ctest),
 # where spinning threads slow every process down many times over.
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMP_WAIT_POLICY="passive")
+for _k in ("PFLOW_TOKEN", "PFLOW_CA", "PFLOW_INSECURE", "PFLOW_CONFIG", "PFLOW_MANAGER", "PFLOW_BACKEND"):
+    ENV.pop(_k, None)  # the stack's own settings only
+CERTS = os.path.join(SRC, "deploy/local/certs.sh")
 
 
 def free_port():
@@ -56,7 +60,8 @@ def can_bind(host):
 
 
 class Stack:
-    """The four services as child processes in a temporary folder."""
+    """The four services as child processes in a temporary folder, over mutual TLS as deploy/local/start.sh runs them;
+    the CLI calls as the first admin (config.yaml: the CA and the admin's token)."""
 
     def __init__(self, agents=(("node-a", "127.0.0.1"),), manager_args=(), cpu_slots=1):
         self.dir = tempfile.mkdtemp(prefix="pflow-e2e-")
@@ -66,9 +71,15 @@ class Stack:
         self.manager_args = list(manager_args)
         self.cpu_slots = cpu_slots
         os.makedirs(os.path.join(self.dir, "logs"))
-        self.start("frontend", [os.path.join(BIN, "pflow-frontend"), "--listen", self.addr("frontend"), "--models", os.path.join(self.dir, "models")])
-        self.start("backend", [os.path.join(BIN, "pflow-backend"), "--listen", self.addr("backend"), "--data", os.path.join(self.dir, "snapshots")])
+        self.tls = os.path.join(self.dir, "tls")
+        subprocess.run([CERTS, self.tls, "manager", "frontend", "backend"] + ["node:" + n for n, _ in agents], check=True,
+                       capture_output=True)
+        self.config = os.path.join(self.dir, "config.yaml")
+        self.start("frontend", [os.path.join(BIN, "pflow-frontend"), "--listen", self.addr("frontend"), "--models", os.path.join(self.dir, "models"),
+                                "--tls-dir", self.tls])
+        self.start_backend()
         self.start_manager()
+        self.write_config()
         for node, host in agents:
             self.start_agent(node, host)
         self.wait_nodes(len(agents))
@@ -80,10 +91,27 @@ class Stack:
         log = open(os.path.join(self.dir, "logs", name + ".log"), "ab")
         self.procs[name] = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=ENV, start_new_session=True)
 
+    def start_backend(self):
+        self.start("backend", [os.path.join(BIN, "pflow-backend"), "--listen", self.addr("backend"), "--data", os.path.join(self.dir, "snapshots"),
+                               "--manager", self.addr("manager"), "--tls-dir", self.tls])
+
     def start_manager(self):
         self.start("manager", [os.path.join(BIN, "pflow-manager"), "--listen", self.addr("manager"), "--db", os.path.join(self.dir, "manager.db"),
                                "--frontend", self.addr("frontend"), "--backend", self.addr("backend"), "--heartbeat-timeout", "6",
-                               "--heartbeat-interval", "1", "--tick", "0.5"] + self.manager_args)
+                               "--heartbeat-interval", "1", "--tick", "0.5", "--tls-dir", self.tls,
+                               "--admin-token-file", os.path.join(self.dir, "admin.token")] + self.manager_args)
+
+    def write_config(self):
+        """The CLI's settings: the CA and the first admin's token (written by the manager on its first start)."""
+        path = os.path.join(self.dir, "admin.token")
+        end = time.time() + 30
+        while not (os.path.exists(path) and os.path.getsize(path) > 0):
+            if time.time() > end:
+                raise AssertionError("the manager wrote no admin token; logs in %s" % self.dir)
+            time.sleep(0.05)
+        self.admin_token = open(path).read().strip()
+        with open(self.config, "w") as f:
+            f.write("ca: %s\ntoken: %s\n" % (os.path.join(self.tls, "ca.crt"), self.admin_token))
 
     def start_agent(self, node, host):
         port = free_port() if host == "127.0.0.1" else 0
@@ -91,12 +119,15 @@ class Stack:
         cmd = [os.path.join(BIN, "pflow-agent"), "--node", node, "--listen", listen, "--manager", self.addr("manager"),
                "--workdir", os.path.join(self.dir, "agent-" + node), "--worker", os.path.join(BIN, "pflow-worker"),
                "--cpu-slots", str(self.cpu_slots), "--force-cpu", "--heartbeat-interval", "1", "--grace", "3",
-               "--rsh-agent", os.path.join(SRC, "deploy/local/pflow-rsh")]
+               "--rsh-agent", os.path.join(SRC, "deploy/local/pflow-rsh"), "--tls-dir", self.tls]
         self.start("agent-" + node, cmd)
 
-    def cli(self, *args, check=True, timeout=300):
+    def cli(self, *args, check=True, timeout=300, token=None):
         cmd = [PFLOW, "--manager", self.addr("manager"), "--backend", self.addr("backend")] + list(args)
-        r = subprocess.run(cmd, capture_output=True, text=True, env=ENV, timeout=timeout)
+        env = dict(ENV, PFLOW_CONFIG=self.config)
+        if token is not None:
+            env["PFLOW_TOKEN"] = token
+        r = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=timeout)
         if check and r.returncode != 0:
             raise AssertionError("%s -> %d\n%s%s" % (" ".join(args), r.returncode, r.stdout, r.stderr))
         return r
@@ -390,6 +421,42 @@ def errors():
         s.close()
 
 
+def users():
+    """Users see and touch only their own jobs; an admin sees all; `pflow delete` removes a finished job and its files;
+    the CLI refuses a negative step."""
+    s = Stack()
+    try:
+        alice = s.json("admin", "user", "add", "alice")["token"]
+        bob = s.json("admin", "user", "add", "bob")["token"]
+        r = s.cli("admin", "user", "add", "mallory", "--admin", check=False, token=bob)
+        assert r.returncode == 7 and "PERMISSION_DENIED" not in r.stderr and "admin" in r.stderr, (r.returncode, r.stderr)
+        job = json.loads(s.cli("submit", SCENE, "--json", token=alice).stdout)["id"]
+        assert json.loads(s.cli("job", job, "--json", token=alice).stdout)["owner"] == "alice"
+        s.wait_state(job, {"succeeded"})
+        r = s.cli("job", job, check=False, token=bob)
+        assert r.returncode == 7 and "not yours" in r.stderr, (r.returncode, r.stderr)
+        r = s.cli("fetch", job, "--last", "-o", os.path.join(s.dir, "b.h5"), check=False, token=bob)
+        assert r.returncode == 7, (r.returncode, r.stderr)
+        assert json.loads(s.cli("jobs", "--all", "--json", token=bob).stdout) == []
+        assert [j["id"] for j in s.json("jobs", "--all")] == [job]  # the admin sees it
+        r = s.cli("jobs", check=False, token="pflow_" + "0" * 64)
+        assert r.returncode == 7 and "not valid" in r.stderr, (r.returncode, r.stderr)
+        r = s.cli("fetch", job, "--step", "-1", "-o", os.path.join(s.dir, "n.h5"), check=False, token=alice)
+        assert r.returncode == 1 and "--step -1" in r.stderr, (r.returncode, r.stderr)
+        r = s.cli("delete", job, check=False, token=bob)
+        assert r.returncode == 7, (r.returncode, r.stderr)
+        data = os.path.join(s.dir, "snapshots", job + ".h5")
+        assert os.path.exists(data)
+        s.cli("delete", job, token=alice)
+        assert not os.path.exists(data), "the job's snapshots are still there"
+        r = s.cli("job", job, check=False, token=alice)
+        assert r.returncode == 1, (r.returncode, r.stderr)
+        nxt = json.loads(s.cli("submit", SCENE, "--json", token=alice).stdout)["id"]
+        assert nxt != job, "an id was given twice"
+    finally:
+        s.close()
+
+
 def sph():
     s = Stack()
     try:
@@ -432,7 +499,7 @@ def sph():
         s.close()
 
 
-SCENARIOS = [equivalence, cancel, queue, restart, killworker, resume, agentrestart, multinode, errors, sph]
+SCENARIOS = [equivalence, cancel, queue, restart, killworker, resume, agentrestart, multinode, errors, users, sph]
 
 if __name__ == "__main__":
     wanted = sys.argv[3:] or [f.__name__ for f in SCENARIOS]

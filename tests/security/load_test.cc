@@ -1,0 +1,143 @@
+// Bounded work under hostile load (label `security`), on the real servers over mutual TLS: fifty slow submissions at
+// once must not starve the heartbeats (no node lost, every submission answered), and a client idle for many
+// keep-alive periods must still be served (the client's pings and the server's ping policy agree).
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <thread>
+
+#include "manager/ManagerService.h"
+#include "manager/Users.h"
+#include "pflow/manager/v1/manager_service.grpc.pb.h"
+#include "pflow/manager/v1/node_registry.grpc.pb.h"
+#include "tests/manager/Fakes.h"
+#include "tests/security/SecurityFixture.h"
+
+namespace pflow::security_test {
+namespace {
+
+namespace mv1 = pflow::manager::v1;
+namespace cv1 = pflow::common::v1;
+
+class ManagerUnderLoad : public TlsProcess {
+ protected:
+  void SetUp() override {
+    TlsProcess::SetUp();
+    m_store = manager::JobStore::open(":memory:").value();
+    m_users = manager::UserStore::open(":memory:").value();
+    m_token = m_users->add("alice", false, 0).value();
+    manager::ManagerOptions options;
+    options.heartbeatTimeoutSeconds = 2;  // a node is lost after 2 s without a heartbeat
+    options.heartbeatIntervalSeconds = 0.2;
+    m_manager = manager::Manager::create(options, m_clock, *m_store, m_agents, m_frontend).value();
+    m_pool = std::make_unique<TaskPool>(8);      // as pflow-manager: 8 threads for user calls...
+    m_nodePool = std::make_unique<TaskPool>(4);  // ...and a pool of their own for heartbeats
+    m_service = std::make_unique<manager::ManagerServiceImpl>(*m_manager, *m_users, *m_pool);
+    m_registry = std::make_unique<manager::NodeRegistryImpl>(*m_manager, *m_nodePool, true);
+    m_server = rpc::ServerRunner::start("127.0.0.1:0", {m_service.get(), m_registry.get()}, as("manager")).value();
+  }
+  void TearDown() override {
+    m_server->shutdown(1);
+    m_pool.reset();
+    m_nodePool.reset();
+    TlsProcess::TearDown();
+  }
+  grpc::Status heartbeat(mv1::NodeRegistry::Stub& stub) {
+    mv1::HeartbeatRequest req;
+    req.set_node("a");
+    req.set_agent_address("127.0.0.1:7000");
+    auto* d = req.add_devices();
+    d->mutable_ref()->set_node("a");
+    d->mutable_ref()->set_kind(cv1::DEVICE_KIND_GPU);
+    d->set_name("NVIDIA H100 80GB HBM3");
+    d->set_memory_total_bytes(80ull << 30);
+    mv1::HeartbeatResponse resp;
+    auto ctx = call();
+    ctx->set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(1));  // the agent's own deadline is short too
+    return stub.Heartbeat(ctx.get(), req, &resp);
+  }
+
+  SystemClock m_clock;
+  manager::testing::FakeAgentClient m_agents;
+  manager::testing::FakeFrontendClient m_frontend;
+  std::unique_ptr<manager::JobStore> m_store;
+  std::unique_ptr<manager::UserStore> m_users;
+  std::string m_token;
+  std::unique_ptr<manager::Manager> m_manager;
+  std::unique_ptr<TaskPool> m_pool, m_nodePool;
+  std::unique_ptr<manager::ManagerServiceImpl> m_service;
+  std::unique_ptr<manager::NodeRegistryImpl> m_registry;
+  std::unique_ptr<rpc::ServerRunner> m_server;
+};
+
+TEST_F(ManagerUnderLoad, FiftySlowSubmissionsDoNotStarveHeartbeats) {
+  auto node = mv1::NodeRegistry::NewStub(rpc::makeChannel(m_server->address(), as("node-a")));
+  ASSERT_TRUE(heartbeat(*node).ok());
+  m_frontend.buildSeconds = 1.0;  // each build holds a user thread for a second: 50 of them keep all 8 busy ~6 s
+
+  std::atomic<bool> done{false};
+  std::atomic<int> beats{0}, missed{0};
+  std::thread agent([&] {
+    while (!done) {
+      if (heartbeat(*node).ok()) ++beats;
+      else ++missed;
+      m_manager->tick();  // the manager's timer thread
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    }
+  });
+  std::atomic<int> submitted{0}, refused{0};
+  std::vector<std::thread> users;
+  for (int i = 0; i < 50; ++i)
+    users.emplace_back([&] {
+      auto stub = mv1::ManagerService::NewStub(rpc::makeChannel(m_server->address(), user()));
+      mv1::SubmitJobRequest req;
+      req.set_scene_yaml(manager::testing::scene(10));
+      req.set_scene_name("slow.yaml");
+      req.set_wait(true);
+      mv1::SubmitJobResponse resp;
+      auto ctx = call(m_token);
+      ctx->set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+      if (stub->SubmitJob(ctx.get(), req, &resp).ok()) ++submitted;
+      else ++refused;
+    });
+  for (auto& t : users) t.join();
+  done = true;
+  agent.join();
+
+  EXPECT_EQ(submitted, 50);
+  EXPECT_EQ(refused, 0);
+  EXPECT_EQ(missed, 0) << beats << " heartbeats answered";
+  EXPECT_GE(beats, 15);  // the builds took >= 50 / 8 s
+  for (const manager::NodeView& n : m_manager->nodes()) EXPECT_FALSE(n.lost) << n.name;
+  for (const manager::Job& j : m_manager->list(false)) EXPECT_NE(j.state, manager::JobState::kFailed) << j.id << ": " << j.reason;
+}
+
+TEST_F(TlsProcess, AnIdleClientIsStillServed) {
+  // 100 ms keep-alive here stands for pflow's 20 s: 60 periods idle is 20 minutes at the real rate. A server stricter
+  // than the client's pings would have cut the connection ("too many pings") after the third.
+  const int saved = rpc::keepaliveMillis();
+  rpc::setKeepaliveMillis(100);
+  manager::testing::FakeAgentClient agents;
+  manager::testing::FakeFrontendClient frontend;
+  FakeClock clock(1000);
+  auto store = manager::JobStore::open(":memory:").value();
+  auto users = manager::UserStore::open(":memory:").value();
+  const std::string token = users->add("alice", false, 0).value();
+  auto m = manager::Manager::create({}, clock, *store, agents, frontend).value();
+  TaskPool pool(2);
+  manager::ManagerServiceImpl service(*m, *users, pool);
+  auto server = rpc::ServerRunner::start("127.0.0.1:0", {&service}, as("manager")).value();
+  auto channel = rpc::makeChannel(server->address(), user());
+  auto stub = mv1::ManagerService::NewStub(channel);
+  mv1::ListJobsResponse resp;
+  ASSERT_TRUE(stub->ListJobs(call(token).get(), mv1::ListJobsRequest(), &resp).ok());
+  std::this_thread::sleep_for(std::chrono::seconds(6));
+  EXPECT_NE(channel->GetState(false), GRPC_CHANNEL_TRANSIENT_FAILURE);
+  const auto s = stub->ListJobs(call(token).get(), mv1::ListJobsRequest(), &resp);
+  EXPECT_TRUE(s.ok()) << s.error_code() << " " << s.error_message();
+  server->shutdown(1);
+  rpc::setKeepaliveMillis(saved);
+}
+
+}  // namespace
+}  // namespace pflow::security_test
