@@ -10,6 +10,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <thread>
 
 #include "backend/BackendClient.h"
 #include "cli/RunCommand.h"
@@ -70,6 +71,7 @@ const char* stateName(mv1::JobState s) {
     case mv1::JOB_STATE_CANCELLING: return "cancelling";
     case mv1::JOB_STATE_CANCELLED: return "cancelled";
     case mv1::JOB_STATE_REQUEUED: return "requeued";
+    case mv1::JOB_STATE_BUILDING: return "building";
     default: return "unknown";
   }
 }
@@ -255,8 +257,26 @@ int submitJob(const Endpoints& e, const SubmitOptions& o, bool json) {
     a->set_content(bytes.str());
   }
   mv1::SubmitJobResponse resp;
-  auto ctx = rpc::contextWithDeadline(120);  // the manager builds the model (particle generation) before answering
-  if (grpc::Status s = manager(e)->SubmitJob(ctx.get(), req, &resp); !s.ok()) return report(s, "submit", e.manager);
+  auto stub = manager(e);
+  auto ctx = rpc::contextWithDeadline(120);  // a manager without a build queue builds the model before answering
+  if (grpc::Status s = stub->SubmitJob(ctx.get(), req, &resp); !s.ok()) return report(s, "submit", e.manager);
+  // The manager answers at once with the job BUILDING; it is QUEUED (or FAILED: the scene's errors, or refused) when
+  // the frontend has built it.
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(int(rpc::kBulkDeadlineSeconds));
+  while (resp.job().state() == mv1::JOB_STATE_BUILDING && std::chrono::steady_clock::now() < until) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    mv1::GetJobRequest get;
+    get.set_id(resp.job().id());
+    mv1::Job job;
+    if (grpc::Status s = rpc::retryIdempotent([&](grpc::ClientContext* c) { return stub->GetJob(c, get, &job); }); !s.ok())
+      return report(s, "submit: job " + get.id(), e.manager);
+    *resp.mutable_job() = job;
+  }
+  if (resp.job().state() == mv1::JOB_STATE_FAILED && resp.job().finished_at() > 0 && resp.job().started_at() == 0) {
+    const std::string& why = resp.job().reason();
+    std::fprintf(stderr, "pflow: submit: job %s: %s\n", resp.job().id().c_str(), why.c_str());
+    return why.rfind("refused: ", 0) == 0 ? kExitRefused : kExitInvalid;  // refused, or the scene's errors
+  }
   if (json && !o.watch) std::printf("%s\n", toJson(resp.job()).dump().c_str());
   else if (!json) std::printf("submitted job %s (%s): %s, %llu particles\n", resp.job().id().c_str(), resp.job().name().c_str(),
                               stateName(resp.job().state()), (unsigned long long)resp.job().particles());

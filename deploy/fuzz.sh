@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer target for the scene loader with clang (ASan + UBSan) into build-fuzz/ and runs it for
 # PFLOW_FUZZ_SECONDS (default 60) from a seed corpus of the example scenes. Exits non-zero on a crash, leak,
-# sanitizer report or timeout; the reproducer is left in build-fuzz/artifacts/.
+# sanitizer report or timeout; the reproducer is left in build-fuzz/artifacts/. Then, when the services are built
+# (build/tests/rpc_fuzz), sends structured random messages to every RPC of the in-process servers for as long.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${PFLOW_FUZZ_SECONDS:-60}
@@ -23,4 +24,9 @@ echo "fuzz: scene loader for ${seconds} s"
 # -rss_limit_mb guards against inputs that ask for huge allocations; -timeout flags a hang of one input.
 build-fuzz/bin/scene_loader_fuzz "$corpus" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
   -artifact_prefix=build-fuzz/artifacts/ -print_final_stats=1 2>&1 | tail -n 15
-exit "${PIPESTATUS[0]}"
+rc=${PIPESTATUS[0]}
+((rc == 0)) || exit "$rc"
+if [[ -x build/tests/rpc_fuzz ]]; then
+  echo "fuzz: every RPC for ${seconds} s"
+  build/tests/rpc_fuzz "$seconds"
+fi

@@ -11,14 +11,14 @@
 namespace pflow::manager {
 namespace {
 
-constexpr int kSchemaVersion = 4;  // 2: jobs.model; 3: the REQUEUED state, jobs.attempts and jobs.max_attempts; 4: jobs.owner
+constexpr int kSchemaVersion = 4;  // 2: jobs.model; 3: REQUEUED, jobs.attempts, jobs.max_attempts; 4: BUILDING, jobs.owner, max_seq
 
 // The jobs table's columns and constraints (also the migration's new table).
 constexpr const char* kJobColumns = R"sql((
   seq INTEGER PRIMARY KEY,
   id TEXT NOT NULL UNIQUE,
   name TEXT NOT NULL,
-  state TEXT NOT NULL CHECK(state IN ('QUEUED','STARTING','RUNNING','SUCCEEDED','FAILED','CANCELLING','CANCELLED','REQUEUED')),
+  state TEXT NOT NULL CHECK(state IN ('QUEUED','STARTING','RUNNING','SUCCEEDED','FAILED','CANCELLING','CANCELLED','REQUEUED','BUILDING')),
   reason TEXT NOT NULL,
   scene_name TEXT NOT NULL,
   model_id TEXT NOT NULL,
@@ -56,8 +56,7 @@ CREATE TABLE IF NOT EXISTS job_devices(
 CREATE UNIQUE INDEX IF NOT EXISTS one_live_lease_per_device ON job_devices(node, kind, device_index) WHERE leased = 1;
 )sql";
 
-// Version 2 -> 3: SQLite cannot change a CHECK constraint, so the jobs table is rebuilt (SQLite's documented
-// procedure: foreign keys off, new table, copy, drop, rename, check). A job that had started counts one attempt.
+// The columns every version from 2 on has (the migration copies them).
 constexpr const char* kOldColumns =
     "seq, id, name, state, reason, scene_name, model_id, model_uri, particles, memory_bytes, model, max_devices, wait, "
     "submitted_at, started_at, finished_at, exit_code, step, total_steps, sim_time, sim_duration, "
@@ -102,28 +101,22 @@ Result<std::unique_ptr<JobStore>> JobStore::open(const std::string& path) {
       }
       v = 2;
     }
-    if (v == 2) {
-      const std::string sql = std::string("BEGIN IMMEDIATE; CREATE TABLE jobs_v3") + kJobColumns + "; INSERT INTO jobs_v3(" + kOldColumns +
-                              ", attempts) SELECT " + kOldColumns + ", CASE WHEN started_at > 0 THEN 1 ELSE 0 END FROM jobs; " +
-                              "DROP TABLE jobs; ALTER TABLE jobs_v3 RENAME TO jobs; UPDATE schema_info SET version = 3; COMMIT;";
+    if (v == 2 || v == 3) {
+      // SQLite cannot change a CHECK constraint (3: REQUEUED, 4: BUILDING), so the jobs table is rebuilt (SQLite's
+      // documented procedure: foreign keys off, new table, copy, drop, rename). From 2, a job that had started counts
+      // one attempt; jobs from before users existed belong to no one (admins see them). schema_info gains max_seq.
+      const bool hasMaxSeq = Stmt(db, "SELECT max_seq FROM schema_info LIMIT 0").ok();
+      const std::string attempts = v == 2 ? "CASE WHEN started_at > 0 THEN 1 ELSE 0 END, 0" : "attempts, max_attempts";
+      const std::string sql = std::string("BEGIN IMMEDIATE; CREATE TABLE jobs_v4") + kJobColumns + "; INSERT INTO jobs_v4(" + kOldColumns +
+                              ", attempts, max_attempts) SELECT " + kOldColumns + ", " + attempts + " FROM jobs; " +
+                              "DROP TABLE jobs; ALTER TABLE jobs_v4 RENAME TO jobs; " +
+                              (hasMaxSeq ? "" : "ALTER TABLE schema_info ADD COLUMN max_seq INTEGER NOT NULL DEFAULT 0; ") +
+                              "UPDATE schema_info SET version = 4, max_seq = (SELECT IFNULL(MAX(seq), 0) FROM jobs); COMMIT;";
       if (Status s = store->exec("PRAGMA foreign_keys=OFF;"); !s) return s;
       Status migrated = store->exec(sql.c_str());
       if (!migrated) store->exec("ROLLBACK;");
       if (Status s = store->exec("PRAGMA foreign_keys=ON;"); !s) return s;
       if (!migrated) return migrated;
-      v = 3;
-    }
-    if (v == 3) {  // jobs.owner (jobs from before users existed belong to nobody: admins see them); schema_info.max_seq
-      const bool hasOwner = Stmt(db, "SELECT owner FROM jobs LIMIT 0").ok();  // a table rebuilt from version 2 has it
-      const bool hasMaxSeq = Stmt(db, "SELECT max_seq FROM schema_info LIMIT 0").ok();
-      const std::string sql = std::string("BEGIN IMMEDIATE; ") +
-                              (hasOwner ? "" : "ALTER TABLE jobs ADD COLUMN owner TEXT NOT NULL DEFAULT ''; ") +
-                              (hasMaxSeq ? "" : "ALTER TABLE schema_info ADD COLUMN max_seq INTEGER NOT NULL DEFAULT 0; ") +
-                              "UPDATE schema_info SET version = 4, max_seq = (SELECT IFNULL(MAX(seq), 0) FROM jobs); COMMIT;";
-      if (Status s = store->exec(sql.c_str()); !s) {
-        store->exec("ROLLBACK;");
-        return s;
-      }
       v = 4;
     }
     if (v != kSchemaVersion)

@@ -7,6 +7,7 @@ bool JobTable::isLegal(JobState from, JobState to) {
   switch (from) {
     case S::kQueued:
     case S::kRequeued: return to == S::kStarting || to == S::kCancelled;
+    case S::kBuilding: return to == S::kQueued || to == S::kFailed || to == S::kCancelled;
     case S::kStarting:
       return to == S::kRunning || to == S::kSucceeded || to == S::kFailed || to == S::kCancelling || to == S::kRequeued;
     case S::kRunning: return to == S::kSucceeded || to == S::kFailed || to == S::kCancelling || to == S::kRequeued;

@@ -1,5 +1,6 @@
 // Jobs in memory and the legal state transitions. Not thread-safe: the Manager serialises access.
 //
+//   BUILDING   -> QUEUED (built and admitted), FAILED (invalid scene, refused), CANCELLED (cancel)
 //   QUEUED     -> STARTING (placed), CANCELLED (cancel)
 //   STARTING   -> RUNNING (start confirmed or first progress), SUCCEEDED/FAILED (exit, start failure, node lost),
 //                 CANCELLING (cancel), REQUEUED (node lost, worker gone or killed, attempts left)

@@ -8,44 +8,11 @@
 
 #include "common/Address.h"
 #include "common/Log.h"
+#include "manager/ManagerDetail.h"
 
 namespace pflow::manager {
-namespace {
+using namespace detail;
 
-// A job id as requests carry it: short and printable (the ids the manager makes are job-NNNNNN); never echoed raw.
-Status checkJobIdField(const std::string& id) {
-  if (id.empty()) return invalidArgument("job id is empty");
-  if (id.size() > 64 || !log::isPrintable(id)) return invalidArgument("job id '" + log::escaped(id, 64) + "' is not a job id (job-NNNNNN)");
-  return Status::ok();
-}
-
-std::string jobIdFor(std::int64_t seq) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "job-%06lld", static_cast<long long>(seq));
-  return buf;
-}
-
-std::string seconds(double s) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.1f s", s);
-  return buf;
-}
-
-std::string describeDevices(const std::vector<DeviceKey>& devices) {
-  std::string out;
-  for (const DeviceKey& d : devices) out += (out.empty() ? "" : ", ") + d.toString();
-  return out;
-}
-
-std::set<std::string> nodesOf(const Job& job) {
-  std::set<std::string> out;
-  for (const DeviceKey& d : job.devices) out.insert(d.node);
-  return out;
-}
-
-std::string leadNode(const Job& job) { return job.devices.empty() ? std::string() : job.devices.front().node; }
-
-}  // namespace
 
 Manager::Manager(ManagerOptions options, const Clock& clock, JobStore& store, AgentClient& agents, FrontendClient& frontend)
     : m_options(std::move(options)),
@@ -67,6 +34,10 @@ Result<std::unique_ptr<Manager>> Manager::create(ManagerOptions options, const C
   if (!jobs) return jobs.status();
   int active = 0, queued = 0;
   for (Job& j : jobs.value()) {
+    if (j.state == JobState::kBuilding) {  // its build was lost with the manager that ran it
+      (void)JobTable::transition(j, JobState::kFailed, "the manager stopped while the scene was being built: submit it again", clock.now());
+      if (Status s = store.save(j); !s) return s;
+    }
     if (holdsDevices(j.state)) {
       if (Status s = m->m_inventory.lease(j.devices, j.id); !s) return internalError("job database " + store.path() + ": " + s.message());
       m->m_runtime[j.id].attached = true;  // whatever the agent says at its next heartbeat decides
@@ -239,199 +210,6 @@ void Manager::applyStop(const Action& a, const Status& s, Actions& more) {
   spdlog::warn("manager: stopping {} at {}: {} (retried through the agent's heartbeats)", a.jobId, a.address, s.toString());
 }
 
-// ---- jobs --------------------------------------------------------------------------------------------------------
-
-Result<Job> Manager::submit(const SubmitRequest& req) {
-  ErrorList errors;
-  if (req.sceneYaml.empty()) errors.add("scene_yaml", "is empty: send the scene's YAML text");
-  if (req.maxDevices < 0) errors.add("max_devices", "is negative (" + std::to_string(req.maxDevices) + "); 0 means no limit");
-  for (const auto& [field, value] : {std::pair{"name", &req.name}, {"scene_name", &req.sceneName}}) {
-    if (value->size() > 256) errors.add(field, "is " + std::to_string(value->size()) + " bytes; the limit is 256");
-    else if (!log::isPrintable(*value)) errors.add(field, "'" + log::escaped(*value) + "' has characters other than printable ASCII");
-  }
-  if (req.files.size() > 1000) errors.add("files", std::to_string(req.files.size()) + " files; the limit is 1000");
-  std::set<std::string> paths;
-  for (std::size_t i = 0; i < req.files.size() && i < 1000; ++i) {
-    const std::string path = "files[" + std::to_string(i) + "].path";
-    const std::string& p = req.files[i].path;
-    if (p.empty()) errors.add(path, "is empty");
-    else if (p.size() > 256 || !log::isPrintable(p)) errors.add(path, "'" + log::escaped(p) + "': at most 256 printable ASCII characters");
-    else if (!paths.insert(p).second) errors.add(path, "repeats '" + p + "'");
-  }
-  if (!errors.empty()) return errors.toStatus("SubmitJob");
-
-  {  // cheap refusal before an expensive build
-    std::lock_guard lock(m_mu);
-    const Placement p = place({1, 0, 0}, m_inventory.snapshot(), m_options.thresholds);
-    if (p.outcome == PlacementOutcome::kNeverFits) return failedPrecondition("job refused: " + p.reason);
-  }
-
-  auto model = m_frontend.buildScene(req.sceneYaml, req.sceneName, req.files);
-  if (!model) return model.status();
-  if (model->particles == 0) return invalidArgument("scene '" + req.sceneName + "' has no particles: nothing to simulate");
-
-  Actions actions;
-  std::string id;
-  {
-    std::lock_guard lock(m_mu);
-    const Placement p = place({model->particles, model->memoryBytes, req.maxDevices}, m_inventory.snapshot(), m_options.thresholds);
-    if (p.outcome == PlacementOutcome::kNeverFits) return failedPrecondition("job refused: " + p.reason);
-    const std::size_t ahead = m_jobs.queued().size();
-    if (!req.wait && p.outcome == PlacementOutcome::kWait)
-      return resourceExhausted("too few free devices: the job " + p.reason + " (submit with wait to queue it)");
-    if (!req.wait && ahead > 0)
-      return resourceExhausted("devices are promised to " + std::to_string(ahead) + " queued job(s) ahead of this one (submit with wait to queue it)");
-
-    Job j;
-    j.seq = m_jobs.maxSeq() + 1;
-    j.id = jobIdFor(j.seq);
-    j.name = req.name.empty() ? req.sceneName : req.name;
-    j.state = JobState::kQueued;
-    j.sceneName = req.sceneName;
-    j.modelId = model->modelId;
-    j.modelUri = model->modelUri;
-    j.particles = model->particles;
-    j.memoryBytes = model->memoryBytes;
-    j.model = model->model;
-    j.maxDevices = req.maxDevices;
-    j.maxAttempts = m_options.maxAttempts;
-    j.owner = req.owner;
-    j.wait = req.wait;
-    j.submittedAt = m_clock.now();
-    j.progress.totalSteps = model->steps;
-    j.progress.duration = model->duration;
-    const std::string event = p.outcome == PlacementOutcome::kWait ? "queued: the job " + p.reason : "queued";
-    if (p.outcome == PlacementOutcome::kWait) j.reason = "waiting: the job " + p.reason;
-    if (Status s = commitLocked(j, event); !s) return s;
-    id = j.id;
-    scheduleLocked(actions);
-  }
-  runActions(std::move(actions));
-  return get(id);
-}
-
-Result<Job> Manager::get(const std::string& id) const {
-  if (Status bad = checkJobIdField(id); !bad) return bad;
-  std::lock_guard lock(m_mu);
-  const Job* j = m_jobs.find(id);
-  if (!j) return notFound("no job '" + id + "'");
-  return *j;
-}
-
-std::vector<Job> Manager::list(bool activeOnly) const {
-  std::lock_guard lock(m_mu);
-  return m_jobs.list(activeOnly);
-}
-
-Status Manager::checkAccess(const Principal& who, const std::string& id) const {
-  if (Status bad = checkJobIdField(id); !bad) return bad;
-  std::lock_guard lock(m_mu);
-  const Job* j = m_jobs.find(id);
-  if (!j) return notFound("no job '" + id + "'");
-  if (!who.mayAccess(*j)) return permissionDenied("job " + id + " is not yours");
-  return Status::ok();
-}
-
-Result<Job> Manager::get(const Principal& who, const std::string& id) const {
-  if (Status s = checkAccess(who, id); !s) return s;
-  return get(id);
-}
-
-std::vector<Job> Manager::list(const Principal& who, bool activeOnly) const {
-  std::vector<Job> all = list(activeOnly);
-  std::erase_if(all, [&](const Job& j) { return !who.mayAccess(j); });
-  return all;
-}
-
-Result<Job> Manager::cancel(const Principal& who, const std::string& id) {
-  if (Status s = checkAccess(who, id); !s) return s;
-  return cancel(id);
-}
-
-Result<std::uint64_t> Manager::watch(const Principal& who, const std::string& id, EventCallback callback) {
-  if (Status s = checkAccess(who, id); !s) return s;
-  return watch(id, std::move(callback));
-}
-
-Status Manager::remove(const Principal& who, const std::string& id) {
-  if (Status s = checkAccess(who, id); !s) return s;
-  {
-    std::lock_guard lock(m_mu);
-    const Job* j = m_jobs.find(id);
-    if (!j) return notFound("no job '" + id + "'");
-    if (!isFinal(j->state))
-      return failedPrecondition("job " + id + " is " + jobStateName(j->state) + ": cancel it and delete it once it has ended");
-  }
-  // Outside the lock (a call with a deadline); the job is final, so nothing writes its data any more.
-  if (m_jobData)
-    if (Status s = m_jobData->deleteJobData(id); !s) return s;
-  std::lock_guard lock(m_mu);
-  if (!m_jobs.find(id)) return Status::ok();  // deleted meanwhile by another call
-  if (Status s = m_store.remove(id); !s) return s;
-  m_jobs.erase(id);
-  spdlog::info("manager: job {} deleted by {}", id, who.name);
-  return Status::ok();
-}
-
-Status Manager::checkJobOnNode(const std::string& jobId, const std::string& node) const {
-  std::lock_guard lock(m_mu);
-  const Job* j = m_jobs.find(jobId);
-  if (!j) return notFound("no job '" + jobId + "'");
-  if (!nodesOf(*j).count(node)) return permissionDenied("job " + jobId + " holds no device on node " + node);
-  return Status::ok();
-}
-
-Result<Job> Manager::cancel(const std::string& id) {
-  if (Status bad = checkJobIdField(id); !bad) return bad;
-  Actions actions;
-  {
-    std::lock_guard lock(m_mu);
-    const Job* j = m_jobs.find(id);
-    if (!j) return notFound("no job '" + id + "'");
-    switch (j->state) {
-      case JobState::kQueued:
-      case JobState::kRequeued:
-        endLocked(*j, JobState::kCancelled, "cancelled while queued", std::nullopt, "cancelled while queued");
-        scheduleLocked(actions);  // the jobs behind it may fit now
-        break;
-      case JobState::kStarting:
-      case JobState::kRunning: {
-        Job next = *j;
-        (void)JobTable::transition(next, JobState::kCancelling, "cancelled by request", m_clock.now());
-        if (Status s = commitLocked(next, "cancelling: asking the agent to stop the worker"); !s) return s;
-        stopAction(next, actions);
-        break;
-      }
-      case JobState::kCancelling:
-        stopAction(*j, actions);  // ask again; the state stays
-        break;
-      case JobState::kCancelled:
-        return *j;
-      case JobState::kSucceeded:
-      case JobState::kFailed:
-        return failedPrecondition("job " + id + " already " + jobStateName(j->state) + "; there is nothing to cancel");
-    }
-  }
-  runActions(std::move(actions));
-  return get(id);
-}
-
-Result<std::uint64_t> Manager::watch(const std::string& id, EventCallback callback) {
-  if (Status bad = checkJobIdField(id); !bad) return bad;
-  std::lock_guard lock(m_mu);
-  const Job* j = m_jobs.find(id);
-  if (!j) return notFound("no job '" + id + "'");
-  const std::uint64_t sub = m_nextWatcher++;
-  callback(JobEvent{*j, std::string("now ") + jobStateName(j->state)});
-  if (!isFinal(j->state)) m_watchers.emplace(sub, Watcher{id, std::move(callback)});
-  return sub;
-}
-
-void Manager::unwatch(std::uint64_t subscription) {
-  std::lock_guard lock(m_mu);
-  m_watchers.erase(subscription);
-}
-
 // ---- agents and workers ------------------------------------------------------------------------------------------
 
 Result<HeartbeatReply> Manager::heartbeat(const HeartbeatInfo& hb) {
@@ -493,7 +271,7 @@ Result<bool> Manager::reportProgress(const std::string& jobId, const Progress& p
   if (isFinal(j->state)) return true;  // a stray worker of an ended job: tell it to stop
   if (j->state == JobState::kRequeued) return true;  // a worker of the attempt that was given up: stop
   if (j->attempts > 0 && (attempt > 0 ? attempt : 1) != j->attempts) return true;  // a worker of an earlier attempt
-  if (j->state == JobState::kQueued)
+  if (j->state == JobState::kQueued || j->state == JobState::kBuilding)
     return failedPrecondition("job " + jobId + " is queued: it has no worker that could report progress");
 
   const double now = m_clock.now();
@@ -541,7 +319,8 @@ Status Manager::reportExit(const std::string& jobId, const std::string& node, in
     if (!j) return notFound("no job '" + jobId + "'");
     if (isFinal(j->state)) return Status::ok();  // it already ended (e.g. its node was declared lost)
     if (j->state == JobState::kRequeued) return Status::ok();  // the exit of an attempt already given up
-    if (j->state == JobState::kQueued) return failedPrecondition("job " + jobId + " is queued: it has no worker that could exit");
+    if (j->state == JobState::kQueued || j->state == JobState::kBuilding)
+      return failedPrecondition("job " + jobId + " is " + jobStateName(j->state) + ": it has no worker that could exit");
     const auto nodes = nodesOf(*j);
     if (!nodes.count(node))
       return failedPrecondition("job " + jobId + " does not run on node '" + node + "' (it runs on " + describeDevices(j->devices) + ")");

@@ -59,6 +59,11 @@ class Manager {
   // RUNNING). Refused (nothing stored): RESOURCE_EXHAUSTED when too few devices are free and !wait (or other jobs
   // queue ahead of it); FAILED_PRECONDITION when it could never fit.
   Result<Job> submit(const SubmitRequest& request);
+  // The same in two halves, so that SubmitJob answers at once (ManagerService): beginSubmit checks the request and
+  // stores the job BUILDING; buildSubmitted (on a build thread) builds it and makes it QUEUED (and schedules it), or
+  // FAILED with the scene's errors or "refused: <why>". A job cancelled while building stays CANCELLED.
+  Result<Job> beginSubmit(const SubmitRequest& request);
+  void buildSubmitted(const std::string& id, const SubmitRequest& request);
   Result<Job> get(const std::string& id) const;
   std::vector<Job> list(bool activeOnly) const;
 
@@ -140,6 +145,13 @@ class Manager {
   Lease leaseFor(const Job& job) const;
   void stopAction(const Job& job, Actions& actions) const;
   Status checkAccess(const Principal& who, const std::string& id) const;
+  // Fields of a submission and a cheap never-fits check (before an expensive build).
+  Status checkSubmit(const SubmitRequest& req) const;
+  // A job from a submission (no seq, id or state yet).
+  Job jobFor(const SubmitRequest& req) const;
+  // Takes the built model into `j` when the job may be queued: its particles, memory, steps; else the refusal
+  // (FAILED_PRECONDITION never fits, RESOURCE_EXHAUSTED too few free devices without wait) or the build's error.
+  Status admitLocked(Job& j, const Result<BuiltModel>& model, std::string& event) const;
   void runActions(Actions actions);
   void applyStart(const Action& a, const Result<std::int64_t>& result, Actions& more);
   void applyStop(const Action& a, const Status& result, Actions& more);

@@ -131,12 +131,30 @@ grpc::ServerUnaryReactor* ManagerServiceImpl::SubmitJob(grpc::CallbackServerCont
                                                         v1::SubmitJobResponse* resp) {
   auto who = caller(ctx);
   if (!who) return finishNow(ctx, rpc::toGrpc(who.status()));
+  if (m_builds && m_pendingBuilds->fetch_add(1) >= m_maxPendingBuilds) {
+    --*m_pendingBuilds;
+    return finishNow(ctx, rpc::toGrpc(resourceExhausted(std::to_string(m_maxPendingBuilds) +
+                                                        " submitted scenes are being built; submit again shortly")));
+  }
   return onPool(ctx, m_pool, [this, req, resp, owner = who->name] {
     SubmitRequest r = fromProto(*req);
     r.owner = owner;
-    auto job = m_manager.submit(r);
-    if (!job) return rpc::toGrpc(job.status());
+    if (!m_builds) {
+      auto job = m_manager.submit(r);
+      if (!job) return rpc::toGrpc(job.status());
+      *resp->mutable_job() = toProto(job.value());
+      return grpc::Status::OK;
+    }
+    auto job = m_manager.beginSubmit(r);
+    if (!job) {
+      --*m_pendingBuilds;
+      return rpc::toGrpc(job.status());
+    }
     *resp->mutable_job() = toProto(job.value());
+    m_builds->post([&manager = m_manager, pending = m_pendingBuilds, id = job->id, r = std::move(r)] {
+      manager.buildSubmitted(id, r);
+      --*pending;
+    });
     return grpc::Status::OK;
   });
 }

@@ -9,8 +9,10 @@
 // report only for its own node, progress only for a job on its node. Without TLS (--insecure) there are no
 // certificates: NodeRegistry then trusts the node names in requests, and only loopback can reach it.
 #pragma once
+#include <atomic>
 #include <condition_variable>
 #include <deque>
+#include <memory>
 #include <functional>
 #include <mutex>
 #include <thread>
@@ -28,7 +30,11 @@ using pflow::TaskPool;
 
 class ManagerServiceImpl final : public pflow::manager::v1::ManagerService::CallbackService {
  public:
-  ManagerServiceImpl(Manager& manager, UserStore& users, TaskPool& pool) : m_manager(manager), m_users(users), m_pool(pool) {}
+  // `builds`: where submitted scenes are built, at most `maxPendingBuilds` waiting or running at once (more are
+  // RESOURCE_EXHAUSTED); SubmitJob then answers at once with the job BUILDING. Null: SubmitJob builds before it
+  // answers (tests of the synchronous rules).
+  ManagerServiceImpl(Manager& manager, UserStore& users, TaskPool& pool, TaskPool* builds = nullptr, int maxPendingBuilds = 16)
+      : m_manager(manager), m_users(users), m_pool(pool), m_builds(builds), m_maxPendingBuilds(maxPendingBuilds) {}
 
   grpc::ServerUnaryReactor* SubmitJob(grpc::CallbackServerContext* ctx, const v1::SubmitJobRequest* req,
                                       v1::SubmitJobResponse* resp) override;
@@ -58,6 +64,10 @@ class ManagerServiceImpl final : public pflow::manager::v1::ManagerService::Call
   Manager& m_manager;
   UserStore& m_users;
   TaskPool& m_pool;
+  TaskPool* m_builds;
+  int m_maxPendingBuilds;
+  // Shared with the build tasks, which may outlive this adapter at shutdown (they hold the Manager, not the adapter).
+  std::shared_ptr<std::atomic<int>> m_pendingBuilds = std::make_shared<std::atomic<int>>(0);
 };
 
 class NodeRegistryImpl final : public pflow::manager::v1::NodeRegistry::CallbackService {

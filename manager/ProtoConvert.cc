@@ -23,6 +23,7 @@ mv1::JobState toProto(JobState state) {
     case JobState::kCancelling: return mv1::JOB_STATE_CANCELLING;
     case JobState::kCancelled: return mv1::JOB_STATE_CANCELLED;
     case JobState::kRequeued: return mv1::JOB_STATE_REQUEUED;
+    case JobState::kBuilding: return mv1::JOB_STATE_BUILDING;
   }
   return mv1::JOB_STATE_UNSPECIFIED;
 }

@@ -17,7 +17,8 @@ const char* deviceStateName(DeviceState state) {
 
 namespace {
 constexpr JobState kAllStates[] = {JobState::kQueued,    JobState::kStarting,   JobState::kRunning,  JobState::kSucceeded,
-                                   JobState::kFailed,    JobState::kCancelling, JobState::kCancelled, JobState::kRequeued};
+                                   JobState::kFailed,    JobState::kCancelling, JobState::kCancelled, JobState::kRequeued,
+                                   JobState::kBuilding};
 }
 
 const char* jobStateName(JobState state) {
@@ -30,6 +31,7 @@ const char* jobStateName(JobState state) {
     case JobState::kCancelling: return "CANCELLING";
     case JobState::kCancelled: return "CANCELLED";
     case JobState::kRequeued: return "REQUEUED";
+    case JobState::kBuilding: return "BUILDING";
   }
   return "?";
 }

@@ -54,7 +54,9 @@ struct NodeView {
 // ---- jobs --------------------------------------------------------------------------------------------------------
 
 // kRequeued: back in the queue after a failure of its node or worker that a new attempt may not repeat (Manager).
-enum class JobState { kQueued, kStarting, kRunning, kSucceeded, kFailed, kCancelling, kCancelled, kRequeued };
+// kBuilding: submitted, its scene being built by the frontend (SubmitJob answers at once; the job then goes QUEUED
+// or FAILED with the scene's errors or the reason it was refused).
+enum class JobState { kQueued, kStarting, kRunning, kSucceeded, kFailed, kCancelling, kCancelled, kRequeued, kBuilding };
 const char* jobStateName(JobState state);  // "QUEUED", ...
 std::optional<JobState> jobStateFromName(const std::string& name);
 bool isFinal(JobState state);         // succeeded, failed, cancelled

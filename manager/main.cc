@@ -87,6 +87,14 @@ int main(int argc, char** argv) {
   app.add_option("--threads", threads, "worker threads for calls that reach agents or the frontend")
       ->capture_default_str()
       ->check(CLI::Range(1, 256));
+  int buildThreads = 2, maxPendingBuilds = 16;
+  app.add_option("--build-threads", buildThreads, "submitted scenes built at once (each waits on the frontend)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 64));
+  app.add_option("--max-pending-builds", maxPendingBuilds,
+                 "submissions building or waiting to be built at once; more are refused (RESOURCE_EXHAUSTED, try again)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 4096));
   app.add_option("--log-level", logLevel, "trace, debug, info, warn, error")->capture_default_str();
   rpc::TransportFlags transportFlags;
   transportFlags.add(app);
@@ -170,7 +178,8 @@ int main(int argc, char** argv) {
   manager.value()->setJobDataClient(jobData.get());
   TaskPool pool(threads);
   TaskPool nodePool(std::max(2, threads / 2));  // heartbeats and exit reports: never behind user calls
-  ManagerServiceImpl managerService(*manager.value(), *users.value(), pool);
+  TaskPool builds(buildThreads);                 // submitted scenes, built while SubmitJob has answered BUILDING
+  ManagerServiceImpl managerService(*manager.value(), *users.value(), pool, &builds, maxPendingBuilds);
   NodeRegistryImpl registry(*manager.value(), nodePool, !transport->insecure);
   auto server = rpc::ServerRunner::start(listen, {&managerService, &registry});
   if (!server) {

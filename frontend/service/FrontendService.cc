@@ -115,15 +115,9 @@ void removeStaging(const Loaded& l) {
 
 }  // namespace
 
-grpc::ServerUnaryReactor* FrontendServiceImpl::ValidateScene(grpc::CallbackServerContext* ctx, const v1::ValidateSceneRequest* req,
-                                                             v1::ValidateSceneResponse* resp) {
-  auto* reactor = ctx->DefaultReactor();
-  if (Status who = rpc::requirePeer(*ctx, "the frontend", rpc::kManagerIdentity); !who) {
-    reactor->Finish(rpc::toGrpc(who));
-    return reactor;
-  }
+Status FrontendServiceImpl::validate(const v1::ValidateSceneRequest& req, v1::ValidateSceneResponse* resp) {
   Loaded l;
-  Status s = loadRequest(m_store, req->scene_yaml(), req->scene_name(), req->files(), l);
+  Status s = loadRequest(m_store, req.scene_yaml(), req.scene_name(), req.files(), l);
   if (s.isOk()) {
     if (!l.scene) {
       resp->set_valid(false);
@@ -137,19 +131,12 @@ grpc::ServerUnaryReactor* FrontendServiceImpl::ValidateScene(grpc::CallbackServe
     }
   }
   removeStaging(l);
-  reactor->Finish(rpc::toGrpc(s));
-  return reactor;
+  return s;
 }
 
-grpc::ServerUnaryReactor* FrontendServiceImpl::BuildScene(grpc::CallbackServerContext* ctx, const v1::BuildSceneRequest* req,
-                                                          v1::BuildSceneResponse* resp) {
-  auto* reactor = ctx->DefaultReactor();
-  if (Status who = rpc::requirePeer(*ctx, "the frontend", rpc::kManagerIdentity); !who) {
-    reactor->Finish(rpc::toGrpc(who));
-    return reactor;
-  }
+Status FrontendServiceImpl::build(const v1::BuildSceneRequest& req, v1::BuildSceneResponse* resp) {
   Loaded l;
-  Status s = loadRequest(m_store, req->scene_yaml(), req->scene_name(), req->files(), l);
+  Status s = loadRequest(m_store, req.scene_yaml(), req.scene_name(), req.files(), l);
   if (s.isOk() && !l.scene) s = failedPrecondition(l.scene.status().message());
   Result<SceneSummary> summary = invalidArgument("");
   if (s.isOk()) {
@@ -157,19 +144,46 @@ grpc::ServerUnaryReactor* FrontendServiceImpl::BuildScene(grpc::CallbackServerCo
     if (!summary) s = failedPrecondition(summary.status().message());
   }
   if (s.isOk()) {
-    auto stored = m_store.put(req->scene_yaml(), l.files, l.scene.value(), toJson(summary.value()));
+    auto stored = m_store.put(req.scene_yaml(), l.files, l.scene.value(), toJson(summary.value()));
     if (!stored) {
       s = stored.status();
     } else {
       resp->set_model_id(stored.value().id);
       resp->set_model_uri(stored.value().dir);
       toProto(summary.value(), l.scene.value().config.sim.duration, resp->mutable_summary());
-      spdlog::info("built model {} ({} particles) from {}", stored.value().id, summary.value().particles, log::escaped(req->scene_name()));
+      spdlog::info("built model {} ({} particles) from {}", stored.value().id, summary.value().particles, log::escaped(req.scene_name()));
     }
   }
   removeStaging(l);
-  reactor->Finish(rpc::toGrpc(s));
+  return s;
+}
+
+// Runs `work` on the pool (never on gRPC's threads) unless the caller is not the manager or its deadline has
+// passed by the time a worker is free.
+template <class Work>
+grpc::ServerUnaryReactor* FrontendServiceImpl::onPool(grpc::CallbackServerContext* ctx, const char* what, Work work) {
+  auto* reactor = ctx->DefaultReactor();
+  if (Status who = rpc::requirePeer(*ctx, "the frontend", rpc::kManagerIdentity); !who) {
+    reactor->Finish(rpc::toGrpc(who));
+    return reactor;
+  }
+  m_pool->post([ctx, reactor, what, work = std::move(work)]() mutable {
+    if (ctx->IsCancelled())
+      reactor->Finish(grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, std::string(what) + " waited past its deadline"));
+    else
+      reactor->Finish(rpc::toGrpc(work()));
+  });
   return reactor;
+}
+
+grpc::ServerUnaryReactor* FrontendServiceImpl::ValidateScene(grpc::CallbackServerContext* ctx, const v1::ValidateSceneRequest* req,
+                                                             v1::ValidateSceneResponse* resp) {
+  return onPool(ctx, "ValidateScene", [this, req, resp] { return validate(*req, resp); });
+}
+
+grpc::ServerUnaryReactor* FrontendServiceImpl::BuildScene(grpc::CallbackServerContext* ctx, const v1::BuildSceneRequest* req,
+                                                          v1::BuildSceneResponse* resp) {
+  return onPool(ctx, "BuildScene", [this, req, resp] { return build(*req, resp); });
 }
 
 }  // namespace pflow::frontend

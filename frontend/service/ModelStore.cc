@@ -1,5 +1,7 @@
 #include "frontend/service/ModelStore.h"
 
+#include "common/Log.h"
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -38,11 +40,15 @@ ModelStore::ModelStore(std::string root) : m_root(fs::absolute(root).lexically_n
 
 Status ModelStore::checkRelative(const std::string& path) {
   if (path.empty()) return invalidArgument("an attached file has an empty path");
+  if (path.size() > 1024 || !log::isPrintable(path))
+    return invalidArgument("attached file '" + log::escaped(path, 100) + "': at most 1024 printable ASCII characters");
   const fs::path p(path);
   if (p.is_absolute()) return invalidArgument("attached file '" + path + "': the path must be relative to the scene");
-  for (const auto& part : p)
+  for (const auto& part : p) {
     if (part == "..") return invalidArgument("attached file '" + path + "': '..' is not allowed");
-  if (path.find('\0') != std::string::npos) return invalidArgument("attached file: the path contains a NUL byte");
+    if (part.string().size() > 255) return invalidArgument("attached file '" + log::escaped(path, 100) + "': a name longer than 255 characters");
+  }
+  if (p.filename().empty() || p.filename() == ".") return invalidArgument("attached file '" + path + "': names a folder, not a file");
   return Status::ok();
 }
 

@@ -122,6 +122,41 @@ TEST_F(ManagerAccess, RequestFieldsAreCheckedWithTheirNames) {
   EXPECT_EQ(manager->reportExit(submitAs("alice").id, "", 0, "").code(), StatusCode::kInvalidArgument);  // which node?
 }
 
+TEST_F(ManagerAccess, SubmissionsBuildAfterTheAnswer) {
+  SubmitRequest r = submitRequest(10, true);
+  r.owner = "alice";
+  auto b = manager->beginSubmit(r);
+  ASSERT_TRUE(b);
+  EXPECT_EQ(b->state, JobState::kBuilding);
+  EXPECT_EQ(frontend.builds, 0);  // nothing built yet
+  manager->buildSubmitted(b->id, r);
+  EXPECT_TRUE(holdsDevices(manager->get(b->id)->state));  // queued, then placed
+  EXPECT_EQ(manager->get(b->id)->particles, 10u);
+
+  SubmitRequest bad = r;
+  bad.sceneYaml = "invalid";
+  auto failed = manager->beginSubmit(bad);
+  manager->buildSubmitted(failed->id, bad);
+  EXPECT_EQ(manager->get(failed->id)->state, JobState::kFailed);
+  EXPECT_NE(manager->get(failed->id)->reason.find("materials[0].density"), std::string::npos);  // the scene's errors
+
+  SubmitRequest huge = r;
+  huge.sceneYaml = testing::scene(10) + "memory: 1e15\n";  // fits no device
+  auto refused = manager->beginSubmit(huge);
+  manager->buildSubmitted(refused->id, huge);
+  EXPECT_EQ(manager->get(refused->id)->reason.rfind("refused: ", 0), 0u) << manager->get(refused->id)->reason;
+
+  auto cancelled = manager->beginSubmit(r);
+  ASSERT_TRUE(manager->cancel(alice, cancelled->id));
+  manager->buildSubmitted(cancelled->id, r);  // the build ends after the cancel: it stays cancelled
+  EXPECT_EQ(manager->get(cancelled->id)->state, JobState::kCancelled);
+
+  auto lost = manager->beginSubmit(r);
+  open();  // the manager restarts while it builds
+  EXPECT_EQ(manager->get(lost->id)->state, JobState::kFailed);
+  EXPECT_NE(manager->get(lost->id)->reason.find("submit it again"), std::string::npos);
+}
+
 TEST_F(ManagerAccess, LostNodesAreForgottenAfterAWhile) {
   ASSERT_TRUE(manager->heartbeat(nodeBeat("b", 1)));
   const Job j = submitAs("alice");

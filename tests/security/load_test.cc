@@ -32,12 +32,14 @@ class ManagerUnderLoad : public TlsProcess {
     m_manager = manager::Manager::create(options, m_clock, *m_store, m_agents, m_frontend).value();
     m_pool = std::make_unique<TaskPool>(8);      // as pflow-manager: 8 threads for user calls...
     m_nodePool = std::make_unique<TaskPool>(4);  // ...and a pool of their own for heartbeats
-    m_service = std::make_unique<manager::ManagerServiceImpl>(*m_manager, *m_users, *m_pool);
+    m_builds = std::make_unique<TaskPool>(2);    // ...and builds behind SubmitJob's answer, as pflow-manager
+    m_service = std::make_unique<manager::ManagerServiceImpl>(*m_manager, *m_users, *m_pool, m_builds.get(), maxPendingBuilds());
     m_registry = std::make_unique<manager::NodeRegistryImpl>(*m_manager, *m_nodePool, true);
     m_server = rpc::ServerRunner::start("127.0.0.1:0", {m_service.get(), m_registry.get()}, as("manager")).value();
   }
   void TearDown() override {
     m_server->shutdown(1);
+    m_builds.reset();
     m_pool.reset();
     m_nodePool.reset();
     TlsProcess::TearDown();
@@ -64,7 +66,8 @@ class ManagerUnderLoad : public TlsProcess {
   std::unique_ptr<manager::UserStore> m_users;
   std::string m_token;
   std::unique_ptr<manager::Manager> m_manager;
-  std::unique_ptr<TaskPool> m_pool, m_nodePool;
+  virtual int maxPendingBuilds() const { return 64; }
+  std::unique_ptr<TaskPool> m_pool, m_nodePool, m_builds;
   std::unique_ptr<manager::ManagerServiceImpl> m_service;
   std::unique_ptr<manager::NodeRegistryImpl> m_registry;
   std::unique_ptr<rpc::ServerRunner> m_server;
@@ -73,7 +76,7 @@ class ManagerUnderLoad : public TlsProcess {
 TEST_F(ManagerUnderLoad, FiftySlowSubmissionsDoNotStarveHeartbeats) {
   auto node = mv1::NodeRegistry::NewStub(rpc::makeChannel(m_server->address(), as("node-a")));
   ASSERT_TRUE(heartbeat(*node).ok());
-  m_frontend.buildSeconds = 1.0;  // each build holds a user thread for a second: 50 of them keep all 8 busy ~6 s
+  m_frontend.buildSeconds = 0.3;  // 50 builds on 2 build threads: ~8 s of building while SubmitJob has long answered
 
   std::atomic<bool> done{false};
   std::atomic<int> beats{0}, missed{0};
@@ -85,7 +88,7 @@ TEST_F(ManagerUnderLoad, FiftySlowSubmissionsDoNotStarveHeartbeats) {
       std::this_thread::sleep_for(std::chrono::milliseconds(200));
     }
   });
-  std::atomic<int> submitted{0}, refused{0};
+  std::atomic<int> submitted{0}, refused{0}, slowAnswers{0};
   std::vector<std::thread> users;
   for (int i = 0; i < 50; ++i)
     users.emplace_back([&] {
@@ -97,19 +100,60 @@ TEST_F(ManagerUnderLoad, FiftySlowSubmissionsDoNotStarveHeartbeats) {
       mv1::SubmitJobResponse resp;
       auto ctx = call(m_token);
       ctx->set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
-      if (stub->SubmitJob(ctx.get(), req, &resp).ok()) ++submitted;
+      const auto t0 = std::chrono::steady_clock::now();
+      if (stub->SubmitJob(ctx.get(), req, &resp).ok() && resp.job().state() == mv1::JOB_STATE_BUILDING) ++submitted;
       else ++refused;
+      if (std::chrono::steady_clock::now() - t0 > std::chrono::seconds(2)) ++slowAnswers;  // it answers at once
     });
   for (auto& t : users) t.join();
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  auto building = [&] {
+    int n = 0;
+    for (const manager::Job& j : m_manager->list(false)) n += j.state == manager::JobState::kBuilding;
+    return n;
+  };
+  while (building() > 0 && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(std::chrono::milliseconds(100));
   done = true;
   agent.join();
+  EXPECT_EQ(building(), 0);
+  EXPECT_EQ(slowAnswers, 0);
 
   EXPECT_EQ(submitted, 50);
   EXPECT_EQ(refused, 0);
   EXPECT_EQ(missed, 0) << beats << " heartbeats answered";
-  EXPECT_GE(beats, 15);  // the builds took >= 50 / 8 s
+  EXPECT_GE(beats, 15);  // the builds took >= 50 x 0.3 / 2 s
   for (const manager::NodeView& n : m_manager->nodes()) EXPECT_FALSE(n.lost) << n.name;
   for (const manager::Job& j : m_manager->list(false)) EXPECT_NE(j.state, manager::JobState::kFailed) << j.id << ": " << j.reason;
+}
+
+class ManagerWithASmallBuildQueue : public ManagerUnderLoad {
+ protected:
+  int maxPendingBuilds() const override { return 4; }
+};
+
+TEST_F(ManagerWithASmallBuildQueue, SubmissionsBeyondTheBuildQueueAreRefusedNotStored) {
+  auto node = mv1::NodeRegistry::NewStub(rpc::makeChannel(m_server->address(), as("node-a")));
+  ASSERT_TRUE(heartbeat(*node).ok());
+  m_frontend.buildSeconds = 1.0;
+  std::atomic<int> accepted{0}, exhausted{0};
+  std::vector<std::thread> users;
+  for (int i = 0; i < 10; ++i)
+    users.emplace_back([&] {
+      auto stub = mv1::ManagerService::NewStub(rpc::makeChannel(m_server->address(), user()));
+      mv1::SubmitJobRequest req;
+      req.set_scene_yaml(manager::testing::scene(10));
+      req.set_scene_name("slow.yaml");
+      req.set_wait(true);
+      mv1::SubmitJobResponse resp;
+      const auto s = stub->SubmitJob(call(m_token).get(), req, &resp);
+      if (s.ok()) ++accepted;
+      else if (s.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED) ++exhausted;
+    });
+  for (auto& t : users) t.join();
+  EXPECT_EQ(accepted + exhausted, 10);
+  EXPECT_LE(accepted, 4 + 2);  // the queue's 4 (builds that ended meanwhile free their place)
+  EXPECT_GE(exhausted, 4);
+  EXPECT_EQ(m_manager->list(false).size(), std::size_t(accepted));  // a refused submission leaves no job
 }
 
 TEST_F(TlsProcess, AnIdleClientIsStillServed) {
