@@ -9,11 +9,15 @@ namespace pflow::manager {
 
 namespace {
 
-// Runs `work` (returning a grpc::Status) on the pool and finishes the call with it.
+// Runs `work` (returning a grpc::Status) on the pool and finishes the call with it; a call whose deadline passed
+// (or that its caller cancelled) while it waited for a thread is answered DEADLINE_EXCEEDED without being done.
 template <class Work>
 grpc::ServerUnaryReactor* onPool(grpc::CallbackServerContext* ctx, TaskPool& pool, Work work) {
   grpc::ServerUnaryReactor* reactor = ctx->DefaultReactor();
-  pool.post([reactor, work = std::move(work)]() mutable { reactor->Finish(work()); });
+  pool.post([ctx, reactor, work = std::move(work)]() mutable {
+    if (ctx->IsCancelled()) reactor->Finish(grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, "the call waited past its deadline"));
+    else reactor->Finish(work());
+  });
   return reactor;
 }
 
@@ -131,12 +135,11 @@ grpc::ServerUnaryReactor* ManagerServiceImpl::SubmitJob(grpc::CallbackServerCont
                                                         v1::SubmitJobResponse* resp) {
   auto who = caller(ctx);
   if (!who) return finishNow(ctx, rpc::toGrpc(who.status()));
-  if (m_builds && m_pendingBuilds->fetch_add(1) >= m_maxPendingBuilds) {
-    --*m_pendingBuilds;
-    return finishNow(ctx, rpc::toGrpc(resourceExhausted(std::to_string(m_maxPendingBuilds) +
-                                                        " submitted scenes are being built; submit again shortly")));
-  }
   return onPool(ctx, m_pool, [this, req, resp, owner = who->name] {
+    if (m_builds && m_pendingBuilds->fetch_add(1) >= m_maxPendingBuilds) {  // counted here: a call skipped is not
+      --*m_pendingBuilds;
+      return rpc::toGrpc(resourceExhausted(std::to_string(m_maxPendingBuilds) + " submitted scenes are being built; submit again shortly"));
+    }
     SubmitRequest r = fromProto(*req);
     r.owner = owner;
     if (!m_builds) {

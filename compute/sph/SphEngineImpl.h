@@ -286,6 +286,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     const double reach = double(m_kernel.support()) + m_setup.skin;
     kernels::BuildRateLists<R> b{m_setup.grid, k.cellStart, k.home, k.row, R(reach * reach * (1 + 1e-4)), k.wet,
                                  k.ghostCellStart, k.ghostItems, k.ghostBase, k.gid};
+    b.margin = k.margin;
     for (int attempt = 0; attempt < 2; ++attempt) {
       if (m_listCount.bytes() < std::size_t(std::max<Index>(n, 1)) * 4) m_listCount.resize(std::size_t(std::max<Index>(n, 1)) * 5);
       const std::size_t entries = std::size_t(std::max<Index>(n, 1)) * m_listCapacity;

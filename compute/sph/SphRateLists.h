@@ -36,6 +36,7 @@ struct BuildRateLists {
   ListLayout layout;
   std::uint32_t* list = nullptr;
   std::uint32_t* count = nullptr;  // the candidates found, also beyond capacity (the host grows it and builds again)
+  R margin = R(0);                 // Interact::margin
 
   PFLOW_HOSTDEVICE void operator()(Index a) const {
     const RateRow<R> ra = row[a];
@@ -47,28 +48,51 @@ struct BuildRateLists {
     }
     const R cs = R(grid.cellSize);
     const std::int32_t cxA = cellXOfTag(ra.tag);
+    // Cells whose nearest point, widened by the pass's margin (how far a particle may have left its cell since the
+    // sort), is beyond the support plus the skin hold no candidate and are not walked (walkGap). The listed
+    // candidates, and their order, are those of a walk over every cell.
     int cx, cy, cz;
     grid.coords(home[a], cx, cy, cz);
     const int r = grid.reach;
+    R yRow = R(0), zRow = R(0);
+    auto listed = [&](Index b, const RateRow<R>& rb) {
+      if (b == a || (!fluidA && boundaryTag(rb.tag))) return false;  // walls: fluid neighbours only
+      const Vec3<R> d{R(cxA - cellXOfTag(rb.tag)) * cs + (ra.x - rb.x), yRow - rb.y, zRow - rb.z};
+      return norm2(d) < cut2;
+    };
     for (int z = cz > r ? cz - r : 0; z <= (cz + r < grid.nz ? cz + r : grid.nz - 1); ++z) {
-      const R zRow = ra.z - R(z - cz) * cs;
+      const R gz = walkGap(ra.z, z - cz, cs, margin, z == 0, z == grid.nz - 1);
+      if (gz * gz >= cut2) continue;
+      zRow = ra.z - R(z - cz) * cs;
       for (int y = cy > r ? cy - r : 0; y <= (cy + r < grid.ny ? cy + r : grid.ny - 1); ++y) {
-        const R yRow = ra.y - R(y - cy) * cs;
-        auto consider = [&](Index b) {
-          const RateRow<R> rb = row[b];
-          if (b == a || (!fluidA && boundaryTag(rb.tag))) return;  // walls: fluid neighbours only
-          const Vec3<R> d{R(cxA - cellXOfTag(rb.tag)) * cs + (ra.x - rb.x), yRow - rb.y, zRow - rb.z};
-          if (norm2(d) >= cut2) return;
-          if (n < capacity) list[layout.at(a, n)] = rateListEntry(b, y - cy, z - cz);
+        const R gy = walkGap(ra.y, y - cy, cs, margin, y == 0, y == grid.ny - 1);
+        const R g2 = gz * gz + gy * gy;
+        if (g2 >= cut2) continue;
+        yRow = ra.y - R(y - cy) * cs;
+        int x0 = cx > r ? cx - r : 0, x1 = cx + r < grid.nx ? cx + r : grid.nx - 1;
+        while (x0 < cx && [&] { const R g = walkGap(ra.x, x0 - cx, cs, margin, x0 == 0, false); return g2 + g * g >= cut2; }()) ++x0;
+        while (x1 > cx && [&] { const R g = walkGap(ra.x, x1 - cx, cs, margin, false, x1 == grid.nx - 1); return g2 + g * g >= cut2; }()) --x1;
+        const std::uint32_t c0 = grid.index(x0, y, z), c1 = grid.index(x1, y, z);
+        const std::uint32_t code = rateListEntry(0, y - cy, z - cz);
+        auto append = [&](Index b) {
+          if (n < capacity) list[layout.at(a, n)] = code | (std::uint32_t(b) << 5);
           ++n;
         };
-        const int x0 = cx > r ? cx - r : 0, x1 = cx + r < grid.nx ? cx + r : grid.nx - 1;
-        const std::uint32_t c0 = grid.index(x0, y, z), c1 = grid.index(x1, y, z);
-        if (ghostCellStart) {
-          for (std::uint32_t c = c0; c <= c1; ++c) forCellMergedById(c, cellStart, ghostCellStart, ghostItems, ghostBase, gid, consider);
+        if (ghostCellStart) {  // merged by id, cell by cell
+          for (std::uint32_t c = c0; c <= c1; ++c)
+            forCellMergedById(c, cellStart, ghostCellStart, ghostItems, ghostBase, gid, [&](Index b) {
+              if (listed(b, row[b])) append(b);
+            });
           continue;
         }
-        for (Index b = cellStart[c0]; b < cellStart[c1 + 1]; ++b) consider(b);
+        // As the rates pass: 32 candidates tested into a mask, then the hits appended in order.
+        const Index end = cellStart[c1 + 1];
+        for (Index piece = cellStart[c0]; piece < end; piece += 32) {
+          const int len = end - piece < 32 ? int(end - piece) : 32;
+          std::uint32_t hits = 0;
+          for (int j = 0; j < len; ++j) hits |= std::uint32_t(listed(piece + j, row[piece + j])) << j;
+          for (; hits != 0; hits &= hits - 1) append(piece + Index(lowestSetBit(hits)));
+        }
       }
     }
     count[a] = n;
