@@ -133,17 +133,21 @@ struct Impact {
 Impact runImpact(Timed& t, bool wall, std::int64_t maxSteps) {
   Impact r;
   const double dt = t.sim().dt();
-  double prevOverlap = -1, tStart = 0;
+  auto overlapOf = [&](const auto& b) { return wall ? b[0].r - b[0].x.z : b[0].r + b[1].r - norm(b[1].x - b[0].x); };
+  // The overlap before the first step (the gap, negative): contact that begins inside the first step is timed from
+  // the interpolated crossing like any other, not from the end of that step.
+  double prevOverlap = overlapOf(bodies(t.sim().snapshot(kFields, true))), tStart = 0;
+  if (prevOverlap > 0) r.started = true, tStart = t.sim().time();  // touching already: the contact began at the start
   for (std::int64_t k = 0; k < maxSteps; ++k) {
     if (!t.step()) break;
     const auto b = bodies(t.sim().snapshot(kFields, true));
-    const double overlap = wall ? b[0].r - b[0].x.z : b[0].r + b[1].r - norm(b[1].x - b[0].x);
+    const double overlap = overlapOf(b);
     const double now = t.sim().time();
     if (wall ? b[0].x.z < 0 : b[1].x.x < b[0].x.x) r.tunnelled = true;  // through the wall, or through each other
     if (overlap > 0) {
       if (!r.started) {
         r.started = true;
-        tStart = prevOverlap < 0 ? now - dt * overlap / (overlap - prevOverlap) : now - dt;
+        tStart = now - dt * overlap / (overlap - prevOverlap);  // the crossing of zero overlap, interpolated
       }
       r.maxOverlap = std::max(r.maxOverlap, overlap);
       const double f = norm(b[0].f);
