@@ -18,6 +18,7 @@ packages=(
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler   # services
   libsqlite3-dev sqlite3            # the manager's job store
   libssl-dev openssl                # token hashes; the pflow CA and service certificates (deploy/local/certs.sh)
+  libcpp-httplib-dev                # pflow-web (the web viewer's HTTP side)
 )
 
 missing=()

@@ -5,6 +5,7 @@
 # DIR/<file>.crt and DIR/<file>.key whose common name is the identity the services check:
 #   manager -> manager.crt, CN pflow-manager        frontend -> frontend.crt, CN pflow-frontend
 #   backend -> backend.crt, CN pflow-backend        node:NAME -> node-NAME.crt, CN pflow-node:NAME (its agent and workers)
+#   web -> web.crt, CN pflow-web (pflow-web: its HTTPS and its calls to the manager and the back-end)
 # Every certificate is valid for localhost, 127.0.0.1, 127.0.0.2, ::1, this host's name and each --host.
 # Existing files are kept: rerun it to add a node. To rotate, delete the files (all of them for a new CA) and rerun,
 # then restart the services (docs/security.md, "Rotation"). Keys are EC P-256, mode 0600; DAYS (default 825) sets
@@ -38,9 +39,9 @@ done
 san=${san%,}
 for n in "${names[@]}"; do
   case $n in
-    manager | frontend | backend) file=$n cn=pflow-$n ;;
+    manager | frontend | backend | web) file=$n cn=pflow-$n ;;
     node:*) file=node-${n#node:} cn=pflow-node:${n#node:} ;;
-    *) echo "certs: unknown identity '$n' (manager, frontend, backend or node:NAME)" >&2; exit 2 ;;
+    *) echo "certs: unknown identity '$n' (manager, frontend, backend, web or node:NAME)" >&2; exit 2 ;;
   esac
   [[ -f $dir/$file.crt && -f $dir/$file.key ]] && continue
   openssl ecparam -name prime256v1 -genkey -noout -out "$dir/$file.key"

@@ -3,7 +3,7 @@
 set -uo pipefail
 cd "$(dirname "$0")/../.."
 dir=${PFLOW_LOCAL:-$(pwd)/out/local}
-for name in agent manager backend frontend; do
+for name in web agent manager backend frontend; do
   pidfile="$dir/$name.pid"
   [[ -f "$pidfile" ]] || continue
   pid=$(cat "$pidfile")

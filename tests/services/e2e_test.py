@@ -14,6 +14,7 @@ driven by the `pflow` CLI. Each scenario is one function; run all (default) or s
   multinode    two agents (node-a on 127.0.0.1, node-b on 127.0.0.2) and one job across both through mpirun + hostfile
   errors       unknown ids, double cancel, missing steps, a back-end that is down: clear errors, exit codes
   users        users see only their own jobs, an admin all; tokens; `pflow delete` removes a job and its files
+  web          pflow-web: a user's jobs as JSON, the last snapshot's positions as float32 frames, 401 and 403
   sph          an SPH dam break (solver: sph) submitted, followed and fetched: the same particles, probe series and
                CSV as `pflow run`, and the fluid's grid fields
 """
@@ -72,7 +73,7 @@ class Stack:
         self.cpu_slots = cpu_slots
         os.makedirs(os.path.join(self.dir, "logs"))
         self.tls = os.path.join(self.dir, "tls")
-        subprocess.run([CERTS, self.tls, "manager", "frontend", "backend"] + ["node:" + n for n, _ in agents], check=True,
+        subprocess.run([CERTS, self.tls, "manager", "frontend", "backend", "web"] + ["node:" + n for n, _ in agents], check=True,
                        capture_output=True)
         self.config = os.path.join(self.dir, "config.yaml")
         self.start("frontend", [os.path.join(BIN, "pflow-frontend"), "--listen", self.addr("frontend"), "--models", os.path.join(self.dir, "models"),
@@ -457,6 +458,64 @@ def users():
         s.close()
 
 
+def web():
+    """pflow-web over the real stack: a user's jobs as JSON, the last snapshot's positions as float32 frames equal to
+    the fetched file's, no token -> 401, another user's job -> 403."""
+    import struct
+    import urllib.error
+    import urllib.request
+    s = Stack()
+    try:
+        port = free_port()
+        s.start("web", [os.path.join(BIN, "pflow-web"), "--listen", "127.0.0.1:%d" % port, "--manager", s.addr("manager"),
+                        "--backend", s.addr("backend"), "--tls-dir", s.tls])
+        job = s.submit(SCENE)
+        s.wait_state(job, {"succeeded"})
+        bob = s.json("admin", "user", "add", "bob")["token"]
+
+        def get(path, token):
+            req = urllib.request.Request("http://127.0.0.1:%d%s" % (port, path))
+            if token:
+                req.add_header("Authorization", "Bearer " + token)
+            try:
+                with urllib.request.urlopen(req, timeout=30) as r:
+                    return r.status, r.read()
+            except urllib.error.HTTPError as e:
+                return e.code, e.read()
+        for _ in range(100):  # the viewer is up
+            try:
+                if get("/api/nodes", s.admin_token)[0] == 200:
+                    break
+            except OSError:
+                pass
+            time.sleep(0.1)
+        assert get("/api/jobs?all=1", "")[0] == 401
+        code, body = get("/api/jobs?all=1", s.admin_token)
+        assert code == 200 and [j["id"] for j in json.loads(body)] == [job], (code, body[:300])
+        assert get("/api/jobs/" + job, bob)[0] == 403
+        code, body = get("/api/jobs/%s/snapshots/last?fields=position,id" % job, s.admin_token)
+        assert code == 200, (code, body[:300])
+        at, arrays = 0, {}
+        while at < len(body):
+            (n,) = struct.unpack_from("<I", body, at)
+            h = json.loads(body[at + 4:at + 4 + n])
+            at += 4 + n
+            if "rows" in h:
+                count = h["rows"] * h["components"]
+                arrays.setdefault(h["name"], []).append(np.frombuffer(body, "<f4", count, at).reshape(h["rows"], h["components"]))
+                at += 4 * count
+        pos, ids = np.concatenate(arrays["position"]), np.concatenate(arrays["id"]).ravel()
+        out = os.path.join(s.dir, "fetched.h5")
+        s.cli("fetch", job, "--last", "-o", out)
+        with h5py.File(out) as f:
+            g = f["snapshots"][max(f["snapshots"], key=int)]
+            order = np.argsort(g["id"][...])
+            ref = g["position"][...][order].astype(np.float32)
+        assert np.array_equal(pos[np.argsort(ids)], ref), "positions differ"
+    finally:
+        s.close()
+
+
 def sph():
     s = Stack()
     try:
@@ -499,7 +558,7 @@ def sph():
         s.close()
 
 
-SCENARIOS = [equivalence, cancel, queue, restart, killworker, resume, agentrestart, multinode, errors, users, sph]
+SCENARIOS = [equivalence, cancel, queue, restart, killworker, resume, agentrestart, multinode, errors, users, web, sph]
 
 if __name__ == "__main__":
     wanted = sys.argv[3:] or [f.__name__ for f in SCENARIOS]
