@@ -102,6 +102,9 @@ TEST_F(ManagerUnderLoad, FiftySlowSubmissionsDoNotStarveHeartbeats) {
       mv1::SubmitJobResponse resp;
       auto ctx = call(m_token);
       ctx->set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+      // Fifty TLS handshakes at once on a small machine: a call may find its channel not yet connected, and a call
+      // not waiting for it fails UNAVAILABLE at once (the one refusal seen in 23 runs). The server is under test here.
+      ctx->set_wait_for_ready(true);
       const auto t0 = std::chrono::steady_clock::now();
       const grpc::Status st = stub->SubmitJob(ctx.get(), req, &resp);
       if (st.ok() && resp.job().state() == mv1::JOB_STATE_BUILDING) {
@@ -111,7 +114,7 @@ TEST_F(ManagerUnderLoad, FiftySlowSubmissionsDoNotStarveHeartbeats) {
         std::lock_guard lock(whyMu);
         why = std::to_string(st.error_code()) + " " + st.error_message() + " state " + std::to_string(resp.job().state());
       }
-      if (std::chrono::steady_clock::now() - t0 > std::chrono::seconds(2)) ++slowAnswers;  // it answers at once
+      if (std::chrono::steady_clock::now() - t0 > std::chrono::seconds(5)) ++slowAnswers;  // it answers at once (the builds take ~8 s)
     });
   for (auto& t : users) t.join();
   const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(60);
