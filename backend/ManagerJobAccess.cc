@@ -12,6 +12,9 @@ class ManagerJobAccess final : public JobAccess {
 
   Status mayRead(const std::string& token, const std::string& jobId) override {
     if (token.empty()) return unauthenticated("no token: set PFLOW_TOKEN or `token:` in ~/.config/pflow/config.yaml");
+    // Not a token's shape: refused here, without holding an executor thread on a call to the manager.
+    if (token.size() != 70 || token.rfind("pflow_", 0) != 0 || token.find_first_not_of("0123456789abcdef", 6) != std::string::npos)
+      return unauthenticated("the token is not valid");
     grpc::ClientContext ctx;
     ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(5));
     rpc::addBearer(ctx, token);

@@ -127,6 +127,9 @@ Status Endpoints::resolve() {
   token = resolveOne("", "PFLOW_TOKEN", "token", "");
   if (!insecure) insecure = resolveOne("", "PFLOW_INSECURE", "insecure", "") == "1" || configValue("insecure") == "true";
   ca = resolveOne(ca, "PFLOW_CA", "ca", "");
+  if (insecure && !(rpc::isLoopbackHost(rpc::hostOf(manager)) && rpc::isLoopbackHost(rpc::hostOf(backend))))
+    return invalidArgument("--insecure talks plaintext, and would send the token in the clear: only to services on loopback (" + manager +
+                           ", " + backend + " are not)");
   rpc::setCallToken(token);
   if (insecure) {
     rpc::setDefaultTransport(rpc::Transport::plaintext());

@@ -57,7 +57,10 @@ class GrpcJobSource final : public JobSource {
   Status watchJob(const std::string& token, const std::string& id, const std::function<bool(const json&)>& onEvent) override {
     mv1::WatchJobRequest req;
     req.set_id(id);
-    grpc::ClientContext ctx;  // no deadline: a watch lasts as long as the job; the viewer ends it when its page goes
+    // At most kWatchSeconds: an event stream holds an HTTP worker, and a closed page is only noticed at the next
+    // event; the browser's EventSource reconnects by itself when the stream ends.
+    grpc::ClientContext ctx;
+    ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(kWatchSeconds));
     rpc::addBearer(ctx, token);
     auto reader = m_stub->WatchJob(&ctx, req);
     mv1::JobEvent ev;
@@ -68,10 +71,12 @@ class GrpcJobSource final : public JobSource {
       }
     }
     const grpc::Status s = reader->Finish();
-    return s.error_code() == grpc::StatusCode::CANCELLED ? Status::ok() : rpc::fromGrpc(s);
+    const bool ended = s.error_code() == grpc::StatusCode::CANCELLED || s.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED;
+    return ended ? Status::ok() : rpc::fromGrpc(s);
   }
 
  private:
+  static constexpr int kWatchSeconds = 120;
   std::unique_ptr<mv1::ManagerService::Stub> m_stub;
 };
 

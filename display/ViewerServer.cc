@@ -158,7 +158,7 @@ Result<std::unique_ptr<ViewerServer>> ViewerServer::start(const ViewerOptions& o
             return send();
           });
       if (!st) {
-        appendFrame(frame, {{"error", st.message()}, {"code", statusCodeName(st.code())}}, nullptr);
+        appendFrame(frame, {{"error", log::escaped(st.message(), 2000)}, {"code", statusCodeName(st.code())}}, nullptr);
         send();
       }
       sink.done();
@@ -174,7 +174,8 @@ Result<std::unique_ptr<ViewerServer>> ViewerServer::start(const ViewerOptions& o
         return sink.is_writable() && sink.write(line.data(), line.size());
       });
       if (!s) {
-        const std::string line = "event: error\ndata: " + json{{"error", s.message()}, {"code", statusCodeName(s.code())}}.dump() + "\n\n";
+        const std::string line =
+            "event: error\ndata: " + json{{"error", log::escaped(s.message(), 2000)}, {"code", statusCodeName(s.code())}}.dump() + "\n\n";
         if (sink.is_writable()) sink.write(line.data(), line.size());
       }
       sink.done();

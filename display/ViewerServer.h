@@ -6,7 +6,8 @@
 //   GET  /api/jobs[?all=1]                 the user's jobs (an admin's: everyone's), JSON (manager/JobJson.h)
 //   GET  /api/jobs/ID                      one job
 //   POST /api/jobs/ID/cancel               cancel it
-//   GET  /api/jobs/ID/events               text/event-stream: the job now, then each change, until it ends
+//   GET  /api/jobs/ID/events               text/event-stream: the job now, then each change, until it ends (or for
+//                                          at most 2 minutes: EventSource reconnects)
 //   GET  /api/jobs/ID/snapshots            {"job", "snapshots": [{"step", "time", "particles"}]}
 //   GET  /api/jobs/ID/snapshots/STEP|last  ?fields=position,velocity&grid=1&geometry=1: application/x-pflow-arrays
 //   GET  /api/nodes                        nodes and devices

@@ -197,6 +197,7 @@ Status Manager::remove(const Principal& who, const std::string& id) {
 }
 
 Status Manager::checkJobOnNode(const std::string& jobId, const std::string& node) const {
+  if (Status bad = checkJobIdField(jobId); !bad) return bad;
   std::lock_guard lock(m_mu);
   const Job* j = m_jobs.find(jobId);
   if (!j) return notFound("no job '" + jobId + "'");

@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "common/Log.h"
 #include "common/rpc/Rpc.h"
 #include "manager/ProtoConvert.h"
 
@@ -272,7 +273,8 @@ Result<std::string> NodeRegistryImpl::callerNode(const grpc::CallbackServerConte
 Status NodeRegistryImpl::checkNode(const grpc::CallbackServerContext* ctx, const std::string& node) const {
   auto caller = callerNode(ctx);
   if (!caller) return caller.status();
-  if (!caller->empty() && caller.value() != node) return permissionDenied("node " + caller.value() + " cannot speak for node '" + node + "'");
+  if (!caller->empty() && caller.value() != node)
+    return permissionDenied("node " + caller.value() + " cannot speak for node '" + log::escaped(node, 64) + "'");
   return Status::ok();
 }
 
@@ -295,7 +297,14 @@ grpc::ServerUnaryReactor* NodeRegistryImpl::ReportProgress(grpc::CallbackServerC
   auto node = callerNode(ctx);
   if (!node) return finishNow(ctx, rpc::toGrpc(node.status()));
   if (!node->empty())
-    if (Status s = m_manager.checkJobOnNode(req->job_id(), node.value()); !s) return finishNow(ctx, rpc::toGrpc(s));
+    if (Status s = m_manager.checkJobOnNode(req->job_id(), node.value()); !s) {
+      // A worker of an earlier attempt on a node the job has left: told to stop, as any stray worker is.
+      if (s.code() == StatusCode::kPermissionDenied) {
+        resp->set_cancel(true);
+        return finishNow(ctx, grpc::Status::OK);
+      }
+      return finishNow(ctx, rpc::toGrpc(s));
+    }
   auto cancel = m_manager.reportProgress(req->job_id(), fromProto(req->progress()), req->message(), req->attempt());
   if (cancel) resp->set_cancel(cancel.value());
   return finishNow(ctx, rpc::toGrpc(cancel.status()));

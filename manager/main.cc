@@ -3,7 +3,11 @@
 #include <pthread.h>
 #include <unistd.h>
 
+#include <fcntl.h>
 #include <sys/stat.h>
+
+#include <cerrno>
+#include <cstring>
 
 #include <atomic>
 #include <cstdio>
@@ -140,15 +144,26 @@ int main(int argc, char** argv) {
   }
   if (!adminTokenFile.empty()) {
     auto existing = users.value()->list();
-    if (existing && existing->empty()) {
+    if (!existing) {
+      spdlog::error("{}", existing.status().toString());
+      return 1;
+    }
+    if (existing->empty()) {
       auto token = users.value()->add("admin", true, SystemClock().now());
       if (!token) {
         spdlog::error("making the first admin: {}", token.status().toString());
         return 1;
       }
-      const mode_t old = ::umask(077);
-      std::ofstream(adminTokenFile) << token.value() << "\n";
-      ::umask(old);
+      // A new file only (no link followed, no file of someone else's reused), 0600, written in full.
+      const int fd = ::open(adminTokenFile.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0600);
+      const std::string line = token.value() + "\n";
+      const bool written = fd >= 0 && ::write(fd, line.data(), line.size()) == ssize_t(line.size()) && ::fsync(fd) == 0;
+      if (fd >= 0) ::close(fd);
+      if (!written) {
+        (void)users.value()->remove("admin");
+        spdlog::error("cannot write the first admin's token to {} (it must not exist yet): {}", adminTokenFile, std::strerror(errno));
+        return 1;
+      }
       spdlog::info("no users yet: made user 'admin'; its token is in {}", adminTokenFile);
     }
   }

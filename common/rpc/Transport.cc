@@ -3,6 +3,8 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include <arpa/inet.h>
+
 #include <fstream>
 #include <mutex>
 #include <sstream>
@@ -105,7 +107,8 @@ std::vector<std::string> TransportFlags::args() const {
 
 bool isLoopbackHost(const std::string& host) {
   if (host == "localhost" || host == "[::1]" || host == "::1") return true;
-  return host.rfind("127.", 0) == 0;
+  in_addr a{};  // a numeric 127.0.0.0/8 address, not a name that starts with "127."
+  return ::inet_pton(AF_INET, host.c_str(), &a) == 1 && (ntohl(a.s_addr) >> 24) == 127;
 }
 
 std::string peerIdentity(const grpc::ServerContextBase& ctx) {

@@ -61,7 +61,10 @@ manager::v1::Progress progressOf(const compute::Simulation& sim, std::int64_t to
 // Runs the job on this rank; returns the exit code (the same on every rank), -1 when cancelled.
 int runRank(const worker::WorkerOptions& o, int rank, int ranks) {
   const bool lead = rank == 0;
-  auto scene = frontend::loadScene((std::filesystem::path(o.modelDir) / "scene.yaml").string());
+  // The model as the frontend checked it: its files inside the model's folder only, as when it was built.
+  frontend::LoadOptions confined;
+  confined.confineFiles = true;
+  auto scene = frontend::loadScene((std::filesystem::path(o.modelDir) / "scene.yaml").string(), confined);
   if (!scene) return fail(1, "cannot load the model: " + scene.status().message());
   if (scene.value().config.solver == compute::Solver::kSph) return worker::runSphRank(o, rank, ranks, scene.value());
   compute::RunConfig cfg = scene.value().config;
@@ -188,7 +191,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 1000));
   app.add_flag("--resume", o.resume, "go on from the job's last checkpoint on the back-end (the agent passes it when the job was requeued)");
   app.add_option("--log-level", logLevel, "trace, debug, info, warn, error")->capture_default_str();
-  rpc::TransportFlags transportFlags;  // the agent passes its own: the worker presents its lead node's certificate
+  rpc::TransportFlags transportFlags;  // the agent passes its own: each rank presents its own node's certificate
   transportFlags.add(app);
   try {
     app.parse(argc, argv);
@@ -209,7 +212,7 @@ int main(int argc, char** argv) {
   else if (o.backendAddress.empty() && o.output.empty()) code = fail(1, "give --backend or --output for the snapshots");
   else o.devices = parsed.value();
   if (code == 0 && (!o.managerAddress.empty() || !o.backendAddress.empty())) {
-    auto transport = transportFlags.resolve("node-" + o.devices.front().node);
+    auto transport = transportFlags.resolve("node-" + o.devices[std::size_t(rank)].node);  // the node this rank runs on
     if (!transport) code = fail(1, transport.status().message());
     else rpc::setDefaultTransport(transport.value());
   }

@@ -49,6 +49,10 @@ Status ModelStore::checkRelative(const std::string& path) {
     if (part.string().size() > 255) return invalidArgument("attached file '" + log::escaped(path, 100) + "': a name longer than 255 characters");
   }
   if (p.filename().empty() || p.filename() == ".") return invalidArgument("attached file '" + path + "': names a folder, not a file");
+  // The model's own files: an attachment of that name would replace what was checked.
+  for (const char* reserved : {"scene.yaml", "initial.h5", "summary.json"})
+    if (p.lexically_normal() == fs::path(reserved))
+      return invalidArgument("attached file '" + path + "': the name is the model's own; rename the file and the scene's reference to it");
   return Status::ok();
 }
 

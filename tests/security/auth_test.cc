@@ -263,16 +263,23 @@ TEST_F(ManagerSecurity, ExitAndProgressReportsOnlyFromTheJobsNode) {
   EXPECT_EQ(report(user(), "a").error_code(), C::UNAUTHENTICATED);
   EXPECT_FALSE(manager::isFinal(m_manager->get(job.id())->state));  // none of them ended it
 
+  bool cancel = false;
   auto progress = [&](const rpc::Transport& as) {
     auto stub = mv1::NodeRegistry::NewStub(rpc::makeChannel(m_server->address(), as));
     mv1::ReportProgressRequest req;
     req.set_job_id(job.id());
     req.mutable_progress()->set_step(5);
     mv1::ReportProgressResponse resp;
-    return stub->ReportProgress(call().get(), req, &resp);
+    const auto s = stub->ReportProgress(call().get(), req, &resp);
+    cancel = resp.cancel();
+    return s;
   };
-  EXPECT_EQ(progress(as("node-b")).error_code(), C::PERMISSION_DENIED);
+  ASSERT_TRUE(progress(as("node-b")).ok());  // a node without the job: not recorded, told to stop its worker
+  EXPECT_TRUE(cancel);
+  EXPECT_EQ(m_manager->get(job.id())->progress.step, 0);
   EXPECT_TRUE(progress(as("node-a")).ok());
+  EXPECT_FALSE(cancel);
+  EXPECT_EQ(m_manager->get(job.id())->progress.step, 5);
   EXPECT_TRUE(report(as("node-a"), "a").ok());
   EXPECT_EQ(m_manager->get(job.id())->state, manager::JobState::kSucceeded);
 }

@@ -165,6 +165,20 @@ TEST_F(TlsProcess, TheFrontendReadsOnlyTheUpload) {
     EXPECT_NE(all.find("not allowed"), std::string::npos) << all;
     EXPECT_EQ(all.find("root:"), std::string::npos) << all;
   }
+  // An attachment named as one of the model's own files would replace the scene that was checked.
+  frontend::v1::BuildSceneRequest build;
+  build.set_scene_yaml(csvScene("ok.csv"));
+  build.set_scene_name("scene.yaml");
+  auto* ok = build.add_files();
+  ok->set_path("ok.csv");
+  ok->set_content("x,y,z,radius\n0,0,0,0.001\n");
+  auto* evil = build.add_files();
+  evil->set_path("./scene.yaml");
+  evil->set_content(csvScene("/etc/passwd"));
+  frontend::v1::BuildSceneResponse built;
+  const auto s = stub->BuildScene(call().get(), build, &built);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << s.error_message();
+  EXPECT_NE(s.error_message().find("the model's own"), std::string::npos) << s.error_message();
   server.value()->shutdown(1);
 }
 
