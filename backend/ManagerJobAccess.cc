@@ -1,4 +1,5 @@
 #include "backend/JobAccess.h"
+#include "common/Token.h"
 #include "common/rpc/Rpc.h"
 #include "pflow/manager/v1/manager_service.grpc.pb.h"
 
@@ -13,15 +14,13 @@ class ManagerJobAccess final : public JobAccess {
   Status mayRead(const std::string& token, const std::string& jobId) override {
     if (token.empty()) return unauthenticated("no token: set PFLOW_TOKEN or `token:` in ~/.config/pflow/config.yaml");
     // Not a token's shape: refused here, without holding an executor thread on a call to the manager.
-    if (token.size() != 70 || token.rfind("pflow_", 0) != 0 || token.find_first_not_of("0123456789abcdef", 6) != std::string::npos)
-      return unauthenticated("the token is not valid");
-    grpc::ClientContext ctx;
-    ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(5));
-    rpc::addBearer(ctx, token);
+    if (!looksLikeToken(token)) return unauthenticated("the token is not valid");
+    auto ctx = rpc::contextWithDeadline(5);
+    rpc::addBearer(*ctx, token);
     manager::v1::GetJobRequest req;
     req.set_id(jobId);
     manager::v1::Job job;
-    const grpc::Status s = m_stub->GetJob(&ctx, req, &job);
+    const grpc::Status s = m_stub->GetJob(ctx.get(), req, &job);
     if (s.ok()) return Status::ok();
     if (s.error_code() == grpc::StatusCode::UNAVAILABLE || s.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED)
       return unavailable("cannot ask the manager at " + m_address + " whether the caller may read job " + jobId);

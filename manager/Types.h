@@ -99,18 +99,14 @@ struct Job {
   std::string owner;                  // the user who submitted it ("" for jobs from before users existed: admins only)
 };
 
-// Who is calling (docs/security.md): a user (by bearer token), a node (its agent or workers, by certificate), or
-// one of the services. The adapters establish it; the Manager decides what it may do.
+// The user a ManagerService call comes from (by its bearer token; docs/security.md): the adapter establishes it,
+// the Manager decides what it may do. Nodes are checked by certificate in NodeRegistry, not through this.
 struct Principal {
-  enum class Kind { kUser, kNode, kService } kind = Kind::kUser;
-  std::string name;    // the user's name, the node's name, or the service's identity
-  bool admin = false;  // users only: may see and touch every job, and manage users
-  static Principal user(std::string name, bool admin = false) { return {Kind::kUser, std::move(name), admin}; }
-  static Principal node(std::string name) { return {Kind::kNode, std::move(name), false}; }
-  static Principal service(std::string name) { return {Kind::kService, std::move(name), false}; }
-  // May see and touch `job`: its owner, an admin, or a service (the back-end checking on a user's behalf goes
-  // through the user's own principal).
-  bool mayAccess(const Job& job) const { return kind == Kind::kService || admin || (kind == Kind::kUser && job.owner == name); }
+  std::string name;
+  bool admin = false;  // may see and touch every job, and manage users
+  static Principal user(std::string name, bool admin = false) { return {std::move(name), admin}; }
+  // May see and touch `job`: its owner or an admin.
+  bool mayAccess(const Job& job) const { return admin || job.owner == name; }
 };
 
 // What a job may use, as sent to the agent of its first device's node.

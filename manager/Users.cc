@@ -4,6 +4,7 @@
 #include <openssl/rand.h>
 #include <sqlite3.h>
 
+#include "common/Token.h"
 #include "manager/Sqlite.h"
 
 namespace pflow::manager {
@@ -33,7 +34,7 @@ Status validateUserName(const std::string& name) {
 Result<std::string> newToken() {
   unsigned char bytes[32];
   if (RAND_bytes(bytes, sizeof bytes) != 1) return internalError("no random bytes for a token");
-  return "pflow_" + hex(bytes, sizeof bytes);
+  return kTokenPrefix + hex(bytes, sizeof bytes);
 }
 
 std::string tokenHash(const std::string& token) {
@@ -124,7 +125,7 @@ Result<std::vector<User>> UserStore::list() const {
 
 Result<User> UserStore::authenticate(const std::string& token) const {
   if (token.empty()) return unauthenticated("no token: set PFLOW_TOKEN or `token:` in ~/.config/pflow/config.yaml");
-  if (token.size() > 256) return unauthenticated("the token is not valid");
+  if (!looksLikeToken(token)) return unauthenticated("the token is not valid");
   std::lock_guard lock(m_mu);
   Stmt st(m_db, "SELECT name, admin, created_at FROM users WHERE token_sha256 = ?1");
   if (!st.ok()) return error("preparing the token query");

@@ -41,7 +41,6 @@ Result<Transport> Transport::fromDir(const std::string& dir, const std::string& 
   t.caPem = std::move(ca.value());
   t.certPem = std::move(cert.value());
   t.keyPem = std::move(key.value());
-  t.identity = name;
   return t;
 }
 

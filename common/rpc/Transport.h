@@ -23,9 +23,8 @@ struct Transport {
   std::string caPem;      // the pflow CA: verifies the peer
   std::string certPem;    // this process's certificate and key (empty: none, the CLI)
   std::string keyPem;
-  std::string identity;   // the certificate's common name (for logs)
 
-  static Transport plaintext() { return Transport{true, {}, {}, {}, {}}; }
+  static Transport plaintext() { return Transport{true, {}, {}, {}}; }
   // DIR/ca.crt, DIR/<name>.crt, DIR/<name>.key (name: "manager", "frontend", "backend", "node-<node>").
   static Result<Transport> fromDir(const std::string& dir, const std::string& name);
   // The CA alone: a client that authenticates by token (the CLI).

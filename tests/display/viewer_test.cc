@@ -13,7 +13,7 @@
 #include "manager/ManagerService.h"
 #include "manager/Users.h"
 #include "tests/agent/AgentTestUtil.h"
-#include "tests/manager/Fakes.h"
+#include "tests/manager/TestManager.h"
 
 namespace pflow::display {
 namespace {
@@ -23,22 +23,16 @@ using nlohmann::json;
 class Viewer : public ::testing::Test {
  protected:
   void SetUp() override {
-    m_jobStore = manager::JobStore::open(":memory:").value();
-    m_users = manager::UserStore::open(":memory:").value();
-    m_alice = m_users->add("alice", false, 0).value();
-    m_bob = m_users->add("bob", false, 0).value();
-    m_manager = manager::Manager::create({}, m_clock, *m_jobStore, m_agents, m_frontend).value();
+    m_tm = std::make_unique<manager::testing::TestManager>(manager::testing::TestManager::Options{});
+    m_alice = m_tm->addUser("alice");
+    m_bob = m_tm->addUser("bob");
+    m_manager = m_tm->manager.get();
     ASSERT_TRUE(m_manager->heartbeat(manager::testing::nodeBeat("a", 1)));
-    manager::SubmitRequest req = manager::testing::submitRequest(4, true);
-    req.owner = "alice";
-    m_job = m_manager->submit(req).value().id;
-    m_pool = std::make_unique<TaskPool>(2);
-    m_managerService = std::make_unique<manager::ManagerServiceImpl>(*m_manager, *m_users, *m_pool);
-    m_managerServer = rpc::ServerRunner::start("127.0.0.1:0", {m_managerService.get()}).value();
+    m_job = m_tm->submitAs("alice", 4);
     m_store = backend::SnapshotStore::open({m_dir.path(), 0, 8}).value();
     m_backendService = std::make_unique<backend::SnapshotService>(*m_store);
     m_backendServer = rpc::ServerRunner::start("127.0.0.1:0", {m_backendService.get()}).value();
-    m_jobs = makeGrpcJobSource(m_managerServer->address());
+    m_jobs = makeGrpcJobSource(m_tm->address());
     m_snapshots = makeGrpcSnapshotSource(m_backendServer->address());
     ViewerOptions o;
     o.listen = "127.0.0.1:0";
@@ -48,8 +42,7 @@ class Viewer : public ::testing::Test {
   void TearDown() override {
     m_viewer->stop();
     m_backendServer->shutdown(1);
-    m_managerServer->shutdown(1);
-    m_pool.reset();
+    m_tm.reset();
   }
   httplib::Result get(const std::string& path, const std::string& token) {
     httplib::Headers h;
@@ -75,16 +68,10 @@ class Viewer : public ::testing::Test {
   }
 
   agent::testing::TempDir m_dir;
-  FakeClock m_clock{1000};
-  manager::testing::FakeAgentClient m_agents;
-  manager::testing::FakeFrontendClient m_frontend;
-  std::unique_ptr<manager::JobStore> m_jobStore;
-  std::unique_ptr<manager::UserStore> m_users;
+  std::unique_ptr<manager::testing::TestManager> m_tm;
+  manager::Manager* m_manager = nullptr;
   std::string m_alice, m_bob, m_job;
-  std::unique_ptr<manager::Manager> m_manager;
-  std::unique_ptr<TaskPool> m_pool;
-  std::unique_ptr<manager::ManagerServiceImpl> m_managerService;
-  std::unique_ptr<rpc::ServerRunner> m_managerServer, m_backendServer;
+  std::unique_ptr<rpc::ServerRunner> m_backendServer;
   std::unique_ptr<backend::SnapshotStore> m_store;
   std::unique_ptr<backend::SnapshotService> m_backendService;
   std::unique_ptr<JobSource> m_jobs;

@@ -10,7 +10,7 @@
 #include "pflow/manager/v1/manager_service.grpc.pb.h"
 #include "pflow/manager/v1/node_registry.grpc.pb.h"
 #include "tests/agent/AgentTestUtil.h"
-#include "tests/manager/Fakes.h"
+#include "tests/manager/TestManager.h"
 #include "tests/security/SecurityFixture.h"
 
 namespace pflow::security_test {
@@ -22,43 +22,28 @@ using manager::JobStore;
 using manager::Manager;
 using manager::ManagerOptions;
 using manager::UserStore;
+using manager::testing::TestManager;
 using C = grpc::StatusCode;
 
 class ManagerSecurity : public TlsProcess {
  protected:
   void SetUp() override {
     TlsProcess::SetUp();
-    m_db = m_dir / "manager.db";
-    auto s = JobStore::open(m_db);
-    ASSERT_TRUE(s);
-    m_store = std::move(s.value());
-    auto u = UserStore::open(m_db);
-    ASSERT_TRUE(u);
-    m_users = std::move(u.value());
-    for (auto [name, admin] : {std::pair{"alice", false}, {"bob", false}, {"root", true}}) {
-      auto t = m_users->add(name, admin, 0);
-      ASSERT_TRUE(t);
-      m_token[name] = t.value();
-    }
-    ManagerOptions options;
-    options.thresholds.particlesPerGpu = 250000;
-    auto m = Manager::create(options, m_clock, *m_store, m_agents, m_frontend);
-    ASSERT_TRUE(m);
-    m_manager = std::move(m.value());
-    m_pool = std::make_unique<TaskPool>(2);
-    m_nodePool = std::make_unique<TaskPool>(2);
-    m_service = std::make_unique<manager::ManagerServiceImpl>(*m_manager, *m_users, *m_pool);
-    m_registry = std::make_unique<manager::NodeRegistryImpl>(*m_manager, *m_nodePool, true);
-    auto server = rpc::ServerRunner::start("127.0.0.1:0", {m_service.get(), m_registry.get()}, as("manager"));
-    ASSERT_TRUE(server) << server.status().toString();
-    m_server = std::move(server.value());
+    m_db = m_dir / "manager.db";  // a file: TokensAreStoredOnlyAsHashes reads it
+    TestManager::Options o;
+    o.db = m_db;
+    o.manager.thresholds.particlesPerGpu = 250000;
+    o.verifyNodes = true;
+    o.transport = as("manager");
+    m_tm = std::make_unique<TestManager>(std::move(o));
+    m_manager = m_tm->manager.get();
+    m_server = m_tm->server.get();
+    for (auto [name, admin] : {std::pair{"alice", false}, {"bob", false}, {"root", true}}) m_token[name] = m_tm->addUser(name, admin);
     m_jobs = mv1::ManagerService::NewStub(rpc::makeChannel(m_server->address(), user()));
     ASSERT_TRUE(heartbeat("a", as("node-a")).ok());
   }
   void TearDown() override {
-    if (m_server) m_server->shutdown(1);
-    m_pool.reset();
-    m_nodePool.reset();
+    m_tm.reset();
     TlsProcess::TearDown();
   }
 
@@ -102,17 +87,10 @@ class ManagerSecurity : public TlsProcess {
 
   agent::testing::TempDir m_dir;
   std::string m_db;
-  FakeClock m_clock{1000};  // common/Clock.h
-  manager::testing::FakeAgentClient m_agents;
-  manager::testing::FakeFrontendClient m_frontend;
-  std::unique_ptr<JobStore> m_store;
-  std::unique_ptr<UserStore> m_users;
+  std::unique_ptr<TestManager> m_tm;
+  Manager* m_manager = nullptr;
+  rpc::ServerRunner* m_server = nullptr;
   std::map<std::string, std::string> m_token;
-  std::unique_ptr<Manager> m_manager;
-  std::unique_ptr<TaskPool> m_pool, m_nodePool;
-  std::unique_ptr<manager::ManagerServiceImpl> m_service;
-  std::unique_ptr<manager::NodeRegistryImpl> m_registry;
-  std::unique_ptr<rpc::ServerRunner> m_server;
   std::unique_ptr<mv1::ManagerService::Stub> m_jobs;
 };
 

@@ -112,7 +112,7 @@ TEST(YamlBombs, AliasesOfAliasesAreRefusedQuickly) {
   const auto r = frontend::loadSceneFromString(yaml, "bomb.yaml");
   ASSERT_FALSE(r);
   EXPECT_NE(r.status().message().find("aliases"), std::string::npos) << r.status().message();
-  EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(20));
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(5));  // 1.1 s measured on 2 cores
 }
 
 TEST(YamlBombs, DeepNestingIsRefusedBeforeParsing) {

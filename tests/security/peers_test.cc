@@ -18,7 +18,7 @@
 #include "pflow/backend/v1/snapshot_service.grpc.pb.h"
 #include "pflow/frontend/v1/frontend_service.grpc.pb.h"
 #include "tests/agent/AgentTestUtil.h"
-#include "tests/manager/Fakes.h"
+#include "tests/manager/TestManager.h"
 #include "tests/security/SecurityFixture.h"
 
 namespace pflow::security_test {
@@ -106,36 +106,25 @@ class BackendPeers : public TlsProcess {
  protected:
   void SetUp() override {
     TlsProcess::SetUp();
-    auto js = manager::JobStore::open(":memory:");
-    ASSERT_TRUE(js);
-    m_jobStore = std::move(js.value());
-    auto us = manager::UserStore::open(":memory:");
-    ASSERT_TRUE(us);
-    m_users = std::move(us.value());
-    m_alice = m_users->add("alice", false, 0).value();
-    m_bob = m_users->add("bob", false, 0).value();
-    manager::ManagerOptions options;
-    m_manager = manager::Manager::create(options, m_clock, *m_jobStore, m_agents, m_frontend).value();
-    ASSERT_TRUE(m_manager->heartbeat(manager::testing::nodeBeat("a", 1)));
-    manager::SubmitRequest req = manager::testing::submitRequest(10, true);
-    req.owner = "alice";
-    m_job = m_manager->submit(req).value().id;
-    m_pool = std::make_unique<TaskPool>(2);
-    m_managerService = std::make_unique<manager::ManagerServiceImpl>(*m_manager, *m_users, *m_pool);
-    m_managerServer = rpc::ServerRunner::start("127.0.0.1:0", {m_managerService.get()}, as("manager")).value();
+    manager::testing::TestManager::Options o;
+    o.transport = as("manager");
+    m_tm = std::make_unique<manager::testing::TestManager>(std::move(o));
+    m_alice = m_tm->addUser("alice");
+    m_bob = m_tm->addUser("bob");
+    ASSERT_TRUE(m_tm->manager->heartbeat(manager::testing::nodeBeat("a", 1)));
+    m_job = m_tm->submitAs("alice");
 
     auto store = backend::SnapshotStore::open({m_dir.path(), 0, 8});
     ASSERT_TRUE(store);
     m_store = std::move(store.value());
     rpc::setDefaultTransport(as("backend"));  // the back-end's own calls to the manager
-    m_access = backend::makeManagerJobAccess(m_managerServer->address());
+    m_access = backend::makeManagerJobAccess(m_tm->address());
     m_service = std::make_unique<backend::SnapshotService>(*m_store, 2, m_access.get());
     m_server = rpc::ServerRunner::start("127.0.0.1:0", {m_service.get()}, as("backend")).value();
   }
   void TearDown() override {
     if (m_server) m_server->shutdown(1);
-    if (m_managerServer) m_managerServer->shutdown(1);
-    m_pool.reset();
+    m_tm.reset();
     TlsProcess::TearDown();
   }
   grpc::Status list(const rpc::Transport& t, const std::string& token) {
@@ -158,16 +147,8 @@ class BackendPeers : public TlsProcess {
   }
 
   agent::testing::TempDir m_dir;
-  FakeClock m_clock{1000};
-  manager::testing::FakeAgentClient m_agents;
-  manager::testing::FakeFrontendClient m_frontend;
-  std::unique_ptr<manager::JobStore> m_jobStore;
-  std::unique_ptr<manager::UserStore> m_users;
+  std::unique_ptr<manager::testing::TestManager> m_tm;
   std::string m_alice, m_bob, m_job;
-  std::unique_ptr<manager::Manager> m_manager;
-  std::unique_ptr<TaskPool> m_pool;
-  std::unique_ptr<manager::ManagerServiceImpl> m_managerService;
-  std::unique_ptr<rpc::ServerRunner> m_managerServer;
   std::unique_ptr<backend::SnapshotStore> m_store;
   std::unique_ptr<backend::JobAccess> m_access;
   std::unique_ptr<backend::SnapshotService> m_service;
