@@ -3,9 +3,11 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "cli/RenderCommand.h"
 #include "cli/RunCommand.h"
 #ifdef PFLOW_HAVE_SERVICES
 #include "cli/ClusterCommands.h"
+#include "display/ViewerSources.h"
 #endif
 #include "common/Log.h"
 
@@ -48,6 +50,10 @@ int main(int argc, char** argv) {
   auto* valCmd = app.add_subcommand("validate", "check a scene file and summarise it");
   valCmd->add_option("scene", validatePath, "scene file (YAML)")->required()->check(CLI::ExistingFile);
   valCmd->add_flag("--json", validateJson, "print the result as JSON");
+
+  pflow::cli::RenderArgs render;
+  auto* renderCmd = pflow::cli::addRenderCommand(app, render);
+  pflow::cli::JobSnapshotsFn jobSnapshots;
 
 #ifdef PFLOW_HAVE_SERVICES
   pflow::cli::Endpoints endpoints;
@@ -144,7 +150,12 @@ int main(int argc, char** argv) {
     fetch.probes = !noProbes;
     return pflow::cli::fetchSnapshot(endpoints, fetch, qjson);
   }
+  jobSnapshots = [&endpoints]() -> pflow::Result<pflow::cli::JobSnapshots> {
+    if (pflow::Status s = endpoints.resolve(); !s) return s;
+    return pflow::cli::JobSnapshots{pflow::display::makeGrpcSnapshotSource(endpoints.backend), endpoints.token};
+  };
 #endif
+  if (*renderCmd) return pflow::cli::runRender(render, jobSnapshots);
 
   if (*valCmd) return pflow::cli::validateScene(validatePath, validateJson);
 

@@ -19,7 +19,19 @@ packages=(
   libsqlite3-dev sqlite3            # the manager's job store
   libssl-dev openssl                # token hashes; the pflow CA and service certificates (deploy/local/certs.sh)
   libcpp-httplib-dev                # pflow-web (the web viewer's HTTP side)
+  chromium fonts-dejavu-core        # pflow render and the browser tests (headless, software WebGL)
 )
+# Node.js and npm bundle the viewer's page (web/): the machine's own when present, else Debian's.
+command -v node >/dev/null && command -v npm >/dev/null || packages+=(nodejs npm)
+
+npm_packages() {  # the page's npm packages, pinned by web/package-lock.json, from the npm registry
+  local web
+  web="$(cd "$(dirname "$0")/../web" && pwd)"
+  if [[ ! -f "$web/node_modules/.package-lock.json" || "$web/package-lock.json" -nt "$web/node_modules/.package-lock.json" ]]; then
+    echo "install-deps: npm ci in web/"
+    (cd "$web" && npm ci --no-audit --no-fund --loglevel=error)
+  fi
+}
 
 missing=()
 for p in "${packages[@]}"; do
@@ -27,6 +39,7 @@ for p in "${packages[@]}"; do
 done
 if ((${#missing[@]} == 0)); then
   echo "install-deps: all ${#packages[@]} packages present"
+  npm_packages
   exit 0
 fi
 echo "install-deps: installing ${missing[*]}"
@@ -35,3 +48,4 @@ if [[ $(id -u) -ne 0 ]]; then SUDO="sudo"; fi
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq
 $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+npm_packages

@@ -132,8 +132,35 @@ class GrpcSnapshotSource final : public SnapshotSource {
     while (reader->Read(&chunk)) {
       if (first) onHeader(chunk.step(), chunk.time()), first = false;
       const cv1::ArrayChunk& a = chunk.array();
-      if (a.dtype() == cv1::DTYPE_STRING) continue;  // names (geometry's surface names): not an array to draw
       piece.section = sectionName(chunk.section());
+      piece.grid.reset();
+      piece.strings.clear();
+      piece.values.clear();
+      if (a.dtype() == cv1::DTYPE_STRING) {  // names (geometry's surface names): each a u32 length and its bytes
+        piece.name = a.name();
+        const std::string& d = a.data();
+        for (std::size_t at = 0; at + 4 <= d.size();) {
+          std::uint32_t n = 0;
+          std::memcpy(&n, d.data() + at, 4);
+          at += 4;
+          if (n > d.size() - at) break;
+          piece.strings.push_back(d.substr(at, n));
+          at += n;
+        }
+        if (!piece.strings.empty() && !onPiece(piece)) {
+          ctx->TryCancel();
+          break;
+        }
+        continue;
+      }
+      if (chunk.has_grid() && chunk.grid().cells_size() == 3) {
+        const auto& g = chunk.grid();
+        GridInfo info;
+        info.origin[0] = g.origin().x(), info.origin[1] = g.origin().y(), info.origin[2] = g.origin().z();
+        info.cellSize = g.cell_size();
+        for (int k = 0; k < 3; ++k) info.cells[k] = g.cells(k);
+        piece.grid = info;
+      }
       piece.name = a.name();
       piece.unit = a.unit();
       piece.firstRow = a.first_row();

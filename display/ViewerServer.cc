@@ -11,6 +11,7 @@
 #include "common/Address.h"
 #include "common/Log.h"
 #include "common/rpc/Transport.h"
+#include "display/ArrayFrames.h"
 
 namespace pflow::display {
 namespace {
@@ -33,16 +34,6 @@ void sendError(httplib::Response& res, const Status& s) {
 void sendJson(httplib::Response& res, const Result<json>& r) {
   if (!r) return sendError(res, r.status());
   res.set_content(r.value().dump(), "application/json");
-}
-
-void appendFrame(std::string& out, const json& header, const std::vector<float>* values) {
-  const std::string h = header.dump();
-  const std::uint32_t n = static_cast<std::uint32_t>(h.size());
-  char len[4];
-  for (int i = 0; i < 4; ++i) len[i] = char((n >> (8 * i)) & 0xff);
-  out.append(len, 4);
-  out += h;
-  if (values) out.append(reinterpret_cast<const char*>(values->data()), values->size() * sizeof(float));  // x86, aarch64: little-endian
 }
 
 std::vector<std::string> splitCommas(const std::string& s) {
@@ -104,7 +95,13 @@ Result<std::unique_ptr<ViewerServer>> ViewerServer::start(const ViewerOptions& o
   svr.set_payload_max_length(1 << 20);
   svr.set_read_timeout(30, 0);
   svr.set_write_timeout(60, 0);
-  svr.set_default_headers({{"X-Content-Type-Options", "nosniff"}, {"Cache-Control", "no-store"}});
+  // The page loads nothing from elsewhere (three.js is bundled), runs no inline script and is not framed.
+  svr.set_default_headers({{"X-Content-Type-Options", "nosniff"},
+                           {"Cache-Control", "no-store"},
+                           {"Referrer-Policy", "no-referrer"},
+                           {"Content-Security-Policy",
+                            "default-src 'self'; script-src 'self'; style-src 'self' 'unsafe-inline'; img-src 'self' blob: data:; "
+                            "connect-src 'self'; frame-ancestors 'none'; base-uri 'none'; form-action 'self'"}});
 
   svr.Get("/api/jobs", [&jobs](const httplib::Request& req, httplib::Response& res) {
     sendJson(res, jobs.listJobs(tokenOf(req, false), req.get_param_value("all") == "1"));
@@ -149,16 +146,13 @@ Result<std::unique_ptr<ViewerServer>> ViewerServer::start(const ViewerOptions& o
         return ok;
       };
       const Status st = snapshots.readSnapshot(
-          token, r, [&](std::int64_t step, double time) { appendFrame(frame, {{"step", step}, {"time", time}}, nullptr), send(); },
+          token, r, [&](std::int64_t step, double time) { appendHeaderFrame(frame, step, time), send(); },
           [&](const ArrayPiece& p) {
-            appendFrame(frame,
-                        {{"section", p.section}, {"name", p.name}, {"first_row", p.firstRow}, {"rows", p.rows}, {"total_rows", p.totalRows},
-                         {"components", p.components}, {"unit", p.unit}},
-                        &p.values);
+            appendPieceFrame(frame, p);
             return send();
           });
       if (!st) {
-        appendFrame(frame, {{"error", log::escaped(st.message(), 2000)}, {"code", statusCodeName(st.code())}}, nullptr);
+        appendErrorFrame(frame, st);
         send();
       }
       sink.done();

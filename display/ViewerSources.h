@@ -30,12 +30,21 @@ class JobSource {
 
 // One piece of a snapshot array, its values as float32 (what a browser draws; ids and kinds fit a float exactly up
 // to 2^24).
+// The grid a grid array lies on (backend/fields/GridFields.h): cubic cells, cell (i, j, k) at row i.
+struct GridInfo {
+  double origin[3] = {0, 0, 0};  // m, lower corner of cell (0, 0, 0)
+  double cellSize = 0;           // m
+  std::uint32_t cells[3] = {0, 0, 0};
+};
+
 struct ArrayPiece {
   std::string section;  // "particles", "grid", "geometry", "probes"
   std::string name;     // "position", "velocity", "solid_fraction", ...
   std::uint64_t rows = 0, firstRow = 0, totalRows = 0, components = 1;
   std::string unit;     // SI, "" = dimensionless
   std::vector<float> values;  // rows x components
+  std::optional<GridInfo> grid;       // grid arrays: their grid
+  std::vector<std::string> strings;   // a list of names (geometry's surface names) instead of values
 };
 
 struct SnapshotRequest {

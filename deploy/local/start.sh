@@ -36,7 +36,8 @@ start manager "$bin/pflow-manager" --listen "127.0.0.1:$mport" --db "$dir/manage
   --frontend "127.0.0.1:$fport" --backend "127.0.0.1:$bport" --tls-dir "$tls" --admin-token-file "$dir/admin.token"
 start agent "$bin/pflow-agent" --node "$node" --listen "127.0.0.1:$aport" \
   --manager "127.0.0.1:$mport" --workdir "$dir/agent" --worker "$bin/pflow-worker" --tls-dir "$tls"
-start web "$bin/pflow-web" --listen "127.0.0.1:$wport" --manager "127.0.0.1:$mport" --backend "127.0.0.1:$bport" --tls-dir "$tls"
+start web "$bin/pflow-web" --listen "127.0.0.1:$wport" --manager "127.0.0.1:$mport" --backend "127.0.0.1:$bport" --tls-dir "$tls" \
+  --static "${PFLOW_WEB_PAGE:-$(dirname "$bin")/web}"
 
 # The first admin's token: written by the manager on its first start.
 for _ in $(seq 1 100); do [[ -s "$dir/admin.token" ]] && break; sleep 0.1; done
@@ -58,7 +59,7 @@ fi
 # Ready when the manager lists the agent's node.
 for _ in $(seq 1 100); do
   if PFLOW_CONFIG="$dir/config.yaml" "$bin/pflow" nodes --json 2>/dev/null | grep -q '"devices":\[{'; then
-    echo "local: stack ready (manager 127.0.0.1:$mport, TLS; viewer API http://127.0.0.1:$wport/api, docs/viewer.md)"
+    echo "local: stack ready (manager 127.0.0.1:$mport, TLS); the viewer: http://127.0.0.1:$wport (sign in with the token in $dir/admin.token)"
     exit 0
   fi
   sleep 0.2
