@@ -96,6 +96,7 @@ class SnapshotStreamer final : public grpc::ServerWriteReactor<v1::SnapshotChunk
     m_request.includeGrid = request.include_grid();
     m_request.includeGeometry = request.include_geometry();
     m_request.includeProbes = request.include_probes();
+    m_request.particles = !request.skip_particles();
     m_jobId = request.job_id();
     m_executor.post([this] { open(); });
   }

@@ -575,7 +575,9 @@ Result<std::unique_ptr<SnapshotCursor>> SnapshotStore::openRead(const std::strin
   if (!meta) return meta.status();
 
   std::vector<FileCursor::Item> items;
-  if (request.fields.empty()) {
+  if (!request.particles && !request.fields.empty()) return invalidArgument("fields named without particle arrays asked for");
+  if (!request.particles) {
+  } else if (request.fields.empty()) {
     for (const auto& a : meta->arrays) items.push_back({Section::kParticles, a});
   } else {
     for (const auto& name : request.fields) {

@@ -71,6 +71,7 @@ struct ReadRequest {
   bool includeGrid = false;
   bool includeGeometry = false;
   bool includeProbes = false;        // the job's probe series after everything else (Section::kProbes)
+  bool particles = true;             // false: no particle arrays (then `fields` must be empty)
 };
 
 // Reads one snapshot piece by piece: particle arrays (in stored order or the order asked), then grid fields,

@@ -36,6 +36,22 @@ CLI::App* addRenderCommand(CLI::App& app, RenderArgs& a) {
   return cmd;
 }
 
+CLI::App* addPlotCommand(CLI::App& app, RenderArgs& a) {
+  auto& o = a.options;
+  o.plot = true;
+  o.output = "pflow-series.png";
+  auto* cmd = app.add_subcommand("plot", "draw a run's time series as charts (DEM: kinetic energy, contacts, mass flow through planes; "
+                                         "SPH: probes and gauges)");
+  cmd->add_option("target", a.target, "a snapshot file (.h5, from pflow run or pflow fetch) or a job id")->required();
+  cmd->add_option("-o,--output", o.output, "PNG file")->capture_default_str();
+  cmd->add_option("--series", o.series, "the series to draw (names or prefixes: kinetic_energy, contacts, mass_past, P, ...); default all");
+  cmd->add_option("--size", a.size, "WIDTHxHEIGHT in pixels")->capture_default_str();
+  cmd->add_option("--title", o.title, "the picture's title (default: the job id or file name)");
+  cmd->add_option("--timeout", o.timeoutSeconds, "seconds to wait for the picture")->capture_default_str();
+  cmd->add_flag("--json", a.json, "print what was drawn as JSON");
+  return cmd;
+}
+
 int runRender(RenderArgs& a, const JobSnapshotsFn& jobSnapshots) {
   auto& o = a.options;
   std::smatch m;
@@ -92,8 +108,10 @@ int runRender(RenderArgs& a, const JobSnapshotsFn& jobSnapshots) {
                      {"particles", r.particles}, {"wall_s", r.seconds}, {"page", r.pageTiming}};
     std::printf("%s\n", j.dump().c_str());
   } else {
-    std::printf("%s: %dx%d, step %lld (t = %g s), %llu particles, %.1f s\n", o.output.c_str(), o.width, o.height, (long long)r.step, r.time,
-                (unsigned long long)r.particles, r.seconds);
+    if (o.plot) std::printf("%s: %dx%d, time series up to t = %g s, %.1f s\n", o.output.c_str(), o.width, o.height, r.time, r.seconds);
+    else
+      std::printf("%s: %dx%d, step %lld (t = %g s), %llu particles, %.1f s\n", o.output.c_str(), o.width, o.height, (long long)r.step, r.time,
+                  (unsigned long long)r.particles, r.seconds);
   }
   return kExitOk;
 }

@@ -25,6 +25,8 @@ struct RenderArgs {
 };
 
 CLI::App* addRenderCommand(CLI::App& app, RenderArgs& args);
+// `pflow plot FILE.h5|JOB`: the run's time series as charts (the same machinery, options.plot).
+CLI::App* addPlotCommand(CLI::App& app, RenderArgs& args);
 
 // A job's snapshots and the token to read them with (the back-end's, over gRPC); absent in builds without services.
 struct JobSnapshots {

@@ -13,6 +13,7 @@
 #include <numbers>
 
 #include "backend/store/CheckpointFile.h"
+#include "backend/store/DemSeries.h"
 #include "backend/store/SnapshotFile.h"
 #include "common/Log.h"
 #include "compute/dem/Simulation.h"
@@ -131,6 +132,8 @@ Result<RunSummary> runScene(const RunOptions& o) {
   };
   if (!resume)
     if (Status s = writeSnapshot(); !s.isOk()) return s;
+  compute::Domain single;
+  backend::DemSeriesRecorder series(sim, single, cfg.series);
 
   const double duration = cfg.sim.duration, interval = cfg.sim.snapshotInterval;
   auto totalSteps = std::int64_t(std::llround(duration / sim.dt()));
@@ -146,6 +149,7 @@ Result<RunSummary> runScene(const RunOptions& o) {
   auto observer = [&](const compute::Simulation& s) -> Status {
     if (s.outputDue())
       if (Status st = writeSnapshot(); !st.isOk()) return st;
+    series.sample(s, single);
     PFLOW_TRY(checkpoints.value().maybeWrite(s, sim.timers()));
     const auto now = std::chrono::steady_clock::now();
     if (o.progressSeconds > 0 && std::chrono::duration<double>(now - lastReport).count() >= o.progressSeconds) {
@@ -165,6 +169,10 @@ Result<RunSummary> runScene(const RunOptions& o) {
   sum.simulatedTime = sim.time();
   sum.particleStepsPerSecond = sum.wallSeconds > 0 ? double(sum.particles) * double(sum.steps) / sum.wallSeconds : 0;
   if (Status s = writer.value()->close(); !s.isOk() && run.isOk()) run = s;
+  {  // the series, also when the run failed; a resumed run's earlier samples kept
+    const backend::ProbeSeries all = resume ? backend::withEarlierSamples(sum.outputPath, series.series()) : series.series();
+    if (Status s = backend::writeProbeFiles(sum.outputPath, all); !s.isOk() && run.isOk()) run = s;
+  }
   spdlog::info("{}", sim.timers().report());
   if (!run.isOk()) {
     spdlog::error("{}", run.message());

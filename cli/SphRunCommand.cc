@@ -98,7 +98,8 @@ Result<RunSummary> runSphScene(const RunOptions& o, const frontend::LoadedScene&
   sum.particleStepsPerSecond = sum.wallSeconds > 0 ? double(sum.particles) * double(sum.steps) / sum.wallSeconds : 0;
   if (Status s = writer.value()->close(); !s.isOk() && run.isOk()) run = s;
   if (!probes.empty()) {  // what was measured, also when the run failed
-    if (Status s = backend::writeProbeFiles(sum.outputPath, probes.series()); !s.isOk() && run.isOk()) run = s;
+    const backend::ProbeSeries all = resume ? backend::withEarlierSamples(sum.outputPath, probes.series()) : probes.series();
+    if (Status s = backend::writeProbeFiles(sum.outputPath, all); !s.isOk() && run.isOk()) run = s;
     spdlog::info("{} probe samples of {} probes in {} (/probes) and {}", probes.series().time.size(), probes.series().names.size(),
                  sum.outputPath, backend::probesCsvPathFor(sum.outputPath));
   }

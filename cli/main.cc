@@ -51,8 +51,9 @@ int main(int argc, char** argv) {
   valCmd->add_option("scene", validatePath, "scene file (YAML)")->required()->check(CLI::ExistingFile);
   valCmd->add_flag("--json", validateJson, "print the result as JSON");
 
-  pflow::cli::RenderArgs render;
+  pflow::cli::RenderArgs render, plot;
   auto* renderCmd = pflow::cli::addRenderCommand(app, render);
+  auto* plotCmd = pflow::cli::addPlotCommand(app, plot);
   pflow::cli::JobSnapshotsFn jobSnapshots;
 
 #ifdef PFLOW_HAVE_SERVICES
@@ -156,6 +157,7 @@ int main(int argc, char** argv) {
   };
 #endif
   if (*renderCmd) return pflow::cli::runRender(render, jobSnapshots);
+  if (*plotCmd) return pflow::cli::runRender(plot, jobSnapshots);
 
   if (*valCmd) return pflow::cli::validateScene(validatePath, validateJson);
 

@@ -99,6 +99,7 @@ class FileSnapshotSource final : public SnapshotSource {
       }
     onHeader(step, snap->time);
     for (const auto& a : snap->arrays) {
+      if (!r.particles) break;
       if (!r.fields.empty() && std::find(r.fields.begin(), r.fields.end(), a.name) == r.fields.end()) continue;
       if (!sendRows("particles", a.name, a.unit, a.data.data(), a.type, snap->n, std::uint64_t(a.components), std::nullopt, onPiece))
         return Status::ok();
@@ -142,7 +143,18 @@ class FileSnapshotSource final : public SnapshotSource {
                       sendStrings("plane_names", g.planeNames, onPiece) &&
                       sendDoubles("geometry", "plane_surface", "", ints(g.planeSurface), g.planeSurface.size(), std::nullopt, onPiece) &&
                       sendStrings("surface_names", g.surfaceNames, onPiece);
-      (void)ok;
+      if (!ok) return Status::ok();
+    }
+    if (r.probes) {
+      auto series = reader.value()->readProbes();
+      if (!series && series.status().code() != StatusCode::kNotFound) return series.status();
+      if (series) {
+        const auto& s = series.value();
+        const std::uint64_t k = s.time.size();
+        if (!sendDoubles("probes", "time", "s", s.time, k, std::nullopt, onPiece)) return Status::ok();
+        for (std::size_t p = 0; p < s.names.size(); ++p)
+          if (!sendDoubles("probes", s.names[p], s.units[p], s.values[p], k, std::nullopt, onPiece)) return Status::ok();
+      }
     }
     return Status::ok();
   }

@@ -124,6 +124,8 @@ class GrpcSnapshotSource final : public SnapshotSource {
     for (const auto& f : r.fields) req.add_fields(f);
     req.set_include_grid(r.grid);
     req.set_include_geometry(r.geometry);
+    req.set_include_probes(r.probes);
+    req.set_skip_particles(!r.particles);
     auto ctx = callFor(token, rpc::kBulkDeadlineSeconds);
     auto reader = m_stub->ReadSnapshot(ctx.get(), req);
     bv1::SnapshotChunk chunk;

@@ -67,6 +67,14 @@ std::string pageQuery(const RenderOptions& o, const std::string& key, bool slice
   auto add = [&q](const char* name, const std::string& v) {
     if (!v.empty()) q += std::string("&") + name + "=" + urlEncode(v);
   };
+  if (o.plot) {
+    std::string series;
+    for (const auto& s : o.series) series += (series.empty() ? "" : ",") + s;
+    add("plot", "1");
+    add("series", series);
+    add("title", o.title);
+    return q;
+  }
   std::string view = o.view;
   if (view.empty() && !o.slice.empty()) view = o.slice[0] == 'x' ? "side" : o.slice[0] == 'y' ? "front" : "top";
   add("view", view);
@@ -171,18 +179,24 @@ Result<RenderReport> renderSnapshot(const RenderOptions& o, SnapshotSource& sour
   std::string data;
   bool fluid = false;
   SnapshotRequest req = request;
-  req.grid = !o.slice.empty();
-  req.geometry = true;
+  req.grid = !o.plot && !o.slice.empty();
+  req.geometry = !o.plot;
+  req.probes = o.plot;
+  req.particles = !o.plot;
+  bool anySeries = false;
   const Status read = source.readSnapshot(
       token, req, [&](std::int64_t step, double time) { report.step = step, report.time = time, appendHeaderFrame(data, step, time); },
       [&](const ArrayPiece& p) {
         if (p.section == "particles" && p.name == "position") report.particles = p.totalRows;
         if (p.section == "grid" && p.name == "fluid_fraction") fluid = true;
+        if (p.section == "probes") anySeries = true;
         appendPieceFrame(data, p);
         return true;
       });
   if (!read) return read;
   if (data.empty()) return notFound("no snapshot to draw");
+  if (o.plot && !anySeries)
+    return notFound("no time series stored for this run (DEM runs record them since this version; SPH runs need probes)");
 
   // 2. A one-shot loopback server: the page, the data at /data/KEY, the picture posted to /result/KEY.
   const std::string key = randomKey();

@@ -25,6 +25,8 @@ struct RenderOptions {
   std::string slice;                         // "AXIS=VALUE": a grid field on that slice
   std::string field;                         // the slice's grid field (default solid_fraction, or fluid_fraction)
   bool streamlines = false;                  // the in-plane mean velocity on the slice
+  bool plot = false;                         // draw the run's time series as charts instead (`pflow plot`)
+  std::vector<std::string> series;           // plot: the series to draw (names or prefixes); empty = all
   bool particles = true;                     // draw the particles (default: hidden when a slice is drawn)
   bool particlesSet = false;                 // `particles` was given
   std::string title;

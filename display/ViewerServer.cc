@@ -36,6 +36,31 @@ void sendJson(httplib::Response& res, const Result<json>& r) {
   res.set_content(r.value().dump(), "application/json");
 }
 
+// Streams a snapshot request as application/x-pflow-arrays, piece by piece as the back-end sends it; an error after
+// the first byte ends the stream with an error frame.
+void streamArrays(httplib::Response& res, SnapshotSource& snapshots, const std::string& token, const SnapshotRequest& r) {
+  res.set_chunked_content_provider("application/x-pflow-arrays", [&snapshots, token, r](std::size_t, httplib::DataSink& sink) {
+    std::string frame;
+    auto send = [&] {
+      const bool ok = sink.is_writable() && sink.write(frame.data(), frame.size());
+      frame.clear();
+      return ok;
+    };
+    const Status st = snapshots.readSnapshot(
+        token, r, [&](std::int64_t step, double time) { appendHeaderFrame(frame, step, time), send(); },
+        [&](const ArrayPiece& p) {
+          appendPieceFrame(frame, p);
+          return send();
+        });
+    if (!st) {
+      appendErrorFrame(frame, st);
+      send();
+    }
+    sink.done();
+    return true;
+  });
+}
+
 std::vector<std::string> splitCommas(const std::string& s) {
   std::vector<std::string> out;
   std::stringstream in(s);
@@ -138,26 +163,20 @@ Result<std::unique_ptr<ViewerServer>> ViewerServer::start(const ViewerOptions& o
     bool found = !r.step && !listing.value()["snapshots"].empty();
     for (const auto& snap : listing.value()["snapshots"]) found = found || (r.step && snap["step"].get<std::int64_t>() == *r.step);
     if (!found) return sendError(res, notFound("job " + r.job + " has no snapshot " + (r.step ? "at step " + std::to_string(*r.step) : "yet")));
-    res.set_chunked_content_provider("application/x-pflow-arrays", [&snapshots, token, r](std::size_t, httplib::DataSink& sink) {
-      std::string frame;
-      auto send = [&] {
-        const bool ok = sink.is_writable() && sink.write(frame.data(), frame.size());
-        frame.clear();
-        return ok;
-      };
-      const Status st = snapshots.readSnapshot(
-          token, r, [&](std::int64_t step, double time) { appendHeaderFrame(frame, step, time), send(); },
-          [&](const ArrayPiece& p) {
-            appendPieceFrame(frame, p);
-            return send();
-          });
-      if (!st) {
-        appendErrorFrame(frame, st);
-        send();
-      }
-      sink.done();
-      return true;
-    });
+    streamArrays(res, snapshots, token, r);
+  });
+  // The run's time series (DEM series, SPH probes), with the last snapshot's step and time.
+  svr.Get(R"(/api/jobs/([A-Za-z0-9._-]{1,64})/series)", [&jobs, &snapshots](const httplib::Request& req, httplib::Response& res) {
+    SnapshotRequest r;
+    r.job = req.matches[1];
+    r.probes = true;
+    r.particles = false;
+    const std::string token = tokenOf(req, false);
+    if (auto job = jobs.getJob(token, r.job); !job) return sendError(res, job.status());
+    auto listing = snapshots.listSnapshots(token, r.job);
+    if (!listing) return sendError(res, listing.status());
+    if (listing.value()["snapshots"].empty()) return sendError(res, notFound("job " + r.job + " has no snapshot yet"));
+    streamArrays(res, snapshots, token, r);
   });
   svr.Get(R"(/api/jobs/([A-Za-z0-9._-]{1,64})/events)", [&jobs](const httplib::Request& req, httplib::Response& res) {
     const std::string token = tokenOf(req, true), id = req.matches[1];

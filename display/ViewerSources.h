@@ -52,6 +52,8 @@ struct SnapshotRequest {
   std::optional<std::int64_t> step;  // unset: the last
   std::vector<std::string> fields;   // empty: every particle field
   bool grid = false, geometry = false;
+  bool probes = false;    // the run's time series (section "probes": "time", then one array per series)
+  bool particles = true;  // false: no particle arrays (the series alone)
 };
 
 class SnapshotSource {

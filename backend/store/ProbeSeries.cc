@@ -1,5 +1,7 @@
 #include "backend/store/ProbeSeries.h"
 
+#include <filesystem>
+
 #include <hdf5.h>
 
 #include <algorithm>
@@ -202,6 +204,23 @@ std::string probeSeriesCsv(const ProbeSeries& s) {
     }
     out += "\n";
   }
+  return out;
+}
+
+ProbeSeries withEarlierSamples(const std::string& h5Path, const ProbeSeries& now) {
+  std::error_code ec;
+  if (now.time.empty() || !std::filesystem::exists(h5Path, ec)) return now;
+  auto before = readProbeSeries(h5Path);
+  if (!before || before->names != now.names) return now;
+  ProbeSeries out = now;
+  out.time.clear();
+  for (auto& v : out.values) v.clear();
+  for (std::size_t k = 0; k < before->time.size() && before->time[k] < now.time.front() * (1 - 1e-12); ++k) {
+    out.time.push_back(before->time[k]);
+    for (std::size_t p = 0; p < out.values.size(); ++p) out.values[p].push_back(before->values[p][k]);
+  }
+  out.time.insert(out.time.end(), now.time.begin(), now.time.end());
+  for (std::size_t p = 0; p < out.values.size(); ++p) out.values[p].insert(out.values[p].end(), now.values[p].begin(), now.values[p].end());
   return out;
 }
 

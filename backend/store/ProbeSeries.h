@@ -76,6 +76,9 @@ ProbeSeries probeSamples(const ProbeSeries& series, std::size_t first);
 std::string probesCsvPathFor(const std::string& h5Path);
 // /probes into the closed snapshot file (writeProbeSeries) and the same series as CSV beside it.
 Status writeProbeFiles(const std::string& h5Path, const ProbeSeries& series);
+// `now` after the samples of the /probes already in h5Path from before its first time (a resumed run's earlier
+// part), when that file has a series of the same names; else `now` alone.
+ProbeSeries withEarlierSamples(const std::string& h5Path, const ProbeSeries& now);
 // "time,P1 [Pa],H1 [m]\n0,...": the CSV form.
 std::string probeSeriesCsv(const ProbeSeries& series);
 

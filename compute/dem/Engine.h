@@ -70,7 +70,7 @@ struct EngineSetup {
 
 struct ContactStats {
   std::size_t particleContacts = 0;  // pairs in contact (each counted once)
-  std::size_t wallContacts = 0;
+  std::size_t wallContacts = 0;     // particle-plane and particle-triangle contacts (a particle on a triangle edge: two)
   double coordinationNumber = 0;     // 2 * pairs / N
   double maxOverlapRatio = 0;        // max over contacts of overlap / smaller radius (walls: / radius)
   double kineticEnergy = 0;          // translational + rotational [J]
@@ -147,6 +147,8 @@ class Engine : public DistributedRows {
   // plus rotational) and gravitational energy (relative to the grid's lower corner), and the kinetic alone [J].
   virtual double mechanicalEnergy() const = 0;
   virtual double kineticEnergy() const = 0;
+  // Mass of the owned particles whose centre lies past the plane (point, unit normal) [kg]: one device reduction.
+  virtual double massPastPlane(const Vec3d& point, const Vec3d& normal) const = 0;
   // Elastic energy stored in the owned particles' contacts now (the Hertz potential (8/15) E* sqrt(R*)
   // delta^5/2; a pair with another owned particle counted half by each, so ranks' values add up). Host
   // copies: called once, at the start.

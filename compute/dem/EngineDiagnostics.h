@@ -268,6 +268,18 @@ ContactStats EngineImpl<Exec, R>::contactStats() const {
   m_mem.copyToHost(mass.data(), m_particles.template ptr<Field::Mass>(), m_n * sizeof(R));
   m_mem.copyToHost(nbr.data(), m_nbr.data(), nbr.size() * sizeof(Index));
   m_mem.copyToHost(cnt.data(), m_nbrCount.data(), n * sizeof(std::uint32_t));
+  // Mesh walls: each particle's candidate triangles (as of the last rebuild) and the triangles' vertices now.
+  std::vector<Index> wallCand;
+  std::vector<std::uint32_t> wallCnt;
+  std::vector<Vec3d> triVerts;
+  if (m_anyWalls && m_numTri > 0) {
+    wallCand.resize(std::size_t(n) * m_wallCap);
+    wallCnt.resize(n);
+    triVerts.resize(3 * std::size_t(m_numTri));
+    m_mem.copyToHost(wallCand.data(), m_wallCand.data(), wallCand.size() * sizeof(Index));
+    m_mem.copyToHost(wallCnt.data(), m_wallCandCount.data(), n * sizeof(std::uint32_t));
+    m_mem.copyToHost(triVerts.data(), m_triVerts.data(), triVerts.size() * sizeof(Vec3d));
+  }
   ContactStats st;
   for (Index i = 0; i < n; ++i) st.candidatesPerParticle += double(cnt[i]) / std::max<Index>(n, 1);
   for (Index i = 0; i < n; ++i) {
@@ -284,6 +296,14 @@ ContactStats EngineImpl<Exec, R>::contactStats() const {
     }
     for (const auto& p : m_setup.planes) {
       const double ov = double(rad[i]) - dot(pos[i] - p.point, p.normal);
+      if (ov <= 0) continue;
+      ++st.wallContacts;
+      st.maxOverlapRatio = std::max(st.maxOverlapRatio, ov / rad[i]);
+    }
+    for (std::uint32_t e = 0; e < std::min<std::uint32_t>(wallCnt.empty() ? 0 : wallCnt[i], m_wallCap); ++e) {  // mesh triangles
+      const Index t = wallCand[std::size_t(i) * m_wallCap + e];
+      const auto cp = geometry::closestPointOnTriangle(pos[i], triVerts[3 * t], triVerts[3 * t + 1], triVerts[3 * t + 2]);
+      const double ov = double(rad[i]) - norm(cp.point - pos[i]);
       if (ov <= 0) continue;
       ++st.wallContacts;
       st.maxOverlapRatio = std::max(st.maxOverlapRatio, ov / rad[i]);

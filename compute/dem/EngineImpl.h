@@ -236,6 +236,10 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
                                                                             m_setup.gravity, m_setup.grid.lo}});
   }
   double kineticEnergy() const override { return m_exec.sumOf(m_owned, kineticOf()); }
+  double massPastPlane(const Vec3d& point, const Vec3d& normal) const override {
+    return m_exec.sumOf(m_owned, kernels::MassPastPlane<R>{m_particles.template ptr<Field::Position>(), m_particles.template ptr<Field::Mass>(),
+                                                           point, normal});
+  }
   kernels::KineticEnergy<R> kineticOf() const {
     return {m_particles.template ptr<Field::Velocity>(), m_particles.template ptr<Field::AngularVelocity>(),
             m_particles.template ptr<Field::Mass>(), m_particles.template ptr<Field::Radius>()};

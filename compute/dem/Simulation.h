@@ -93,6 +93,7 @@ class Simulation {
   ExecutorKind executorKind() const { return m_executor; }
   std::size_t deviceBytes() const { return m_engine->deviceBytes(); }
   Engine& engine() { return *m_engine; }
+  const Engine& engine() const { return *m_engine; }
   // Distributed runs: overlap the halo with the interior forces (SimulationOptions::overlapHalo).
   void setOverlapHalo(bool on) { m_overlapHalo = on; }
 

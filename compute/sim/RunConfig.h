@@ -122,6 +122,21 @@ struct SimulationSettings {
 // Which solver runs the scene (the scene's `solver`): granular DEM, or weakly compressible SPH for fluids.
 enum class Solver { kDem, kSph };
 
+// A plane the DEM run's series measures the mass past (output.flow_planes): the mass of the particles whose centre
+// lies on the side `normal` points to; its growth is the mass flow through the plane.
+struct FlowPlane {
+  std::string name;
+  Vec3d point{0, 0, 0};   // m
+  Vec3d normal{0, 0, 1};  // unit
+};
+
+// A DEM run's time series (backend/store/DemSeries.h): kinetic energy, contacts and the mass past each flow plane,
+// sampled every `interval` s of simulated time, or at every snapshot when 0 (output.series_interval).
+struct SeriesConfig {
+  double interval = 0;
+  std::vector<FlowPlane> flowPlanes;
+};
+
 struct RunConfig {
   Solver solver = Solver::kDem;
   sph::SphConfig sph;  // solver: sph (the fluid, the method and its particles); unused by DEM
@@ -134,6 +149,7 @@ struct RunConfig {
   // Empty = unnamed (numbers still valid).
   std::vector<std::string> surfaceNames;
   SimulationSettings sim;
+  SeriesConfig series;  // DEM; an SPH run has its probes (sph.probes)
 
   // Every problem at once, each naming the field (`particles.radius[12]`) and the bound it breaks.
   ErrorList validate() const;

@@ -29,6 +29,7 @@
 #include "common/Log.h"
 #include "common/rpc/Rpc.h"
 #include "compute/mpi/MpiDomain.h"
+#include "backend/store/DemSeries.h"
 #include "compute/dem/Simulation.h"
 #include "compute/worker/JobCheckpoints.h"
 #include "compute/worker/SnapshotSinks.h"
@@ -111,6 +112,17 @@ int runRank(const worker::WorkerOptions& o, int rank, int ranks) {
   };
   if (!resumed.value())  // a resumed run's snapshot of this step is on the back-end already
     if (Status s = write(); !s.isOk()) return fail(2, s.message());
+  // The run's series (backend/store/DemSeries.h), sent to the back-end's /probes with each snapshot. A resumed run
+  // samples again from its checkpoint's time; the back-end drops samples at or before the last it stored
+  // (appendProbeSeries), so the job's series keeps one sample per time across attempts.
+  backend::DemSeriesRecorder series(sim, all, cfg.series);
+  std::size_t seriesSent = 0;
+  auto sendSeries = [&]() -> Status {
+    if (!lead || seriesSent == series.series().time.size()) return Status::ok();
+    Status s = sink->writeProbes(backend::probeSamples(series.series(), seriesSent));
+    if (s.isOk()) seriesSent = series.series().time.size();
+    return s;
+  };
 
   const double duration = cfg.sim.duration, interval = cfg.sim.snapshotInterval;
   const auto totalSteps = std::int64_t(std::llround(duration / sim.dt()));
@@ -121,8 +133,11 @@ int runRank(const worker::WorkerOptions& o, int rank, int ranks) {
   bool cancelled = false;
   auto rate = [&](const compute::Simulation& s, double wall) { return wall > 0 ? particles * double(s.stepCount() - firstStep) / wall : 0; };
   auto observer = [&](const compute::Simulation& s) -> Status {
-    if (s.outputDue())
+    series.sample(s, all);  // collective
+    if (s.outputDue()) {
       if (Status st = write(); !st.isOk()) return st;
+      if (Status st = all.agree(sendSeries()); !st.isOk()) return st;
+    }
     checkpoints.maybeTake(s, sim.timers());
     if (worker::stopAgreed(progress.cancelRequested(), domain)) {
       cancelled = true;
@@ -143,6 +158,7 @@ int runRank(const worker::WorkerOptions& o, int rank, int ranks) {
       if (Status s = sink->close(); !s.isOk()) spdlog::warn("{}", s.message());
     return -1;  // tells main: cancelled
   }
+  if (Status s = all.agree(sendSeries()); !s.isOk() && run.isOk()) run = s;
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   progress.final(progressOf(sim, totalSteps, duration, rate(sim, wall), particles), "finished");
   if (sink)

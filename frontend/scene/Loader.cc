@@ -350,6 +350,7 @@ void Loader::parseOutput(const Fields& top) {
       badValue("output.checkpoint_interval", format::num(m_checkpointInterval) + " must be > 0 (simulated seconds between checkpoints)", c->loc);
   }
   if (m_sph) get(*f, "probe_interval", m_config.sph.probeInterval);
+  if (!m_sph) parseSeries(*f);
   const Entry* fields = f->find("fields");
   if (!fields || !isList(fields->value, "output.fields", fields->loc, "field names")) return;
   // The snapshot fields of the particle field table; id and position are always written (ParaView needs them).
@@ -373,6 +374,38 @@ void Loader::parseOutput(const Fields& top) {
   }
   for (const char* always : {"id", "position"})
     if (std::find(m_outputFields.begin(), m_outputFields.end(), always) == m_outputFields.end()) m_outputFields.emplace_back(always);
+}
+
+// output.series_interval and output.flow_planes (DEM): what the run's time series samples, and how often.
+void Loader::parseSeries(const Fields& f) {
+  auto& series = m_config.series;
+  if (const Entry* e = f.find("series_interval")) {
+    get(f, "series_interval", series.interval);
+    if (!(series.interval > 0) || !std::isfinite(series.interval))
+      badValue("output.series_interval", format::num(series.interval) + " must be > 0 (simulated seconds between samples; leave it out "
+                                         "to sample at every snapshot)", e->loc);
+  }
+  const Entry* e = f.find("flow_planes");
+  if (!e || !isList(e->value, "output.flow_planes", e->loc, "flow planes")) return;
+  for (std::size_t k = 0; k < e->value.size(); ++k) {
+    const std::string path = at("output.flow_planes", k);
+    const auto pf = mapping(e->value[k], path, e->loc, kFlowPlaneKeys);
+    if (!pf) continue;
+    compute::FlowPlane plane;
+    const bool named = get(*pf, "name", plane.name, true);
+    get(*pf, "point", plane.point, true);
+    const bool normal = get(*pf, "normal", plane.normal, true);
+    if (named && (plane.name.empty() || plane.name.size() > 64 ||
+                  !std::all_of(plane.name.begin(), plane.name.end(), [](unsigned char c) { return std::isalnum(c) || c == '_' || c == '-' || c == '.'; })))
+      badValue(path + ".name", "'" + plane.name + "': 1-64 of letters, digits, '_', '-', '.'", pf->loc);
+    else if (named)
+      for (const auto& other : series.flowPlanes)
+        if (other.name == plane.name) badValue(path + ".name", "'" + plane.name + "' names another flow plane too", pf->loc);
+    const double len = norm(plane.normal);
+    if (normal && !(len > 0 && std::isfinite(len))) badValue(path + ".normal", "must be a non-zero vector", pf->loc);
+    else if (normal) plane.normal = plane.normal * (1.0 / len);
+    series.flowPlanes.push_back(plane);
+  }
 }
 
 std::string Loader::resolvePath(const std::string& name) const {

@@ -92,7 +92,8 @@ constexpr std::string_view kSimulationKeys[] = {"gravity", "duration", "dt", "dt
 constexpr std::string_view kModelModes[] = {"auto", "full"};
 constexpr std::string_view kAccuracyKeys[] = {"quantity", "tolerance"};
 constexpr std::string_view kPhysicsKeys[] = {"friction", "rolling_resistance"};
-constexpr std::string_view kOutputKeys[] = {"file", "fields", "checkpoint_interval"};
+constexpr std::string_view kOutputKeys[] = {"file", "fields", "checkpoint_interval", "series_interval", "flow_planes"};
+constexpr std::string_view kFlowPlaneKeys[] = {"name", "point", "normal"};
 constexpr std::string_view kPrecisions[] = {"double", "float"};
 constexpr std::string_view kDecompositions[] = {"sfc", "multisection"};
 constexpr std::string_view kInstabilityActions[] = {"stop", "reduce_dt"};
@@ -204,6 +205,7 @@ class Loader {
   bool parseRegion(const Fields& f, std::string_view key, Vec3d& lo, Vec3d& hi, bool required);
   void parseMotion(const Fields& g, MeshMotion& motion);
   void parseOutput(const Fields& top);
+  void parseSeries(const Fields& output);
   // solver: sph (Fluid.cc): fluid, tank, obstacles, sph and probes; the particles generated on the lattice.
   void parseSphScene(const Fields& top);
   std::optional<compute::sph::SphRegion> parseSphBox(const Fields& f, const std::string& path);

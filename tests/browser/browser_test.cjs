@@ -260,6 +260,34 @@ const scenarios = {
     }
   },
 
+  // The time series of a finished job drawn over the view (DEM series: kinetic energy, contacts, ...).
+  async plots(state) {
+    const id = await finishedJob(state);
+    const b = await browser();
+    try {
+      const page = await signedIn(b, state);
+      await openView(page, state, id);
+      await page.click('#plots');
+      await page.waitForSelector('#view[data-plots="ready"]', { timeout: 30000 });
+      const drawn = await page.evaluate(() => {
+        const o = document.getElementById('view-overlay');
+        const d = o.getContext('2d').getImageData(0, 0, o.width, o.height).data;
+        let opaque = 0, blue = 0;
+        for (let i = 0; i < d.length; i += 4) {
+          if (d[i + 3] > 200) opaque++;
+          if (Math.abs(d[i] - 0x1f) < 30 && Math.abs(d[i + 1] - 0x77) < 30 && Math.abs(d[i + 2] - 0xb4) < 30) blue++;
+        }
+        return { opaque: opaque / (d.length / 4), blue: blue / (d.length / 4) };
+      });
+      console.log(`plots: ${(100 * drawn.opaque).toFixed(1)} % opaque, ${(100 * drawn.blue).toFixed(2)} % curve pixels`);
+      check(drawn.opaque > 0.9, 'the charts do not cover the view');
+      check(drawn.blue > 0.001, 'no curve drawn');
+      check(page.pageErrors.length === 0, `page errors: ${page.pageErrors.join('; ')}`);
+    } finally {
+      await b.close();
+    }
+  },
+
   // A wrong token is refused: the sign-in form says so and no job is listed; the API answers 401 without one.
   async wrong_token(state) {
     const b = await browser();
@@ -313,6 +341,9 @@ async function screenshots(state, out) {
     await page.click('#streamlines');
     await sleep(800);
     await page.screenshot({ path: path.join(out, 'viewer-slice.png') });
+    await page.click('#plots');
+    await page.waitForSelector('#view[data-plots="ready"]', { timeout: 30000 });
+    await page.screenshot({ path: path.join(out, 'viewer-plots.png') });
     await page.goto(`${state.web}/#nodes`);
     await page.waitForSelector('#nodes-table');
     await page.screenshot({ path: path.join(out, 'viewer-nodes.png') });

@@ -9,6 +9,7 @@ render_test.py BIN_DIR SRC_DIR [name...]
   sph          an SPH dam break coloured by pressure, boundary particles grey
   errors       bad options all named at once (exit 1), a missing file (exit 2), a missing step (exit 2)
   million      10^6 particles in under 20 s on this machine
+  plot         pflow plot: a DEM run's series (with the mass past a flow plane) and an SPH run's probes as charts
 """
 import json
 import os
@@ -158,8 +159,38 @@ def check_million():
     assert wall < 20, f"{wall:.1f} s for 10^6 particles (limit 20 s)"
 
 
+def check_plot():
+    src = hopper()  # the example names a flow plane at the orifice
+    path = os.path.join(TMP, "series.png")
+    r = pflow("plot", src, "-o", path, "--json")
+    img = mpimg.imread(path)[:, :, :3]
+    assert img.shape == (1000, 1600, 3), img.shape
+    lines = np.zeros(img.shape[:2], bool)
+    for hexc in ("#1f77b4",):  # the first line colour of every panel
+        c = np.array([int(hexc[i:i + 2], 16) for i in (1, 3, 5)]) / 255.0
+        lines |= np.abs(img - c).sum(axis=2) < 0.15
+    print(f"  DEM series: {100 * lines.mean():.2f} % line pixels ({json.loads(r.stdout)['wall_s']:.1f} s)")
+    assert lines.mean() > 0.002, "no curves drawn"
+    import h5py
+    with h5py.File(src, "r") as f:
+        names = sorted(k for k in f["probes"].keys())
+        mass = f["probes/mass_past:orifice"][:]
+        ke = f["probes/kinetic_energy"][:]
+    for want in ("contacts", "coordination", "kinetic_energy", "mass_past:orifice", "time", "wall_contacts"):
+        assert want in names, f"{want} not in {names}"
+    assert (ke >= 0).all() and ke.max() > 0, "kinetic energy"
+    assert (np.diff(mass) >= -1e-12).all() or mass.max() == 0, "the mass past the orifice went down"
+    one, _ = None, None
+    r = pflow("plot", src, "-o", os.path.join(TMP, "one.png"), "--series", "kinetic_energy")
+    bad = pflow("plot", src, "-o", os.path.join(TMP, "none.png"), "--series", "nonesuch", check=False)
+    assert bad.returncode != 0 and "nonesuch" in bad.stderr, bad.stderr
+    dam = os.path.join(TMP, "dam-probes.h5")
+    pflow("run", os.path.join(SRC, "examples/dam_break_3d.yaml"), "-o", dam, "--steps", "30", "--progress", "0")
+    pflow("plot", dam, "-o", os.path.join(TMP, "dam-series.png"))
+
+
 CHECKS = {"views": check_views, "options": check_options, "slice": check_slice, "sph": check_sph, "errors": check_errors,
-          "million": check_million}
+          "million": check_million, "plot": check_plot}
 
 if __name__ == "__main__":
     names = sys.argv[3:] or list(CHECKS)

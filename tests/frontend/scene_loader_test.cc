@@ -615,5 +615,30 @@ TEST(SceneLoader, PhysicsSwitchesZeroTheCoefficients) {
   ASSERT_FALSE(typo.isOk());
   EXPECT_NE(typo.status().message().find("simulation.physics.rolling: unknown key 'rolling'"), std::string::npos) << typo.status().message();
 }
+
+// ---- output: the DEM run's time series ------------------------------------------------------------------------------
+
+TEST(SceneLoader, SeriesIntervalAndFlowPlanes) {
+  const std::string set = latticeSet("{min: [0, 0, 0], max: [0.01, 0.01, 0.01]}", "0.001");
+  const auto ok = loadSceneFromString(latticeScene(set) + "output:\n  series_interval: 0.002\n  flow_planes:\n"
+                                      "    - {name: outlet, point: [0, 0, -0.01], normal: [0, 0, -2]}\n");
+  ASSERT_TRUE(ok.isOk()) << errorText(ok);
+  EXPECT_DOUBLE_EQ(ok->config.series.interval, 0.002);
+  ASSERT_EQ(ok->config.series.flowPlanes.size(), 1u);
+  EXPECT_EQ(ok->config.series.flowPlanes[0].name, "outlet");
+  EXPECT_DOUBLE_EQ(ok->config.series.flowPlanes[0].normal.z, -1.0);  // normalised
+
+  const auto bad = loadSceneFromString(latticeScene(set) + "output:\n  series_interval: -1\n  flow_planes:\n"
+                                       "    - {name: a b, point: [0, 0, 0], normal: [0, 0, 1]}\n"
+                                       "    - {name: c, point: [0, 0, 0], normal: [0, 0, 0]}\n"
+                                       "    - {name: c, point: [0, 0, 0], normal: [1, 0, 0]}\n"
+                                       "    - {name: d, normal: [1, 0, 0]}\n");
+  const std::string e = errorText(bad);
+  EXPECT_HAS(e, "output.series_interval");
+  EXPECT_HAS(e, "output.flow_planes[0].name");
+  EXPECT_HAS(e, "output.flow_planes[1].normal");
+  EXPECT_HAS(e, "'c' names another flow plane too");
+  EXPECT_HAS(e, "output.flow_planes[3].point");
+}
 }  // namespace
 }  // namespace pflow::frontend

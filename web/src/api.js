@@ -47,6 +47,7 @@ export const api = {
     if (geometry) q.set('geometry', '1');
     return fetchArrays(`/api/jobs/${id(job)}/snapshots/${step}?${q}`, headers());
   },
+  series: (job) => fetchArrays(`/api/jobs/${id(job)}/series`, headers()),
   // Server-sent events of a job (EventSource sends no headers: the token goes in the query, over loopback or TLS).
   events: (job, onEvent, onError) => {
     const source = new EventSource(`/api/jobs/${id(job)}/events?token=${encodeURIComponent(token.get())}`);

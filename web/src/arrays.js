@@ -2,7 +2,8 @@
 // frame's float32 values. The first frame is {step, time}; each other is one piece of an array (at most 1 MiB), a
 // list of names ({strings}) or an error ({error, code}). The result holds whole arrays by section:
 //   {step, time, particles: {name: Field}, grid: {spec, fields: {name: Field}} | null, geometry: {name: Field |
-//    string[]} | null}, Field = {values: Float32Array(rows * components), rows, components, unit}.
+//    string[]} | null, probes: {name: Field} | null (time series: "time" and one per probe or DEM series)},
+//   Field = {values: Float32Array(rows * components), rows, components, unit}.
 
 export class ArraysError extends Error {
   constructor(message, code) {
@@ -16,7 +17,7 @@ const decoder = new TextDecoder();
 export function parseArrays(buffer) {
   const bytes = new Uint8Array(buffer);
   const view = new DataView(buffer);
-  const out = { step: 0, time: 0, particles: {}, grid: null, geometry: null };
+  const out = { step: 0, time: 0, particles: {}, grid: null, geometry: null, probes: null };
   let at = 0;
   let first = true;
   while (at < bytes.length) {
@@ -50,8 +51,10 @@ export function parseArrays(buffer) {
       table = out.geometry = out.geometry || {};
     } else if (header.section === 'particles') {
       table = out.particles;
+    } else if (header.section === 'probes') {
+      table = out.probes = out.probes || {};
     } else {
-      at += 4 * count;  // a section this page does not draw (probes)
+      at += 4 * count;  // a section this page does not know
       continue;
     }
     let field = table[header.name];

@@ -4,6 +4,7 @@
 import { api, el } from './api.js';
 import { Viewer, VIEWS } from './viewer.js';
 import { COLORMAPS } from './colormap.js';
+import { seriesPanels, drawPlots } from './plot.js';
 
 const CACHE = 6;  // snapshots kept for playing back and forth
 
@@ -57,6 +58,7 @@ export class JobView {
     this.surfaceList = el('div', { id: 'surfaces' });
     const views = el('div', { class: 'buttons' }, ...Object.keys(VIEWS).map((v) => el('button', { id: `view-${v}`, onclick: () => { this.viewer.setView(v); this.redraw(); } }, v)));
     const shot = el('button', { id: 'screenshot', onclick: () => this.screenshot() }, 'screenshot');
+    this.plotsButton = el('button', { id: 'plots', onclick: () => this.togglePlots() }, 'time series');
     const row = (label, ...items) => el('div', { class: 'row' }, el('span', { class: 'label' }, label), ...items);
     const panel = el('div', { class: 'panel' },
       this.title,
@@ -67,7 +69,7 @@ export class JobView {
       el('h3', {}, 'grid slice'), row('', el('label', {}, this.sliceOn, ' show'), this.sliceAxis, el('label', {}, this.streamBox, ' streamlines')),
       row('', this.sliceValue), row('field', this.sliceField), row('map', this.sliceMap),
       el('h3', {}, 'surfaces'), this.surfaceList,
-      el('h3', {}, 'view'), views, row('', shot));
+      el('h3', {}, 'view'), views, row('', shot, this.plotsButton));
     this.root.replaceChildren(el('div', { class: 'jobview' }, this.stage, panel));
   }
 
@@ -96,7 +98,33 @@ export class JobView {
     this.title.textContent = `${j.name || 'job'} ${j.id} (${j.state})`;
     const p = j.progress || {};
     const newest = this.steps.length ? this.steps[this.steps.length - 1].step : -1;
-    if (p.step > newest || ['succeeded', 'failed', 'cancelled'].includes(j.state)) this.listSnapshots();
+    if (p.step > newest || ['succeeded', 'failed', 'cancelled'].includes(j.state)) {
+      this.listSnapshots();
+      if (this.plotsOn && this.follow && Date.now() - (this.seriesAt || 0) > 5000) this.loadSeries();
+    }
+  }
+
+  // The run's time series over the view (DEM series, SPH probes), drawn with plot.js.
+  async togglePlots() {
+    this.plotsOn = !this.plotsOn;
+    this.plotsButton.textContent = this.plotsOn ? '3-D view' : 'time series';
+    this.stage.dataset.plots = this.plotsOn ? 'loading' : 'off';
+    if (this.plotsOn) await this.loadSeries();
+    this.drawLegend();
+  }
+
+  async loadSeries() {
+    this.seriesAt = Date.now();
+    try {
+      const s = await api.series(this.job);
+      this.series = s.probes;
+      this.stage.dataset.plots = 'ready';
+    } catch (e) {
+      this.series = null;
+      this.stage.dataset.plots = 'error';
+      this.status.textContent = `time series: ${e.message}`;
+    }
+    this.drawLegend();
   }
 
   async listSnapshots() {
@@ -245,7 +273,8 @@ export class JobView {
     this.overlay.height = h;
     const ctx = this.overlay.getContext('2d');
     ctx.clearRect(0, 0, w, h);
-    this.viewer.drawLegend(ctx);
+    if (this.plotsOn) drawPlots(ctx, w, h, seriesPanels(this.series), this.title.textContent, { scale: 0.9 });
+    else this.viewer.drawLegend(ctx);
   }
 
   screenshot() {

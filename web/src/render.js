@@ -1,9 +1,11 @@
 // `pflow render`'s page: loaded by headless Chromium from the CLI's one-shot loopback server, it draws one
 // snapshot with the viewer's own code and posts the composed PNG back. Options come in the query string:
 //   key (the server's secret path), width, height, view, color, colormap, min, max, clip (AXIS=VALUE),
-//   slice (AXIS=VALUE), field, streamlines=1, particles=0|1, title.
+//   slice (AXIS=VALUE), field, streamlines=1, particles=0|1, title; or plot=1 (the time series as charts, `pflow
+//   plot`) with series (comma-separated names to keep).
 import { fetchArrays } from './arrays.js';
 import { Viewer } from './viewer.js';
+import { seriesPanels, drawPlots } from './plot.js';
 
 const q = new URLSearchParams(location.search);
 const key = q.get('key') || '';
@@ -26,6 +28,7 @@ async function main() {
   const t0 = performance.now();
   const snapshot = await fetchArrays(`/data/${key}`);
   const t1 = performance.now();
+  if (q.get('plot') === '1') return plot(snapshot, width, height, t0, t1);
   // Many particles: one point sprite each (a software renderer spends its time on vertices); few: quads, which have
   // no size limit when a particle fills much of the picture.
   const many = (snapshot.particles.position ? snapshot.particles.position.rows : 0) > 20000;
@@ -56,6 +59,20 @@ async function main() {
   const blob = await new Promise((resolve) => picture.toBlob(resolve, 'image/png'));
   const t3 = performance.now();
   await report('result', blob, 'image/png', `data ${(t1 - t0).toFixed(0)} ms, draw ${(t2 - t1).toFixed(0)} ms, png ${(t3 - t2).toFixed(0)} ms`);
+}
+
+async function plot(snapshot, width, height, t0, t1) {
+  const canvas = document.createElement('canvas');
+  canvas.width = width;
+  canvas.height = height;
+  const only = (q.get('series') || '').split(',').filter((x) => x);
+  const panels = seriesPanels(snapshot.probes, only);
+  if (only.length && !panels.length)
+    throw new Error(`no series named ${only.join(', ')} (have: ${Object.keys(snapshot.probes || {}).filter((n) => n !== 'time').join(', ') || 'none'})`);
+  drawPlots(canvas.getContext('2d'), width, height, panels, `${q.get('title') || 'pflow'}: time series`);
+  const t2 = performance.now();
+  const blob = await new Promise((resolve) => canvas.toBlob(resolve, 'image/png'));
+  await report('result', blob, 'image/png', `data ${(t1 - t0).toFixed(0)} ms, draw ${(t2 - t1).toFixed(0)} ms, png ${(performance.now() - t2).toFixed(0)} ms`);
 }
 
 main().catch((e) => report('error', String(e && e.message ? e.message : e), 'text/plain'));

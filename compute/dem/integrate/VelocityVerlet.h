@@ -127,6 +127,16 @@ struct KineticEnergy {
   }
 };
 
+// Mass of particle i when its centre lies past the plane through `point` along `normal` (unit), else 0 [kg]
+// (sumOf): the mass downstream of a flow plane, whose growth is the mass flow through it.
+template <class R>
+struct MassPastPlane {
+  const Vec3d* pos;
+  const R* mass;
+  Vec3d point, normal;
+  PFLOW_HOSTDEVICE double operator()(Index i) const { return dot(pos[i] - point, normal) > 0 ? double(mass[i]) : 0.0; }
+};
+
 // Gravitational potential energy of particle i relative to the point `origin`, -m g.(x - origin) [J] (sumOf).
 template <class R>
 struct PotentialEnergy {

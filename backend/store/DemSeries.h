@@ -1,0 +1,70 @@
+// A DEM run's time series (docs/output-format.md, "Series"), kept in the same form and file group as an SPH run's
+// probes (/probes: time, then one dataset per series with its unit and point) so every path that stores, streams,
+// fetches and draws probes carries them too (`pflow fetch` writes them as CSV; `pflow plot` draws them):
+//   kinetic_energy [J]        translational plus rotational, every particle
+//   contacts                  particle pairs in contact (a pair across two ranks of a distributed run counts on each)
+//   wall_contacts             particle-wall contacts
+//   coordination              2 x contacts / particles
+//   mass_past:<plane> [kg]    the mass of the particles whose centre lies past output.flow_planes' <plane> (on the
+//                             side its normal points to); its growth is the mass flow through the plane
+// A series' point is the flow plane's point, or NaN for the global ones. Sampled at the start, then every
+// output.series_interval of simulated time (the first step at or past each multiple), or at every snapshot when
+// none is given. Sampling is collective in a distributed run: every rank calls sample() after every step.
+#pragma once
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "backend/store/ProbeSeries.h"
+#include "compute/sim/RunConfig.h"
+
+namespace pflow::backend {
+
+class DemSeriesRecorder {
+ public:
+  // Sim: compute::Simulation; Domain: compute::Domain (sums over ranks). A template: no link dependency.
+  template <class Sim, class Domain>
+  DemSeriesRecorder(const Sim& sim, Domain& domain, const compute::SeriesConfig& config) : m_config(config), m_next(config.interval) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    auto add = [&](const std::string& name, const char* unit, Vec3d point) {
+      m_series.names.push_back(name);
+      m_series.units.push_back(unit);
+      m_series.points.push_back(point);
+    };
+    add("kinetic_energy", "J", {nan, nan, nan});
+    add("contacts", "", {nan, nan, nan});
+    add("wall_contacts", "", {nan, nan, nan});
+    add("coordination", "", {nan, nan, nan});
+    for (const auto& p : config.flowPlanes) add("mass_past:" + p.name, "kg", p.point);
+    m_series.add(sim.time(), values(sim, domain));
+    while (m_config.interval > 0 && m_next <= sim.time() * (1 + 1e-12)) m_next += m_config.interval;  // a resumed run
+  }
+
+  template <class Sim, class Domain>
+  void sample(const Sim& sim, Domain& domain) {
+    if (m_config.interval > 0 ? sim.time() < m_next * (1 - 1e-12) : !sim.outputDue()) return;
+    m_series.add(sim.time(), values(sim, domain));
+    while (m_config.interval > 0 && m_next <= sim.time() * (1 + 1e-12)) m_next += m_config.interval;
+  }
+
+  const ProbeSeries& series() const { return m_series; }
+
+ private:
+  template <class Sim, class Domain>
+  std::vector<double> values(const Sim& sim, Domain& domain) const {
+    const auto stats = sim.contactStats();  // host copies: once a sample
+    const double particles = domain.sum(double(sim.numParticles()));
+    const double pairs = domain.sum(double(stats.particleContacts));
+    std::vector<double> v = {domain.sum(sim.engine().kineticEnergy()), pairs, domain.sum(double(stats.wallContacts)),
+                             particles > 0 ? 2 * pairs / particles : 0.0};
+    for (const auto& p : m_config.flowPlanes) v.push_back(domain.sum(sim.engine().massPastPlane(p.point, p.normal)));
+    return v;
+  }
+
+  compute::SeriesConfig m_config;
+  ProbeSeries m_series;
+  double m_next;
+};
+
+}  // namespace pflow::backend
