@@ -54,10 +54,11 @@ CLI::App* addPlotCommand(CLI::App& app, RenderArgs& a) {
 
 int runRender(RenderArgs& a, const JobSnapshotsFn& jobSnapshots) {
   auto& o = a.options;
+  const std::string cmd = o.plot ? "pflow plot" : "pflow render";
   std::smatch m;
   static const std::regex size(R"(^([0-9]{1,5})x([0-9]{1,5})$)");
   if (!std::regex_match(a.size, m, size)) {
-    std::fprintf(stderr, "pflow render: --size '%s': WIDTHxHEIGHT in pixels, e.g. 1600x1000\n", a.size.c_str());
+    std::fprintf(stderr, "%s: --size '%s': WIDTHxHEIGHT in pixels, e.g. 1600x1000\n", cmd.c_str(), a.size.c_str());
     return kExitInvalid;
   }
   o.width = std::stoi(m[1]), o.height = std::stoi(m[2]);
@@ -80,16 +81,16 @@ int runRender(RenderArgs& a, const JobSnapshotsFn& jobSnapshots) {
     source = display::makeFileSnapshotSource(a.target);
     if (o.title.empty()) o.title = std::filesystem::path(a.target).filename().string();
   } else if (a.target.ends_with(".h5") || a.target.find('/') != std::string::npos) {
-    std::fprintf(stderr, "pflow render: %s: no such file\n", a.target.c_str());
+    std::fprintf(stderr, "%s: %s: no such file\n", cmd.c_str(), a.target.c_str());
     return kExitIo;
   } else {
     if (!jobSnapshots) {
-      std::fprintf(stderr, "pflow render: %s is not a file, and this pflow was built without the services to fetch a job\n", a.target.c_str());
+      std::fprintf(stderr, "%s: %s is not a file, and this pflow was built without the services to fetch a job\n", cmd.c_str(), a.target.c_str());
       return kExitInvalid;
     }
     auto job = jobSnapshots();
     if (!job) {
-      std::fprintf(stderr, "pflow render: %s\n", job.status().message().c_str());
+      std::fprintf(stderr, "%s: %s\n", cmd.c_str(), job.status().message().c_str());
       return exitCodeFor(job.status());
     }
     source = std::move(job.value().source);
@@ -99,7 +100,8 @@ int runRender(RenderArgs& a, const JobSnapshotsFn& jobSnapshots) {
   }
   auto report = display::renderSnapshot(o, *source, token, request);
   if (!report) {
-    std::fprintf(stderr, "pflow render: %s\n", report.status().message().c_str());
+    const std::string& m = report.status().message();
+    std::fprintf(stderr, "%s%s\n", m.rfind("pflow ", 0) == 0 ? "" : (cmd + ": ").c_str(), m.c_str());
     return exitCodeFor(report.status());
   }
   const auto& r = report.value();

@@ -132,8 +132,20 @@ Result<RunSummary> runScene(const RunOptions& o) {
   };
   if (!resume)
     if (Status s = writeSnapshot(); !s.isOk()) return s;
+  // The run's series (backend/store/DemSeries.h), appended to /probes after each snapshot so that a killed run
+  // keeps them; a resumed run into the same file goes on where the file's end (earlier samples kept, repeats dropped).
   compute::Domain single;
   backend::DemSeriesRecorder series(sim, single, cfg.series);
+  std::size_t seriesStored = 0;
+  auto storeSeries = [&]() -> Status {
+    seriesStored = std::min(seriesStored, series.series().time.size());
+    if (seriesStored == series.series().time.size()) return Status::ok();
+    auto stored = writer.value()->appendProbes(backend::probeSamples(series.series(), seriesStored));
+    if (!stored) return stored.status();
+    seriesStored = series.series().time.size();
+    return Status::ok();
+  };
+  if (Status s = storeSeries(); !s.isOk()) return s;
 
   const double duration = cfg.sim.duration, interval = cfg.sim.snapshotInterval;
   auto totalSteps = std::int64_t(std::llround(duration / sim.dt()));
@@ -150,6 +162,8 @@ Result<RunSummary> runScene(const RunOptions& o) {
     if (s.outputDue())
       if (Status st = writeSnapshot(); !st.isOk()) return st;
     series.sample(s, single);
+    if (s.outputDue())
+      if (Status st = storeSeries(); !st.isOk()) return st;
     PFLOW_TRY(checkpoints.value().maybeWrite(s, sim.timers()));
     const auto now = std::chrono::steady_clock::now();
     if (o.progressSeconds > 0 && std::chrono::duration<double>(now - lastReport).count() >= o.progressSeconds) {
@@ -168,11 +182,9 @@ Result<RunSummary> runScene(const RunOptions& o) {
   sum.steps = sim.stepCount() - firstStep;
   sum.simulatedTime = sim.time();
   sum.particleStepsPerSecond = sum.wallSeconds > 0 ? double(sum.particles) * double(sum.steps) / sum.wallSeconds : 0;
+  if (Status s = storeSeries(); !s.isOk() && run.isOk()) run = s;  // samples since the last snapshot, also of a failed run
   if (Status s = writer.value()->close(); !s.isOk() && run.isOk()) run = s;
-  {  // the series, also when the run failed; a resumed run's earlier samples kept
-    const backend::ProbeSeries all = resume ? backend::withEarlierSamples(sum.outputPath, series.series()) : series.series();
-    if (Status s = backend::writeProbeFiles(sum.outputPath, all); !s.isOk() && run.isOk()) run = s;
-  }
+  if (Status s = backend::writeProbesCsv(sum.outputPath); !s.isOk() && run.isOk()) run = s;
   spdlog::info("{}", sim.timers().report());
   if (!run.isOk()) {
     spdlog::error("{}", run.message());

@@ -5,7 +5,11 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <atomic>
+#include <cerrno>
 #include <chrono>
+#include <csignal>
+#include <cstring>
 #include <condition_variable>
 #include <cstdlib>
 #include <filesystem>
@@ -16,6 +20,7 @@
 #include <sstream>
 
 #include "display/ArrayFrames.h"
+#include <nlohmann/json.hpp>
 
 extern char** environ;
 
@@ -80,8 +85,13 @@ std::string pageQuery(const RenderOptions& o, const std::string& key, bool slice
   add("view", view);
   add("color", o.colorBy);
   add("colormap", o.colormap);
-  if (o.min) add("min", std::to_string(*o.min));
-  if (o.max) add("max", std::to_string(*o.max));
+  auto number = [](double v) {  // every digit: a range of 1e-7 must not become 0.000000
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    return std::string(buf);
+  };
+  if (o.min) add("min", number(*o.min));
+  if (o.max) add("max", number(*o.max));
   add("clip", o.clip);
   add("slice", o.slice);
   if (!o.slice.empty()) add("field", o.field.empty() ? (sliceFluid ? "fluid_fraction" : "solid_fraction") : o.field);
@@ -89,6 +99,17 @@ std::string pageQuery(const RenderOptions& o, const std::string& key, bool slice
   add("particles", (o.particlesSet ? o.particles : o.slice.empty()) ? "1" : "0");
   add("title", o.title);
   return q;
+}
+
+// Chromium's process group while one runs: SIGINT or SIGTERM to `pflow render` takes it down too (it is in a group
+// of its own, which a terminal's Ctrl-C does not reach).
+std::atomic<pid_t> g_chromiumGroup{0};
+struct sigaction g_oldInt, g_oldTerm;
+extern "C" void onRenderSignal(int sig) {
+  if (const pid_t g = g_chromiumGroup.load(); g > 0) ::kill(-g, SIGKILL);
+  ::sigaction(SIGINT, &g_oldInt, nullptr);
+  ::sigaction(SIGTERM, &g_oldTerm, nullptr);
+  ::raise(sig);
 }
 
 struct Exchange {
@@ -124,7 +145,7 @@ Status validateRenderOptions(const RenderOptions& o) {
   }
   if (!(o.timeoutSeconds > 0)) errors.push_back("--timeout: more than 0 s");
   if (errors.empty()) return Status::ok();
-  std::string msg = "pflow render: " + std::to_string(errors.size()) + " problem" + (errors.size() > 1 ? "s" : "") + ":";
+  std::string msg = std::string(o.plot ? "pflow plot: " : "pflow render: ") + std::to_string(errors.size()) + " problem" + (errors.size() > 1 ? "s" : "") + ":";
   for (const auto& e : errors) msg += "\n  " + e;
   return invalidArgument(msg);
 }
@@ -168,6 +189,7 @@ Result<std::string> findPageDir(const std::string& given) {
 Result<RenderReport> renderSnapshot(const RenderOptions& o, SnapshotSource& source, const std::string& token,
                                     const SnapshotRequest& request) {
   const auto t0 = std::chrono::steady_clock::now();
+  const std::string what = o.plot ? "pflow plot" : "pflow render";
   if (Status st = validateRenderOptions(o); !st) return st;
   auto chromium = findChromium(o.chromium);
   if (!chromium) return chromium.status();
@@ -203,7 +225,12 @@ Result<RenderReport> renderSnapshot(const RenderOptions& o, SnapshotSource& sour
   Exchange ex;
   httplib::Server server;
   server.set_payload_max_length(std::size_t(512) << 20);
-  server.Get("/data/" + key, [&data](const httplib::Request&, httplib::Response& res) {
+  std::atomic<bool> served{false};
+  server.Get("/data/" + key, [&data, &served](const httplib::Request&, httplib::Response& res) {
+    if (served.exchange(true)) {  // once: the page's one fetch
+      res.status = 410;
+      return;
+    }
     res.set_content(data.data(), data.size(), "application/x-pflow-arrays");
   });
   auto finish = [&ex](std::string png, std::string error, std::string timing) {
@@ -228,15 +255,29 @@ Result<RenderReport> renderSnapshot(const RenderOptions& o, SnapshotSource& sour
     });
   }
   const int port = server.bind_to_any_port("127.0.0.1");
-  if (port <= 0) return unavailable("pflow render: cannot listen on a loopback port");
+  if (port <= 0) return unavailable(what + ": cannot listen on a loopback port");
   std::thread serving([&server] { server.listen_after_bind(); });
+  for (int i = 0; i < 5000 && !server.is_running(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(1));  // stop() needs it running
 
-  // 3. Chromium, headless, with a throw-away profile; its output to a log kept for errors.
+  // 3. Chromium, headless, with a throw-away profile in a folder only this user can enter (mkdtemp: 0700). The key
+  // stays off Chromium's command line, which every local user can read: Chromium opens a file in that folder,
+  // which sends it on to the page's address with the key.
   std::error_code ec;
-  fs::path profile = fs::temp_directory_path(ec) / ("pflow-render-" + key.substr(0, 12));
-  fs::create_directories(profile, ec);
+  std::string pattern = (fs::temp_directory_path(ec) / "pflow-render-XXXXXX").string();
+  if (::mkdtemp(pattern.data()) == nullptr) {
+    server.stop();
+    serving.join();
+    return unavailable(what + ": cannot make a temporary folder " + pattern + ": " + std::strerror(errno));
+  }
+  const fs::path profile = pattern;
   const fs::path log = profile / "chromium.log";
-  const std::string url = "http://127.0.0.1:" + std::to_string(port) + "/render.html?" + pageQuery(o, key, fluid);
+  const std::string target = "http://127.0.0.1:" + std::to_string(port) + "/render.html?" + pageQuery(o, key, fluid);
+  const fs::path start = profile / "start.html";
+  {
+    std::ofstream f(start);
+    f << "<!doctype html><meta charset=\"utf-8\"><script>location.replace(" << nlohmann::json(target).dump() << ");</script>\n";
+  }
+  const std::string url = "file://" + start.string();
   std::vector<std::string> args = {chromium.value(),
                                    "--headless=new",
                                    "--use-angle=swiftshader",
@@ -266,7 +307,13 @@ Result<RenderReport> renderSnapshot(const RenderOptions& o, SnapshotSource& sour
   posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETPGROUP);
   posix_spawnattr_setpgroup(&attr, 0);  // its own process group: killed as a whole
   pid_t pid = -1;
+  struct sigaction handler {};
+  handler.sa_handler = onRenderSignal;
+  ::sigemptyset(&handler.sa_mask);
+  ::sigaction(SIGINT, &handler, &g_oldInt);
+  ::sigaction(SIGTERM, &handler, &g_oldTerm);
   const int spawned = posix_spawn(&pid, argv[0], &actions, &attr, argv.data(), environ);
+  if (spawned == 0) g_chromiumGroup = pid;
   posix_spawn_file_actions_destroy(&actions);
   posix_spawnattr_destroy(&attr);
 
@@ -292,25 +339,30 @@ Result<RenderReport> renderSnapshot(const RenderOptions& o, SnapshotSource& sour
         break;
       }
     }
-    if (failure.empty() && !ex.error.empty()) failure = "the page could not draw the snapshot: " + ex.error;
+    if (failure.empty() && !ex.error.empty()) failure = ex.error;
   }
   if (spawned == 0) {
-    if (!exited) {
-      ::kill(-pid, SIGKILL);
-      ::waitpid(pid, &exitStatus, 0);
-    }
+    ::kill(-pid, SIGKILL);  // the whole group: the main process and its renderer and GPU processes
+    if (!exited) ::waitpid(pid, &exitStatus, 0);
+    g_chromiumGroup = 0;
   }
+  ::sigaction(SIGINT, &g_oldInt, nullptr);
+  ::sigaction(SIGTERM, &g_oldTerm, nullptr);
   server.stop();
   serving.join();
-  fs::remove_all(profile, ec);
-  if (!failure.empty()) return internalError("pflow render: " + failure);
+  for (int attempt = 0; attempt < 50; ++attempt) {  // the group's last processes may still be leaving the profile
+    fs::remove_all(profile, ec);
+    if (!fs::exists(profile, ec)) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  if (!failure.empty()) return internalError(what + ": " + failure);
   std::string png;
   {
     std::lock_guard<std::mutex> lock(ex.mutex);
     png = std::move(ex.png);
     report.pageTiming = ex.timing;
   }
-  if (png.size() < 8 || png.compare(1, 3, "PNG") != 0) return internalError("pflow render: the page sent no PNG");
+  if (png.size() < 8 || png.compare(1, 3, "PNG") != 0) return internalError(what + ": the page sent no PNG");
 
   // 5. The file, whole or not at all.
   const fs::path out = fs::absolute(o.output);

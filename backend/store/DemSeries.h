@@ -11,6 +11,7 @@
 // output.series_interval of simulated time (the first step at or past each multiple), or at every snapshot when
 // none is given. Sampling is collective in a distributed run: every rank calls sample() after every step.
 #pragma once
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -43,6 +44,17 @@ class DemSeriesRecorder {
 
   template <class Sim, class Domain>
   void sample(const Sim& sim, Domain& domain) {
+    // simulation.on_instability: reduce_dt went back to an earlier state: the samples of the abandoned stretch go
+    // (those already stored stay: a file or the back-end keeps the first sample of each time).
+    const double now = sim.time();
+    if (!m_series.time.empty() && m_series.time.back() > now + 1e-12 * std::max(1.0, std::abs(now))) {
+      while (!m_series.time.empty() && m_series.time.back() > now + 1e-12 * std::max(1.0, std::abs(now))) {
+        m_series.time.pop_back();
+        for (auto& v : m_series.values) v.pop_back();
+      }
+      m_next = m_config.interval;
+      while (m_config.interval > 0 && m_next <= now * (1 + 1e-12)) m_next += m_config.interval;
+    }
     if (m_config.interval > 0 ? sim.time() < m_next * (1 - 1e-12) : !sim.outputDue()) return;
     m_series.add(sim.time(), values(sim, domain));
     while (m_config.interval > 0 && m_next <= sim.time() * (1 + 1e-12)) m_next += m_config.interval;

@@ -177,6 +177,15 @@ Status writeProbeFiles(const std::string& h5Path, const ProbeSeries& series) {
   return f ? Status::ok() : ioError("cannot write " + csv);
 }
 
+Status writeProbesCsv(const std::string& h5Path) {
+  auto series = readProbeSeries(h5Path);
+  if (!series) return series.status().code() == StatusCode::kNotFound ? Status::ok() : series.status();
+  const std::string csv = probesCsvPathFor(h5Path);
+  std::ofstream f(csv);
+  f << probeSeriesCsv(series.value());
+  return f ? Status::ok() : ioError("cannot write " + csv);
+}
+
 ProbeSeries probeSamples(const ProbeSeries& series, std::size_t first) {
   ProbeSeries out;
   out.names = series.names;

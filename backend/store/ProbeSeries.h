@@ -79,6 +79,8 @@ Status writeProbeFiles(const std::string& h5Path, const ProbeSeries& series);
 // `now` after the samples of the /probes already in h5Path from before its first time (a resumed run's earlier
 // part), when that file has a series of the same names; else `now` alone.
 ProbeSeries withEarlierSamples(const std::string& h5Path, const ProbeSeries& now);
+// The /probes of a closed snapshot file as CSV beside it (probesCsvPathFor); nothing when it has none.
+Status writeProbesCsv(const std::string& h5Path);
 // "time,P1 [Pa],H1 [m]\n0,...": the CSV form.
 std::string probeSeriesCsv(const ProbeSeries& series);
 

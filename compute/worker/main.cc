@@ -118,6 +118,7 @@ int runRank(const worker::WorkerOptions& o, int rank, int ranks) {
   backend::DemSeriesRecorder series(sim, all, cfg.series);
   std::size_t seriesSent = 0;
   auto sendSeries = [&]() -> Status {
+    seriesSent = std::min(seriesSent, series.series().time.size());  // after a reduce_dt rewind
     if (!lead || seriesSent == series.series().time.size()) return Status::ok();
     Status s = sink->writeProbes(backend::probeSamples(series.series(), seriesSent));
     if (s.isOk()) seriesSent = series.series().time.size();

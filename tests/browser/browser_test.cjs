@@ -57,13 +57,14 @@ async function setup(dir) {
   check(r.status === 0, `start.sh failed (${r.status})`);
   const state = { dir, web: `http://127.0.0.1:${ports.PFLOW_WEB_PORT}`, config: path.join(dir, 'config.yaml'),
     token: fs.readFileSync(path.join(dir, 'admin.token'), 'utf8').trim() };
-  for (let i = 0; i < 100; ++i) {  // pflow-web answers
+  let up = false;
+  for (let i = 0; i < 100 && !up; ++i) {  // pflow-web answers
     try {
-      const res = await fetch(`${state.web}/index.html`);
-      if (res.ok) break;
+      up = (await fetch(`${state.web}/index.html`)).ok;
     } catch (_) { /* not yet */ }
-    await sleep(100);
+    if (!up) await sleep(100);
   }
+  check(up, `pflow-web does not serve the page at ${state.web} (log: ${dir}/logs/web.log)`);
   fs.writeFileSync(path.join(dir, 'stack.json'), JSON.stringify(state));
 }
 
@@ -114,6 +115,7 @@ async function signedIn(b, state, hash = '#jobs') {
   await page.waitForSelector('#token');
   await page.type('#token', state.token);
   await page.click('#login-button');
+  if (state.token === state.realToken || !state.realToken) await page.waitForSelector('#sign-out', { timeout: 15000 });  // signed in: the page routed
   return page;
 }
 
@@ -292,7 +294,7 @@ const scenarios = {
   async wrong_token(state) {
     const b = await browser();
     try {
-      const page = await signedIn(b, { ...state, token: 'pflow_' + '0'.repeat(64) });
+      const page = await signedIn(b, { ...state, token: 'pflow_' + '0'.repeat(64), realToken: state.token });
       await page.waitForFunction(() => (document.getElementById('login-error')?.textContent || '').includes('refused'), { timeout: 15000 });
       const text = await page.$eval('#login-error', (e) => e.textContent);
       check(!(await page.$('#jobs-table')), 'jobs listed with a wrong token');

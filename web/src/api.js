@@ -50,10 +50,17 @@ export const api = {
   series: (job) => fetchArrays(`/api/jobs/${id(job)}/series`, headers()),
   // Server-sent events of a job (EventSource sends no headers: the token goes in the query, over loopback or TLS).
   events: (job, onEvent, onError) => {
+    // Closed when the job has ended or the server says why not (EventSource would reconnect forever).
     const source = new EventSource(`/api/jobs/${id(job)}/events?token=${encodeURIComponent(token.get())}`);
-    source.onmessage = (e) => onEvent(JSON.parse(e.data));
+    source.onmessage = (e) => {
+      const event = JSON.parse(e.data);
+      onEvent(event);
+      if (event.job && ['succeeded', 'failed', 'cancelled'].includes(event.job.state)) source.close();
+    };
     source.addEventListener('error', (e) => {
-      if (e.data) onError(JSON.parse(e.data));
+      if (!e.data) return;  // a dropped connection: EventSource reconnects
+      source.close();
+      onError(JSON.parse(e.data));
     });
     return source;
   },

@@ -35,7 +35,10 @@ export class JobView {
     this.stage = el('div', { class: 'stage', id: 'view', 'data-state': 'loading' }, this.canvas, this.overlay, this.status);
     const select = (id, options, onchange) => el('select', { id, onchange }, ...options.map(([v, t]) => el('option', { value: v }, t)));
     this.title = el('h2', { id: 'view-title' }, `job ${this.job}`);
-    this.colorBy = select('color-by', [], () => this.recolor());
+    this.colorBy = select('color-by', [], () => {
+      this.min.value = this.max.value = '';  // a range belongs to its field
+      this.recolor();
+    });
     this.colormap = select('colormap', [['', 'by field'], ...COLORMAPS.map((m) => [m, m])], () => this.recolor());
     this.min = el('input', { id: 'range-min', type: 'number', step: 'any', placeholder: 'min', onchange: () => this.recolor() });
     this.max = el('input', { id: 'range-max', type: 'number', step: 'any', placeholder: 'max', onchange: () => this.recolor() });
@@ -128,8 +131,12 @@ export class JobView {
   }
 
   async listSnapshots() {
-    if (this.listing) return;
+    if (this.listing) {
+      this.listAgain = true;  // an event came meanwhile: list once more when this one is done
+      return;
+    }
     this.listing = true;
+    this.listAgain = false;
     try {
       const answer = await api.snapshots(this.job);
       const before = this.steps.length;
@@ -141,6 +148,7 @@ export class JobView {
       this.setState('error', e.message);
     } finally {
       this.listing = false;
+      if (this.listAgain) this.listSnapshots();
     }
   }
 

@@ -31,12 +31,14 @@ void main() {
     return;
   }
   // The square around the sphere's outline in the plane through its centre facing the camera. In perspective the
-  // outline of an off-axis sphere is an ellipse stretched by 1 / cos(angle off the axis) and by d / sqrt(d^2 - r^2)
-  // up close; 10 % more covers the ellipse's outward shift.
-  float grow = 1.05;
+  // outline's far edge, seen at theta + alpha off the view axis (theta: the centre's angle, sin alpha = r / d), lies
+  // r / cos(theta + alpha) from the centre in that plane: d / (sqrt(d^2 - r^2) cos theta - r sin theta) radii.
+  float grow = 1.02;
   if (orthographic < 0.5) {
     float d = length(c.xyz);
-    grow = 1.1 * d / (sqrt(max(d * d - radius * radius, 1e-3 * d * d)) * max(-c.z / d, 0.2));
+    float cosT = clamp(-c.z / d, 0.0, 1.0), sinT = sqrt(1.0 - cosT * cosT);
+    float den = sqrt(max(d * d - radius * radius, 0.0)) * cosT - radius * sinT;
+    grow = den > d / 8.0 ? 1.02 * d / den : 8.0;
   }
   vCenter = c.xyz;
   vRadius = radius;
@@ -141,6 +143,7 @@ export class ParticleCloud {
       g.getAttribute('value').array.set(values);
       for (const a of [centerName, 'radius', 'value']) g.getAttribute(a).needsUpdate = true;
     } else {
+      g.dispose();  // the old buffers' GPU side
       g.setAttribute(centerName, new Attribute(Float32Array.from(centers), 3));
       g.setAttribute('radius', new Attribute(Float32Array.from(radii), 1));
       g.setAttribute('value', new Attribute(Float32Array.from(values), 1));

@@ -147,6 +147,7 @@ export function streamlines(w, nu, nv) {
   const stride = Math.max(1, Math.round(Math.max(nu, nv) / 28));
   const step = 0.3, maxSteps = 4 * (nu + nv);
   const lines = [];
+  let touched = [];  // occupancy cells the current line took
   const trace = (u0, v0, sign, id) => {
     const pts = [];
     let u = u0, v = v0;
@@ -162,6 +163,7 @@ export function streamlines(w, nu, nv) {
       if (!inside(un, vn)) break;
       const o = occ(un, vn);
       if (owner[o] >= 0 && owner[o] !== id) break;
+      if (owner[o] < 0) touched.push(o);
       owner[o] = id;
       pts.push(un, vn);
       u = un;
@@ -174,9 +176,13 @@ export function streamlines(w, nu, nv) {
       const u0 = i + 0.5, v0 = j + 0.5;
       if (owner[occ(u0, v0)] >= 0) continue;
       const id = lines.length;
+      touched = [occ(u0, v0)];
       owner[occ(u0, v0)] = id;
       const back = trace(u0, v0, -1, id), fwd = trace(u0, v0, 1, id);
-      if (back.length + fwd.length < 8) continue;
+      if (back.length + fwd.length < 8) {  // too short to show: its cells free for others
+        for (const o of touched) owner[o] = -1;
+        continue;
+      }
       const line = [];
       for (let k = back.length - 2; k >= 0; k -= 2) line.push(back[k], back[k + 1]);
       line.push(u0, v0, ...fwd);

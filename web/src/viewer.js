@@ -82,6 +82,17 @@ function finiteRange(values) {
   return [min, max];
 }
 
+// Frees the GPU side of an object tree (geometries, materials, textures): three.js does not when it is removed.
+function dispose(object) {
+  object.traverse((o) => {
+    if (o.geometry) o.geometry.dispose();
+    if (o.material) {
+      if (o.material.map) o.material.map.dispose();
+      o.material.dispose();
+    }
+  });
+}
+
 export const VIEWS = {
   iso: { dir: [1, -1.25, 0.85], up: [0, 0, 1] },
   top: { dir: [0, 0, 1], up: [0, 1, 0] },
@@ -164,7 +175,7 @@ export class Viewer {
   }
 
   setGeometry(geometry) {
-    for (const s of this.surfaces) this.surfaceGroup.remove(s.object);
+    for (const s of this.surfaces) (this.surfaceGroup.remove(s.object), dispose(s.object));
     const hidden = new Set(this.surfaces.filter((s) => !s.object.visible).map((s) => s.number));
     this.surfaces = buildSurfaces(geometry, this.bounds);
     for (const s of this.surfaces) {
@@ -242,6 +253,7 @@ export class Viewer {
 
   // slice: {axis, value, field, streamlines, colormap, range} or null. Throws with the reason on a bad request.
   setSlice(slice) {
+    dispose(this.sliceGroup);
     this.sliceGroup.clear();
     this.slice = slice;
     this.sliceInfo = null;
