@@ -135,7 +135,7 @@ Result<RunSummary> runScene(const RunOptions& o) {
   // The run's series (backend/store/DemSeries.h), appended to /probes after each snapshot so that a killed run
   // keeps them; a resumed run into the same file goes on where the file's end (earlier samples kept, repeats dropped).
   compute::Domain single;
-  backend::DemSeriesRecorder series(sim, single, cfg.series);
+  backend::DemSeriesRecorder series(sim, single, cfg.series, cfg.surfaceNames);
   std::size_t seriesStored = 0;
   auto storeSeries = [&]() -> Status {
     seriesStored = std::min(seriesStored, series.series().time.size());

@@ -7,6 +7,11 @@
 //   coordination              2 x contacts / particles
 //   mass_past:<plane> [kg]    the mass of the particles whose centre lies past output.flow_planes' <plane> (on the
 //                             side its normal points to); its growth is the mass flow through the plane
+//   force_x:<surface> .. force_z:<surface> [N], torque_x:<surface> .. torque_z:<surface> [N m]
+//                             the load of the particles' contacts on each wall surface (planes and mesh triangles by
+//                             surface number; a '/' in its name becomes '.'), force and torque about the origin (about p: T - p x F), summed during
+//                             the forces of the sampled step itself (Simulation::recordWallLoads); the start's
+//                             sample, taken before any step, has none (NaN)
 // A series' point is the flow plane's point, or NaN for the global ones. Sampled at the start, then every
 // output.series_interval of simulated time (the first step at or past each multiple), or at every snapshot when
 // none is given. Sampling is collective in a distributed run: every rank calls sample() after every step.
@@ -25,8 +30,12 @@ namespace pflow::backend {
 class DemSeriesRecorder {
  public:
   // Sim: compute::Simulation; Domain: compute::Domain (sums over ranks). A template: no link dependency.
+  // Surface names by number (RunConfig::surfaceNames; "" or missing: "surface N"). The recorder tells `sim` to sum
+  // the wall loads on the steps it samples.
   template <class Sim, class Domain>
-  DemSeriesRecorder(const Sim& sim, Domain& domain, const compute::SeriesConfig& config) : m_config(config), m_next(config.interval) {
+  DemSeriesRecorder(Sim& sim, Domain& domain, const compute::SeriesConfig& config, const std::vector<std::string>& surfaces = {})
+      : m_config(config), m_lastTime(sim.time()) {
+    sim.recordWallLoads(config.interval <= 0, config.interval);
     const double nan = std::numeric_limits<double>::quiet_NaN();
     auto add = [&](const std::string& name, const char* unit, Vec3d point) {
       m_series.names.push_back(name);
@@ -38,8 +47,14 @@ class DemSeriesRecorder {
     add("wall_contacts", "", {nan, nan, nan});
     add("coordination", "", {nan, nan, nan});
     for (const auto& p : config.flowPlanes) add("mass_past:" + p.name, "kg", p.point);
+    m_surfaces = sim.wallLoads().size() / 6;
+    for (std::size_t k = 0; k < m_surfaces; ++k) {
+      std::string name = k < surfaces.size() && !surfaces[k].empty() ? surfaces[k] : "surface " + std::to_string(k);
+      std::replace(name.begin(), name.end(), '/', '.');  // an HDF5 name has no '/': bin/bottom -> bin.bottom
+      for (const char* axis : {"x", "y", "z"}) add(std::string("force_") + axis + ":" + name, "N", {nan, nan, nan});
+      for (const char* axis : {"x", "y", "z"}) add(std::string("torque_") + axis + ":" + name, "N m", {nan, nan, nan});
+    }
     m_series.add(sim.time(), values(sim, domain));
-    while (m_config.interval > 0 && m_next <= sim.time() * (1 + 1e-12)) m_next += m_config.interval;  // a resumed run
   }
 
   template <class Sim, class Domain>
@@ -52,12 +67,11 @@ class DemSeriesRecorder {
         m_series.time.pop_back();
         for (auto& v : m_series.values) v.pop_back();
       }
-      m_next = m_config.interval;
-      while (m_config.interval > 0 && m_next <= now * (1 + 1e-12)) m_next += m_config.interval;
+      m_lastTime = now;
     }
-    if (m_config.interval > 0 ? sim.time() < m_next * (1 - 1e-12) : !sim.outputDue()) return;
-    m_series.add(sim.time(), values(sim, domain));
-    while (m_config.interval > 0 && m_next <= sim.time() * (1 + 1e-12)) m_next += m_config.interval;
+    const bool due = m_config.interval > 0 ? compute::seriesSampleDue(m_lastTime, now, m_config.interval) : sim.outputDue();
+    m_lastTime = now;
+    if (due) m_series.add(now, values(sim, domain));
   }
 
   const ProbeSeries& series() const { return m_series; }
@@ -71,12 +85,22 @@ class DemSeriesRecorder {
     std::vector<double> v = {domain.sum(sim.engine().kineticEnergy()), pairs, domain.sum(double(stats.wallContacts)),
                              particles > 0 ? 2 * pairs / particles : 0.0};
     for (const auto& p : m_config.flowPlanes) v.push_back(domain.sum(sim.engine().massPastPlane(p.point, p.normal)));
+    if (m_surfaces > 0) {
+      const bool fresh = sim.wallLoadsStep() == sim.stepCount();  // summed during this very step
+      const std::vector<double> loads = sim.wallLoads();
+      for (std::size_t k = 0; k < 6 * m_surfaces; ++k) {
+        const double local = fresh && k < loads.size() ? loads[k] : 0.0;
+        const double total = domain.sum(local);  // collective on every rank alike
+        v.push_back(fresh ? total : std::numeric_limits<double>::quiet_NaN());
+      }
+    }
     return v;
   }
 
   compute::SeriesConfig m_config;
   ProbeSeries m_series;
-  double m_next;
+  double m_lastTime;
+  std::size_t m_surfaces = 0;
 };
 
 }  // namespace pflow::backend

@@ -51,4 +51,21 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE std::uint32_t atomicAddU32(std::uint32_t* add
 #endif
 }
 
+// Adds v to a double (wall loads: a few addresses, on the steps that record them only).
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void atomicAddF64(double* addr, double v) {
+#if defined(__CUDA_ARCH__)
+  atomicAdd(addr, v);
+#else
+  std::uint64_t cur = __atomic_load_n(reinterpret_cast<std::uint64_t*>(addr), __ATOMIC_RELAXED);
+  for (;;) {
+    double d;
+    __builtin_memcpy(&d, &cur, sizeof d);
+    d += v;
+    std::uint64_t next;
+    __builtin_memcpy(&next, &d, sizeof d);
+    if (__atomic_compare_exchange_n(reinterpret_cast<std::uint64_t*>(addr), &cur, next, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) return;
+  }
+#endif
+}
+
 }  // namespace pflow

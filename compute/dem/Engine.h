@@ -147,6 +147,11 @@ class Engine : public DistributedRows {
   // plus rotational) and gravitational energy (relative to the grid's lower corner), and the kinetic alone [J].
   virtual double mechanicalEnergy() const = 0;
   virtual double kineticEnergy() const = 0;
+  // Wall loads: with recording on, the force computations sum each surface's load over its wall contacts (atomics:
+  // for the steps a series samples only); wallLoads() is 6 per surface number (force on the wall [N], torque on it
+  // about the origin [N m]) from the last computeForces that recorded, over the owned particles.
+  virtual void recordWallLoads(bool on) = 0;
+  virtual std::vector<double> wallLoads() const = 0;
   // Mass of the owned particles whose centre lies past the plane (point, unit normal) [kg]: one device reduction.
   virtual double massPastPlane(const Vec3d& point, const Vec3d& normal) const = 0;
   // Elastic energy stored in the owned particles' contacts now (the Hertz potential (8/15) E* sqrt(R*)

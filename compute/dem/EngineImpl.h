@@ -157,6 +157,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
 
   Status computeForces(double dt, double time, ForceSet set) override {
     if (set != ForceSet::kBoundary) resetConditions();
+    if (m_recordLoads && set != ForceSet::kBoundary) m_mem.fillBytes(m_surfaceLoads.data(), 0, m_surfaceLoads.bytes());
     launchForces(dt, time, set, false);
     if (set == ForceSet::kInterior) return Status::ok();  // queued; the boundary pass reads the flags
     Conditions c = readConditions();
@@ -236,6 +237,18 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
                                                                             m_setup.gravity, m_setup.grid.lo}});
   }
   double kineticEnergy() const override { return m_exec.sumOf(m_owned, kineticOf()); }
+  void recordWallLoads(bool on) override { m_recordLoads = on && m_anyWalls; }
+  std::vector<double> wallLoads() const override {
+    std::vector<double> out(6 * surfaceCount(), 0.0);
+    if (m_anyWalls && !out.empty()) m_mem.copyToHost(out.data(), m_surfaceLoads.data(), out.size() * sizeof(double));
+    return out;
+  }
+  std::size_t surfaceCount() const {
+    std::size_t n = m_setup.surfaceNames.size();
+    for (auto s : m_setup.triSurface) n = std::max<std::size_t>(n, std::size_t(s) + 1);
+    for (auto s : m_setup.planeSurface) n = std::max<std::size_t>(n, std::size_t(s) + 1);
+    return n;
+  }
   double massPastPlane(const Vec3d& point, const Vec3d& normal) const override {
     return m_exec.sumOf(m_owned, kernels::MassPastPlane<R>{m_particles.template ptr<Field::Position>(), m_particles.template ptr<Field::Mass>(),
                                                            point, normal});
@@ -455,6 +468,9 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     a.triVerts = m_triVerts.as<Vec3d>();
     a.triMesh = m_triMesh.as<std::int32_t>();
     a.triMaterial = m_triMaterial.as<std::int32_t>();
+    a.triSurface = m_setup.triSurface.empty() ? nullptr : m_triSurface.as<std::int32_t>();
+    a.planeSurface = m_setup.planeSurface.empty() ? nullptr : m_planeSurface.as<std::int32_t>();
+    a.surfaceLoads = m_recordLoads ? m_surfaceLoads.as<double>() : nullptr;
     a.meshMotion = m_meshMotion.as<MeshMotionParams>();
     a.wallCand = m_wallCand.as<Index>();
     a.wallCandCount = m_wallCandCount.as<std::uint32_t>();
@@ -499,6 +515,8 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   Buffer m_nbr{m_mem, 0}, m_nbrSlot{m_mem, 0}, m_nbrCount{m_mem, 0};
   Buffer m_planes{m_mem, 0}, m_triRef{m_mem, 0}, m_triVerts{m_mem, 0}, m_triRebuild{m_mem, 0};
   Buffer m_triMesh{m_mem, 0}, m_triMaterial{m_mem, 0}, m_meshMotion{m_mem, 0};
+  Buffer m_triSurface{m_mem, 0}, m_planeSurface{m_mem, 0}, m_surfaceLoads{m_mem, 0};
+  bool m_recordLoads = false;
   Buffer m_binStart{m_mem, 0}, m_binItems{m_mem, 0}, m_binCount{m_mem, 0};
   Buffer m_wallCand{m_mem, 0}, m_wallCandCount{m_mem, 0}, m_planeMask{m_mem, 0};
   Buffer m_params{m_mem, 0}, m_cond{m_mem, sizeof(Conditions)};
@@ -563,6 +581,9 @@ void EngineImpl<Exec, R>::init() {
   upload(m_triRebuild, s.triVerts);
   upload(m_triMesh, s.triMesh);
   upload(m_triMaterial, s.triMaterial);
+  upload(m_triSurface, s.triSurface);
+  upload(m_planeSurface, s.planeSurface);
+  m_surfaceLoads.resize(std::max<std::size_t>(1, 6 * surfaceCount()) * sizeof(double));
   upload(m_meshMotion, s.meshMotion);
   for (const auto& m : s.meshMotion) m_anyMeshMoves |= (m.angularSpeed != 0 || norm2(m.velocity) != 0);
   m_anyWalls = s.model.walls;  // deriveModel: off without planes and triangles (on in simulation.model: full)

@@ -32,6 +32,9 @@ Status Simulation::stepPhases() {
   const bool due = m_rebuildInterval > 0 ? (m_step + 1) % m_rebuildInterval == 0  // fixed interval: may miss contacts
                                          : 2 * moved > m_skin || moved + meshMoved > m_skin;
   const bool rebuildNow = m_domain->anyRebuild(due);
+  const bool loads = (m_loadsAtOutputs && ((m_nextOutput >= 0 && m_step + 1 >= m_nextOutput) || m_step + 1 == m_endOutput)) ||
+                     seriesSampleDue(m_time, tNext, m_loadsInterval);  // the steps advanceOutput will call due
+  m_engine->recordWallLoads(loads);
   if (rebuildNow) s = rebuild(), m_rebuiltAt = m_step + 1;
   if (!rebuildNow && m_domain->ranks() > 1) s = haloAndForces(dt, tNext);  // ghosts refreshed (ranks)
   else if (s.isOk()) { auto t = m_timers.time(Phase::kForces);     s = m_engine->computeForces(dt, tNext); }
@@ -51,6 +54,7 @@ Status Simulation::stepPhases() {
   }
   ++m_step;
   m_time = tNext;
+  if (loads) m_loadsStep = m_step;
   return Status::ok();
 }
 

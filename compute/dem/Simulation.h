@@ -87,6 +87,12 @@ class Simulation {
   }
   GeometrySnapshot geometry() const { return m_engine->geometry(); }
   ContactStats contactStats() const { return m_engine->contactStats(); }
+  // Wall loads (Engine::recordWallLoads) summed during the forces of the steps a series samples at the end of:
+  // every output step (atOutputs) and each step reaching a multiple of `interval` s (seriesSampleDue; 0: none).
+  // wallLoads(): 6 per surface number from the last such step, wallLoadsStep() (-1: none yet).
+  void recordWallLoads(bool atOutputs, double interval) { m_loadsAtOutputs = atOutputs, m_loadsInterval = interval; }
+  std::vector<double> wallLoads() const { return m_engine->wallLoads(); }
+  std::int64_t wallLoadsStep() const { return m_loadsStep; }
   const PhaseTimers& timers() const { return m_timers; }
   PhaseTimers& timers() { return m_timers; }
   std::string executorDescription() const { return m_engine->executorDescription(); }
@@ -145,6 +151,9 @@ class Simulation {
   // output schedule (steps)
   std::int64_t m_outputSteps = 0, m_nextOutput = -1, m_endOutput = -1;
   bool m_outputDue = false;
+  bool m_loadsAtOutputs = false;
+  double m_loadsInterval = 0;
+  std::int64_t m_loadsStep = -1;
   bool m_checkpointDue = false;
   bool m_started = false;  // initialise() done: errors before are the start's (step 0)  // after the step in progress (stepPhases decides)
   std::int64_t m_rebuilds = 0;

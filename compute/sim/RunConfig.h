@@ -1,6 +1,7 @@
 // The plain, validated description of one run. SI units everywhere. No proto, no YAML: the scene
 // loader (frontend) and later the worker's proto conversion fill it; validate() checks it in one place.
 #pragma once
+#include <cmath>
 #include <array>
 #include <cstdint>
 #include <optional>
@@ -136,6 +137,12 @@ struct SeriesConfig {
   double interval = 0;
   std::vector<FlowPlane> flowPlanes;
 };
+
+// Whether a step from time `before` to `after` ends at a sample of a series taken every `interval` s: it reaches
+// or passes the next multiple (the same test in the recorder and in the step that sums the wall loads for it).
+inline bool seriesSampleDue(double before, double after, double interval) {
+  return interval > 0 && std::floor(after / interval * (1 + 1e-12)) > std::floor(before / interval * (1 + 1e-12));
+}
 
 struct RunConfig {
   Solver solver = Solver::kDem;

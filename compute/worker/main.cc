@@ -115,7 +115,7 @@ int runRank(const worker::WorkerOptions& o, int rank, int ranks) {
   // The run's series (backend/store/DemSeries.h), sent to the back-end's /probes with each snapshot. A resumed run
   // samples again from its checkpoint's time; the back-end drops samples at or before the last it stored
   // (appendProbeSeries), so the job's series keeps one sample per time across attempts.
-  backend::DemSeriesRecorder series(sim, all, cfg.series);
+  backend::DemSeriesRecorder series(sim, all, cfg.series, cfg.surfaceNames);
   std::size_t seriesSent = 0;
   auto sendSeries = [&]() -> Status {
     seriesSent = std::min(seriesSent, series.series().time.size());  // after a reduce_dt rewind

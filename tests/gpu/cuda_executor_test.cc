@@ -261,6 +261,30 @@ TEST(CudaExecutor, SettledBedStatisticsMatchCpu) {
 }
 
 // A blow-up on the GPU is caught and reported like on the CPU: the particle, the step, the cause.
+// Wall loads (the series' force and torque per surface) summed on the GPU with double atomics equal the CPU's for
+// the same step: a heap's first step, its lowest spheres pressing on the floor.
+TEST(CudaExecutor, WallLoadsMatchCpu) {
+  SKIP_WITHOUT_GPU();
+  compute::RunConfig c = pouredHeap(1.5e-3);
+  c.surfaceNames = {"floor", "x0", "x1", "y0", "y1"};
+  for (std::size_t p = 0; p < c.planes.size(); ++p) c.planes[p].surface = std::int32_t(p);
+  auto cpu = make(c, ExecutorKind::kCpu), gpu = make(c, underTest(), compute::EngineSetup::Layout::kGpu);
+  ASSERT_TRUE(cpu && gpu);
+  std::vector<double> loads[2];
+  int k = 0;
+  for (auto* sim : {cpu.get(), gpu.get()}) {
+    sim->recordWallLoads(false, 1e-12);  // every step
+    ASSERT_TRUE(sim->runSteps(3).isOk());
+    ASSERT_EQ(sim->wallLoadsStep(), sim->stepCount());
+    loads[k++] = sim->wallLoads();
+  }
+  ASSERT_EQ(loads[0].size(), 30u);
+  double scale = 0;
+  for (double v : loads[0]) scale = std::max(scale, std::abs(v));
+  ASSERT_GT(scale, 0) << "no wall load: the scene does not press on its walls";
+  for (std::size_t i = 0; i < loads[0].size(); ++i) EXPECT_NEAR(loads[1][i], loads[0][i], 1e-9 * scale) << "element " << i;
+}
+
 TEST(CudaExecutor, BlowUpIsReported) {
   SKIP_WITHOUT_GPU();
   compute::RunConfig c;

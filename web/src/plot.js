@@ -20,15 +20,17 @@ export function seriesPanels(probes, only = []) {
   const groups = new Map();
   for (const name of names) {
     const f = probes[name];
+    // Together in one panel: numbered probes of one unit (P1..P8), and a surface's force or torque components.
     const numbered = /^([A-Za-z]+)[0-9]+$/.exec(name);
-    if (numbered) {
-      const key = `${numbered[1]}|${f.unit}`;
+    const load = /^(force|torque)_([xyz]):(.+)$/.exec(name);
+    if (numbered || load) {
+      const key = numbered ? `${numbered[1]}|${f.unit}` : `${load[1]}|${load[3]}`;
       if (!groups.has(key)) {
-        const panel = { title: `${numbered[1]} probes`, unit: f.unit, time, lines: [] };
+        const panel = { title: numbered ? `${numbered[1]} probes` : `${load[1]} on ${load[3]}`, unit: f.unit, time, lines: [] };
         groups.set(key, panel);
         panels.push(panel);
       }
-      groups.get(key).lines.push({ name, y: f.values });
+      groups.get(key).lines.push({ name: numbered ? name : load[2], y: f.values });
       continue;
     }
     const plane = /^mass_past:(.+)$/.exec(name);

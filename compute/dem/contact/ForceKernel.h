@@ -67,6 +67,10 @@ struct ForceArgs {
   const Vec3d* triVerts;
   const std::int32_t* triMesh;
   const std::int32_t* triMaterial;
+  const std::int32_t* triSurface;    // surface number of each triangle
+  const std::int32_t* planeSurface;  // surface number of each plane
+  double* surfaceLoads;              // null, or 6 per surface (force on the wall [N], torque on it about the origin
+                                     // [N m]) summed over this pass's wall contacts (Engine::recordWallLoads)
   const MeshMotionParams* meshMotion;
   const Index* wallCand;
   const std::uint32_t* wallCandCount;
@@ -96,6 +100,7 @@ struct WallContact {
   std::uint64_t key;
   std::int32_t material;
   bool isFace;
+  std::int32_t surface;  // the wall's surface number (-1: none)
 };
 
 // The contact of particle i with partner j as i sees it, for d = x_j - x_i with |d|^2 = d2 < rs^2 (rs = r_i + r_j),
@@ -471,7 +476,8 @@ struct ComputeWallForces {
       }
       if (nwc == kMaxWallContacts) { tooMany = true; break; }
       if (double(ri) - sd > a.maxOverlap * double(ri)) flagDeepOverlap(a.cond, i);
-      wc[nwc++] = {-pl.normal, xi - sd * pl.normal, pl.normal, zero3<double>(), double(ri) - sd, planeKey(Index(p)), pl.material, true};
+      wc[nwc++] = {-pl.normal, xi - sd * pl.normal, pl.normal, zero3<double>(), double(ri) - sd, planeKey(Index(p)), pl.material, true,
+                   a.planeSurface ? a.planeSurface[p] : -1};
     }
     const std::uint32_t nc = a.wallCandCount[i] < a.wallCandCapacity ? a.wallCandCount[i] : a.wallCandCapacity;
     for (std::uint32_t e = 0; e < nc; ++e) {
@@ -492,7 +498,7 @@ struct ComputeWallForces {
       if (rid - d > a.maxOverlap * rid) flagDeepOverlap(a.cond, i);
       const std::int32_t mesh = a.triMesh[t];
       wc[nwc++] = {n, cp.point, fn, a.meshMotion[mesh].velocityAt(cp.point, a.time), rid - d, triangleKey(mesh, t),
-                   a.triMaterial[t], cp.feature == geometry::Feature::kFace};
+                   a.triMaterial[t], cp.feature == geometry::Feature::kFace, a.triSurface ? a.triSurface[t] : -1};
     }
     if (tooMany) atomicOrU32(&a.cond->flags, kTooManyWallContacts);
     const SlotRow<std::uint64_t> key = a.wallLayout.at(a.wallKey, i);
@@ -531,6 +537,7 @@ struct ComputeWallForces {
                                    : contact::hertzMindlin<false, false>(params[wc[k].material], st, zero3<R>(), R(a.dt));
         f += out.force;
         tq += out.torque;
+        addLoad(wc[k].surface, xi, out.force, out.torque);
       }
       return;
     }
@@ -580,7 +587,23 @@ struct ComputeWallForces {
       f += out.force;
       tq += out.torque;
       if (s >= 0) disp[s] = out.history;
+      addLoad(c.surface, xi, out.force, out.torque);
     }
+  }
+
+  // The reaction of one wall contact on its surface: force -F, and torque -(x_i x F + tau) about the origin (the
+  // particle's force F and torque tau about its centre x_i: what the contact gives the particle, the wall loses).
+  PFLOW_HOSTDEVICE void addLoad(std::int32_t surface, Vec3d xi, V force, V torque) const {
+    if (a.surfaceLoads == nullptr || a.storeOnly || surface < 0) return;
+    const Vec3d fd = vcast<double>(force);
+    const Vec3d t = cross(xi, fd) + vcast<double>(torque);
+    double* l = a.surfaceLoads + 6 * std::size_t(surface);
+    atomicAddF64(l + 0, -fd.x);
+    atomicAddF64(l + 1, -fd.y);
+    atomicAddF64(l + 2, -fd.z);
+    atomicAddF64(l + 3, -t.x);
+    atomicAddF64(l + 4, -t.y);
+    atomicAddF64(l + 5, -t.z);
   }
 
   PFLOW_HOSTDEVICE static contact::ContactState<R> wallState(const WallContact& c, V vi, V wi, R ri, R mi, R Ii) {
