@@ -178,6 +178,7 @@ Result<RunSummary> runScene(const RunOptions& o) {
     return Status::ok();
   };
   Status run = sim.runUntil(o.maxSteps >= 0 ? double(totalSteps) * sim.dt() : duration, observer);
+  if (run.isOk()) run = sim.finishRun();  // no run that gained energy ends as a success
   sum.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
   sum.steps = sim.stepCount() - firstStep;
   sum.simulatedTime = sim.time();

@@ -46,6 +46,9 @@ class Simulation {
   // `observer`, which may stop the run by returning a non-OK status.
   Status runUntil(double time, const std::function<Status(const Simulation&)>& observer = {});
   Status runSteps(std::int64_t steps);
+  // The end of a run (pflow run, a job): the energy balance with the contacts' stored energy (host copies, once;
+  // collective). NUMERICAL "energy growth: ..." when the run gained energy without a source.
+  Status finishRun();
 
   // File checkpoints. justRebuilt(): the last step ended with a neighbour rebuild, where state() may be taken.
   // resume(): this run, created from the same scene, goes on from `s` as the run it came from did; call
@@ -142,7 +145,7 @@ class Simulation {
   double m_timeBase = 0;
   // Energy detector (disabled while a mesh moves: its work is not accounted for).
   bool m_energyCheck = false;
-  double m_energyStart = 0, m_energyAllowance = 0, m_energyScale = 0;
+  double m_energyStart = 0, m_energyAllowance = 0, m_energyScale = 0, m_elasticStart = 0;
   // reduce_dt
   OnInstability m_onInstability = OnInstability::kStop;
   int m_checkpointSteps = 1000;

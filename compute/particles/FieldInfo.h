@@ -17,6 +17,7 @@ enum FieldFlags : std::uint32_t {
   kGhost = 1u << 2,     // what a ghost (a copy in a neighbouring rank's halo) holds, sent at each rebuild
   kRefresh = 1u << 3,   // refreshed in the ghosts every step between rebuilds
   kCheckpoint = 1u << 4,  // in a checkpoint besides the kMigrate fields (what the step after it reads unrecomputed)
+  kOnRequest = 1u << 5,   // a kSnapshot field written only when output.fields names it (not by default)
 };
 
 enum class Multiplicity : std::uint8_t { kOne, kContactSlots, kWallSlots };

@@ -170,14 +170,15 @@ class FieldRows {
     return Status::ok();
   }
 
-  // The kSnapshot fields named in `fields` (all of them when empty) of rows [0, n), copied off the device.
+  // The kSnapshot fields named in `fields` (when empty: all of them but the kOnRequest ones) of rows [0, n), copied
+  // off the device.
   // Output is double at both precisions (one file layout): float fields are widened on the host.
   ParticleSnapshot snapshot(std::int64_t step, double time, Index n, const std::vector<std::string>& fields) const {
     ParticleSnapshot s{step, time, n, {}};
     for (int k = 0; k < Store::kCount; ++k) {
       const Info& f = Store::kTable[k];
       if (!(f.flags & kSnapshot)) continue;
-      if (!fields.empty() && std::find(fields.begin(), fields.end(), f.name) == fields.end()) continue;
+      if (fields.empty() ? (f.flags & kOnRequest) != 0 : std::find(fields.begin(), fields.end(), f.name) == fields.end()) continue;
       SnapshotArray a{f.name, f.scalar, f.components, f.unit, {}};
       a.data.resize(m_store.fieldBytes(f, n));
       m_mem.copyToHost(a.data.data(), m_store.buffer(f.id).data(), a.data.size());

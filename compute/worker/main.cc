@@ -153,6 +153,7 @@ int runRank(const worker::WorkerOptions& o, int rank, int ranks) {
     return Status::ok();
   };
   Status run = sim.runUntil(duration, observer);
+  if (run.isOk()) run = sim.finishRun();  // collective: no job that gained energy ends as a success
   if (cancelled) {
     spdlog::info("job {} cancelled at step {} (t = {} s)", o.jobId, sim.stepCount(), sim.time());
     if (sink)

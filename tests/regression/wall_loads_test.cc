@@ -88,6 +88,12 @@ TEST(WallLoads, RestingSphereTorqueAboutTheOrigin) {
   EXPECT_NEAR(last(s, "torque_x:floor") / (-mg * y), 1.0, 1e-5);
   EXPECT_NEAR(last(s, "torque_y:floor") / (mg * x), 1.0, 1e-5);
   EXPECT_NEAR(last(s, "torque_z:floor"), 0.0, 1e-9 * mg * x);
+  // The particle's torque is written when output.fields names it, and only then.
+  EXPECT_EQ(sim.snapshot().find("torque"), nullptr);
+  const auto named = sim.snapshot({"id", "position", "torque"});
+  ASSERT_NE(named.find("torque"), nullptr);
+  EXPECT_EQ(named.find("torque")->components, 3);
+  EXPECT_EQ(named.find("torque")->unit, "N m");
 }
 
 }  // namespace
