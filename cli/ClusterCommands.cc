@@ -394,7 +394,7 @@ int fetchSnapshot(const Endpoints& e, const FetchOptions& o, bool json) {
     std::printf("%s\n", j.dump().c_str());
   } else {
     std::printf("job %s: snapshot written to %s (open %s in ParaView)\n", o.jobId.c_str(), o.output.c_str(), xmf.c_str());
-    if (probes) std::printf("job %s: probe and gauge series in %s (/probes) and %s\n", o.jobId.c_str(), o.output.c_str(), csv.c_str());
+    if (probes) std::printf("job %s: time series (an SPH run's probes, a DEM run's energy, contacts and wall loads) in %s (/probes) and %s\n", o.jobId.c_str(), o.output.c_str(), csv.c_str());
   }
   return kExitOk;
 }

@@ -14,7 +14,8 @@ driven by the `pflow` CLI. Each scenario is one function; run all (default) or s
   multinode    two agents (node-a on 127.0.0.1, node-b on 127.0.0.2) and one job across both through mpirun + hostfile
   errors       unknown ids, double cancel, missing steps, a back-end that is down: clear errors, exit codes
   users        users see only their own jobs, an admin all; tokens; `pflow delete` removes a job and its files
-  web          pflow-web: a user's jobs as JSON, the last snapshot's positions as float32 frames, 401 and 403
+  web          pflow-web: a user's jobs as JSON, the last snapshot's positions as float32 frames, 401 and 403;
+               pflow render and pflow plot of the job through the back-end (another user's: refused); its series
   sph          an SPH dam break (solver: sph) submitted, followed and fetched: the same particles, probe series and
                CSV as `pflow run`, and the fluid's grid fields
 """
@@ -512,6 +513,17 @@ def web():
             order = np.argsort(g["id"][...])
             ref = g["position"][...][order].astype(np.float32)
         assert np.array_equal(pos[np.argsort(ids)], ref), "positions differ"
+        # pflow render and pflow plot of the job, through the back-end over TLS; another user may not.
+        png = os.path.join(s.dir, "job.png")
+        info = json.loads(s.cli("render", job, "-o", png, "--json").stdout)
+        assert info["particles"] == len(ids) and os.path.getsize(png) > 10000, info
+        info = json.loads(s.cli("plot", job, "-o", os.path.join(s.dir, "plot.png"), "--json").stdout)
+        r = s.cli("render", job, "-o", os.path.join(s.dir, "bob.png"), check=False, token=bob)
+        assert r.returncode == 7 and not os.path.exists(os.path.join(s.dir, "bob.png")), (r.returncode, r.stderr)
+        with h5py.File(out) as f:  # the job's series came with the fetch: energy, contacts, wall loads
+            names = set(f["probes"].keys())
+            assert {"time", "kinetic_energy", "contacts", "wall_contacts"} <= names, names
+            assert any(n.startswith("force_z:") for n in names), names
     finally:
         s.close()
 

@@ -44,7 +44,9 @@ export function seriesPanels(probes, only = []) {
       panels.push({ title: `mass flow through ${plane[1]}`, unit: 'kg/s', time, lines: [{ name: `rate:${plane[1]}`, y: rate }] });
     }
   }
-  return panels;
+  // A panel with nothing to show (a surface nothing touched: zero or no value throughout) is left out.
+  const shows = (y) => y.some((v) => Number.isFinite(v) && v !== 0);
+  return panels.filter((p) => p.lines.some((l) => shows(l.y)));
 }
 
 function extent(arrays) {
@@ -75,7 +77,9 @@ export function drawPanel(ctx, panel, { x, y, w, h, scale = 1 }) {
   ctx.fillStyle = '#333';
   ctx.textAlign = 'center';
   ctx.textBaseline = 'top';
-  for (const t of ticks(t0, t1)) {
+  const xTicks = Math.max(2, Math.min(6, Math.floor((right - left) / (90 * scale))));
+  const yTicks = Math.max(2, Math.min(6, Math.floor((bottom - top) / (45 * scale))));
+  for (const t of ticks(t0, t1, xTicks)) {
     ctx.beginPath();
     ctx.moveTo(px(t), top);
     ctx.lineTo(px(t), bottom);
@@ -85,7 +89,7 @@ export function drawPanel(ctx, panel, { x, y, w, h, scale = 1 }) {
   ctx.fillText('time [s]', (left + right) / 2, bottom + 22 * scale);
   ctx.textAlign = 'right';
   ctx.textBaseline = 'middle';
-  for (const v of ticks(v0, v1)) {
+  for (const v of ticks(v0, v1, yTicks)) {
     ctx.beginPath();
     ctx.moveTo(left, py(v));
     ctx.lineTo(right, py(v));
@@ -141,12 +145,12 @@ export function drawPlots(ctx, width, height, panels, title, { scale = width / 1
     ctx.fillText('no time series stored for this run', 24 * scale, head + 20 * scale);
     return;
   }
-  const cols = panels.length <= 1 ? 1 : panels.length <= 4 ? 2 : 3;
+  const cols = panels.length <= 1 ? 1 : panels.length <= 4 ? 2 : panels.length <= 9 ? 3 : 4;
   const rows = Math.ceil(panels.length / cols);
   const gap = 12 * scale;
   const w = (width - gap * (cols + 1)) / cols, h = (height - head - gap * (rows + 1)) / rows;
   panels.forEach((p, k) => {
     const c = k % cols, r = Math.floor(k / cols);
-    drawPanel(ctx, p, { x: gap + c * (w + gap), y: head + gap + r * (h + gap), w, h, scale: Math.min(scale, 1.4) });
+    drawPanel(ctx, p, { x: gap + c * (w + gap), y: head + gap + r * (h + gap), w, h, scale: Math.min(scale, 1.4, h / 220) });
   });
 }
