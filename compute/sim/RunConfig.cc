@@ -196,6 +196,11 @@ void validateMeshes(const RunConfig& c, ErrorList& e) {
     if (mo.angularSpeed != 0 && isFinite(mo.axis) && norm2(mo.axis) == 0.0) {
       e.add(mp + ".axis", "[0, 0, 0] is not a direction: the rotation axis must be nonzero when angular_velocity is " + num(mo.angularSpeed));
     }
+    finiteVec(e, mp + ".vibration.amplitude", mo.vibration);
+    nonNegative(e, mp + ".vibration.frequency", mo.frequency);
+    finite(e, mp + ".vibration.phase", mo.phase);
+    if (isFinite(mo.vibration) && norm2(mo.vibration) > 0 && !(mo.frequency > 0))
+      e.add(mp + ".vibration.frequency", "must be > 0 (Hz) for a vibration of amplitude " + vec(mo.vibration) + " m");
   }
 }
 

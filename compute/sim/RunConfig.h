@@ -57,7 +57,13 @@ struct MeshMotion {
   Vec3d axis{0, 0, 1};            // unit vector
   double angularSpeed = 0;        // [rad/s], right-handed about `axis`
   double startTime = 0;           // [s]
-  bool moves() const { return velocity.x != 0 || velocity.y != 0 || velocity.z != 0 || angularSpeed != 0; }
+  // Sinusoidal vibration on top (a shaker): displacement A (sin(2 pi f tau + phase) - sin(phase)) after the start,
+  // so the mesh starts where it is; velocity A 2 pi f cos(2 pi f tau + phase).
+  Vec3d vibration{0, 0, 0};       // amplitude A [m]
+  double frequency = 0;           // f [Hz]
+  double phase = 0;               // [rad]
+  bool vibrates() const { return frequency > 0 && (vibration.x != 0 || vibration.y != 0 || vibration.z != 0); }
+  bool moves() const { return velocity.x != 0 || velocity.y != 0 || velocity.z != 0 || angularSpeed != 0 || vibrates(); }
 };
 
 // A triangle mesh wall: a body of infinite mass. Triangles are numbered in order; `surface` gives each

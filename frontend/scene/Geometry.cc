@@ -25,6 +25,13 @@ void Loader::parseMotion(const Fields& g, MeshMotion& motion) {
   get(*f, "angular_velocity", motion.angularSpeed);
   get(*f, "axis_point", motion.axisPoint);
   get(*f, "start_time", motion.startTime);
+  if (const Entry* v = f->find("vibration")) {  // a shaker: amplitude [m] and frequency [Hz], phase [rad]
+    if (const auto vf = mapping(v->value, f->child("vibration"), v->loc, kVibrationKeys)) {
+      get(*vf, "amplitude", motion.vibration, true);
+      get(*vf, "frequency", motion.frequency, true);
+      get(*vf, "phase", motion.phase);
+    }
+  }
   if (get(*f, "axis", motion.axis)) {
     const double len = norm(motion.axis);
     if (std::isfinite(len) && len > 0) motion.axis = (1.0 / len) * motion.axis;

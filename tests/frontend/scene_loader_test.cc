@@ -640,5 +640,23 @@ TEST(SceneLoader, SeriesIntervalAndFlowPlanes) {
   EXPECT_HAS(e, "'c' names another flow plane too");
   EXPECT_HAS(e, "output.flow_planes[3].point");
 }
+
+// motion.vibration: a shaker's amplitude, frequency and phase; an amplitude without a frequency is an error.
+TEST(SceneLoader, WallVibration) {
+  const std::string set = latticeSet("{min: [0, 0, 0.002], max: [0.01, 0.01, 0.01]}", "0.001");
+  const std::string box = "  - box: {min: [-0.001, -0.001, 0], max: [0.011, 0.011, 0.02]}\n    name: pan\n";
+  const auto ok = loadSceneFromString(minimalScene(set, "  duration: 0.1\n", box + "    motion: {vibration: {amplitude: [0, 0, 0.001], frequency: 50, phase: 0.5}}\n"));
+  ASSERT_TRUE(ok.isOk()) << errorText(ok);
+  ASSERT_EQ(ok->config.meshes.size(), 1u);
+  const auto& m = ok->config.meshes[0].motion;
+  EXPECT_DOUBLE_EQ(m.vibration.z, 0.001);
+  EXPECT_DOUBLE_EQ(m.frequency, 50);
+  EXPECT_DOUBLE_EQ(m.phase, 0.5);
+  EXPECT_TRUE(m.moves());
+  const auto bad = loadSceneFromString(minimalScene(set, "  duration: 0.1\n", box + "    motion: {vibration: {amplitude: [0, 0, 0.001], frequency: -1, tempo: 3}}\n"));
+  const std::string e = errorText(bad);
+  EXPECT_HAS(e, "vibration.frequency");
+  EXPECT_HAS(e, "tempo");
+}
 }  // namespace
 }  // namespace pflow::frontend

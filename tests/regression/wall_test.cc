@@ -134,5 +134,55 @@ TEST(MeshMotion, RisingFloorLiftsSphere) {
   EXPECT_NEAR(s.find("position")->as<Vec3d>()[0].z, kR - dEq + 0.05 * 0.05, 2e-5);
 }
 
+// A vibration on top of the translation and rotation: the transform is the closed form (the axis point carried by
+// velocity t + A (sin(w t + phase) - sin phase)), and the velocity is its time derivative.
+TEST(MeshMotion, VibrationFollowsItsClosedForm) {
+  const double w = 2 * std::numbers::pi * 20, phase = 0.3;
+  compute::MeshMotionParams m{{0.1, 0, 0}, {1, 0, 0}, {0, 0, 1}, 2.0, 0.5, {0, 0.002, 0.001}, w, phase};
+  EXPECT_EQ(norm(m.transform({2, 0, 0}, 0.5) - Vec3d{2, 0, 0}), 0.0) << "at the start, where it was";
+  const double t = 0.5 + 0.0123, tau = t - 0.5;
+  const Vec3d x = m.transform({2, 0, 0}, t);
+  const double s = std::sin(w * tau + phase) - std::sin(phase);
+  const Vec3d axis{1 + 0.1 * tau, 0.002 * s, 0.001 * s};
+  EXPECT_NEAR(x.x, axis.x + std::cos(2.0 * tau), 1e-12);
+  EXPECT_NEAR(x.y, axis.y + std::sin(2.0 * tau), 1e-12);
+  EXPECT_NEAR(x.z, axis.z, 1e-12);
+  const double h = 1e-7;
+  const Vec3d fd = (1.0 / (2 * h)) * (m.transform({2, 0, 0}, t + h) - m.transform({2, 0, 0}, t - h));
+  const Vec3d v = m.velocityAt(x, t);
+  EXPECT_NEAR(v.x, fd.x, 1e-7);
+  EXPECT_NEAR(v.y, fd.y, 1e-7);
+  EXPECT_NEAR(v.z, fd.z, 1e-7);
+}
+
+// A sphere on a floor mesh shaken vertically at amplitude A and angular frequency w: below the relative acceleration
+// Gamma = A w^2 / g = 1 it rides the floor and never leaves it; above, it takes off (the shaker's closed form: the
+// floor's downward acceleration exceeds g in part of each cycle).
+TEST(MeshMotion, ShakenFloorCarriesASphereBelowOneGAndThrowsItAbove) {
+  const double A = 1e-3;
+  auto largestGap = [&](double gamma) {
+    RunConfig c = floorScene(true, {0.0011, 0.0007, kR}, {0, 0, 0}, {0, 0, 0}, 0.1, 0.5);
+    const double w = std::sqrt(gamma * kG / A);
+    c.meshes[0].motion.vibration = {0, 0, A};
+    c.meshes[0].motion.frequency = w / (2 * std::numbers::pi);
+    c.meshes[0].motion.startTime = 0.1;  // after it settled
+    auto sim = Simulation::create(c);
+    EXPECT_TRUE(sim.isOk()) << sim.status().toString();
+    double gap = -1;
+    EXPECT_TRUE(sim.value()->runUntil(0.5, [&](const Simulation& s) {
+      if (s.time() < 0.15) return Status::ok();
+      const double z = s.snapshot({"position"}).find("position")->as<Vec3d>()[0].z;
+      const double floor = A * std::sin(w * (s.time() - 0.1));
+      gap = std::max(gap, z - kR - floor);
+      return Status::ok();
+    }).isOk());
+    return gap;
+  };
+  const double gentle = largestGap(0.5), strong = largestGap(3.0);
+  std::printf("largest gap under the sphere: %.3g m at Gamma 0.5, %.3g m at Gamma 3\n", gentle, strong);
+  EXPECT_LT(gentle, 0.0) << "it left a floor accelerating downwards at half g";
+  EXPECT_GT(strong, 1e-4) << "it stayed on a floor accelerating downwards at 3 g";
+}
+
 }  // namespace
 }  // namespace pflow::test

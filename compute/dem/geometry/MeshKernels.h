@@ -12,25 +12,39 @@
 namespace pflow::compute {
 
 // Device copy of a mesh's prescribed motion (see MeshMotion in RunConfig.h).
+// A mesh's prescribed motion (RunConfig's MeshMotion): from startTime, a constant velocity plus a sinusoidal
+// vibration carry the rotation axis, about which the mesh turns at a constant angular speed.
 struct MeshMotionParams {
   Vec3d velocity;
   Vec3d axisPoint;  // at startTime
   Vec3d axis;       // unit
   double angularSpeed;
   double startTime;
+  Vec3d vibration;    // amplitude [m]; zero: none
+  double omega;       // vibration's angular frequency 2 pi f [rad/s]
+  double phase;       // [rad]
 
   PFLOW_HOSTDEVICE double elapsed(double t) const { return t > startTime ? t - startTime : 0.0; }
+  // The translation after tau of motion: velocity tau + A (sin(omega tau + phase) - sin(phase)).
+  PFLOW_HOSTDEVICE Vec3d translation(double tau) const {
+    Vec3d d = tau * velocity;
+    if (omega != 0.0) d = d + (std::sin(omega * tau + phase) - std::sin(phase)) * vibration;
+    return d;
+  }
   // Position at time t of a point that was at x0 before the motion started.
   PFLOW_HOSTDEVICE Vec3d transform(Vec3d x0, double t) const {
     const double tau = elapsed(t);
     const Vec3d r = angularSpeed != 0.0 ? rotateAbout(x0 - axisPoint, axis, angularSpeed * tau) : x0 - axisPoint;
-    return axisPoint + tau * velocity + r;
+    return axisPoint + translation(tau) + r;
   }
   // Velocity at time t of the mesh point currently at x.
   PFLOW_HOSTDEVICE Vec3d velocityAt(Vec3d x, double t) const {
     if (t <= startTime) return zero3<double>();
-    const Vec3d c = axisPoint + elapsed(t) * velocity;
-    return velocity + cross(angularSpeed * axis, x - c);
+    const double tau = elapsed(t);
+    const Vec3d c = axisPoint + translation(tau);
+    Vec3d v = velocity + cross(angularSpeed * axis, x - c);
+    if (omega != 0.0) v = v + (omega * std::cos(omega * tau + phase)) * vibration;
+    return v;
   }
 };
 
