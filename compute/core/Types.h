@@ -12,6 +12,10 @@
 
 namespace pflow {
 
+// Most points of a wall's piecewise-linear velocity profile (motion.velocity_profile): held inline in the motion's
+// device parameters.
+inline constexpr int kMaxProfilePoints = 16;
+
 // Index of the lowest set bit of a non-zero mask.
 PFLOW_HOSTDEVICE PFLOW_FORCEINLINE int lowestBit(std::uint32_t mask) {
 #if defined(__CUDA_ARCH__)

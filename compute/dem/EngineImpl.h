@@ -585,7 +585,7 @@ void EngineImpl<Exec, R>::init() {
   upload(m_planeSurface, s.planeSurface);
   m_surfaceLoads.resize(std::max<std::size_t>(1, 6 * surfaceCount()) * sizeof(double));
   upload(m_meshMotion, s.meshMotion);
-  for (const auto& m : s.meshMotion) m_anyMeshMoves |= (m.angularSpeed != 0 || norm2(m.velocity) != 0 || (m.omega != 0 && norm2(m.vibration) != 0));
+  for (const auto& m : s.meshMotion) m_anyMeshMoves |= (m.angularSpeed != 0 || norm2(m.velocity) != 0 || (m.omega != 0 && norm2(m.vibration) != 0) || m.profilePoints > 0);
   m_anyWalls = s.model.walls;  // deriveModel: off without planes and triangles (on in simulation.model: full)
   m_binStart.resize((std::size_t(s.grid.numCells()) + 1) * sizeof(Index));
   m_binCount.resize(std::size_t(s.grid.numCells()) * sizeof(std::uint32_t));

@@ -509,9 +509,15 @@ Result<EngineSetup> prepareEngineSetup(const RunConfig& c) {
     }
     const auto& mo = mc.motion;
     const double axisLen = norm(mo.axis);
-    s.meshMotion.push_back({mo.velocity, mo.axisPoint, axisLen > 0 ? (1.0 / axisLen) * mo.axis : Vec3d{0, 0, 1}, mo.angularSpeed,
-                            mo.startTime, mo.vibrates() ? mo.vibration : Vec3d{0, 0, 0},
-                            mo.vibrates() ? 2 * std::numbers::pi * mo.frequency : 0.0, mo.phase});
+    MeshMotionParams mp{mo.velocity, mo.axisPoint, axisLen > 0 ? (1.0 / axisLen) * mo.axis : Vec3d{0, 0, 1}, mo.angularSpeed,
+                        mo.startTime, mo.vibrates() ? mo.vibration : Vec3d{0, 0, 0},
+                        mo.vibrates() ? 2 * std::numbers::pi * mo.frequency : 0.0, mo.phase, 0, {}, {}};
+    for (const auto& p : mo.profile) {
+      if (mp.profilePoints == kMaxProfilePoints) break;  // validate() refuses more
+      mp.profileTau[mp.profilePoints] = p.tau;
+      mp.profileVelocity[mp.profilePoints++] = p.velocity;
+    }
+    s.meshMotion.push_back(mp);
     s.meshNames.push_back(mc.name);
   }
 

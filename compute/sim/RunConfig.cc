@@ -201,6 +201,18 @@ void validateMeshes(const RunConfig& c, ErrorList& e) {
     finite(e, mp + ".vibration.phase", mo.phase);
     if (isFinite(mo.vibration) && norm2(mo.vibration) > 0 && !(mo.frequency > 0))
       e.add(mp + ".vibration.frequency", "must be > 0 (Hz) for a vibration of amplitude " + vec(mo.vibration) + " m");
+    if (!mo.profile.empty()) {
+      if (mo.profile.size() > std::size_t(kMaxProfilePoints))
+        e.add(mp + ".velocity_profile", std::to_string(mo.profile.size()) + " points: at most " + std::to_string(kMaxProfilePoints));
+      if (norm2(mo.velocity) != 0) e.add(mp + ".velocity", "give velocity or velocity_profile, not both");
+      for (std::size_t k = 0; k < mo.profile.size(); ++k) {
+        const std::string pp = mp + ".velocity_profile[" + std::to_string(k) + "]";
+        nonNegative(e, pp + " time", mo.profile[k].tau);
+        finiteVec(e, pp + " velocity", mo.profile[k].velocity);
+        if (k > 0 && !(mo.profile[k].tau > mo.profile[k - 1].tau))
+          e.add(pp, "time " + num(mo.profile[k].tau) + " s must be after the previous point's " + num(mo.profile[k - 1].tau) + " s");
+      }
+    }
   }
 }
 

@@ -63,7 +63,16 @@ struct MeshMotion {
   double frequency = 0;           // f [Hz]
   double phase = 0;               // [rad]
   bool vibrates() const { return frequency > 0 && (vibration.x != 0 || vibration.y != 0 || vibration.z != 0); }
-  bool moves() const { return velocity.x != 0 || velocity.y != 0 || velocity.z != 0 || angularSpeed != 0 || vibrates(); }
+  // A piecewise-linear translation velocity instead of `velocity`: points (tau [s after startTime], v [m/s]),
+  // tau increasing, at most kMaxProfilePoints; linear between them, the first value before, the last after.
+  struct ProfilePoint {
+    double tau;
+    Vec3d velocity;
+  };
+  std::vector<ProfilePoint> profile;
+  bool moves() const {
+    return velocity.x != 0 || velocity.y != 0 || velocity.z != 0 || angularSpeed != 0 || vibrates() || !profile.empty();
+  }
 };
 
 // A triangle mesh wall: a body of infinite mass. Triangles are numbered in order; `surface` gives each

@@ -25,6 +25,20 @@ void Loader::parseMotion(const Fields& g, MeshMotion& motion) {
   get(*f, "angular_velocity", motion.angularSpeed);
   get(*f, "axis_point", motion.axisPoint);
   get(*f, "start_time", motion.startTime);
+  if (const Entry* p = f->find("velocity_profile"); p && isList(p->value, f->child("velocity_profile"), p->loc, "[time, vx, vy, vz] points")) {
+    for (std::size_t k = 0; k < p->value.size(); ++k) {  // [tau, vx, vy, vz]: s after start_time, m/s
+      const std::string path = at(f->child("velocity_profile"), k);
+      const YAML::Node& node = p->value[k];
+      if (!node.IsSequence() || node.size() != 4) {
+        badValue(path, "a point is [time, vx, vy, vz] (s after start_time, m/s)", p->loc);
+        continue;
+      }
+      double row[4];
+      bool ok = true;
+      for (std::size_t c = 0; c < 4; ++c) ok = read(node[c], at(path, c), p->loc, row[c]) && ok;
+      if (ok) motion.profile.push_back({row[0], {row[1], row[2], row[3]}});
+    }
+  }
   if (const Entry* v = f->find("vibration")) {  // a shaker: amplitude [m] and frequency [Hz], phase [rad]
     if (const auto vf = mapping(v->value, f->child("vibration"), v->loc, kVibrationKeys)) {
       get(*vf, "amplitude", motion.vibration, true);

@@ -657,6 +657,15 @@ TEST(SceneLoader, WallVibration) {
   const std::string e = errorText(bad);
   EXPECT_HAS(e, "vibration.frequency");
   EXPECT_HAS(e, "tempo");
+  const auto profile = loadSceneFromString(minimalScene(set, "  duration: 0.1\n", box + "    motion: {velocity_profile: [[0, 0, 0, 0], [0.1, 0, 0, 0.05]]}\n"));
+  ASSERT_TRUE(profile.isOk()) << errorText(profile);
+  ASSERT_EQ(profile->config.meshes[0].motion.profile.size(), 2u);
+  EXPECT_DOUBLE_EQ(profile->config.meshes[0].motion.profile[1].velocity.z, 0.05);
+  const auto backwards = loadSceneFromString(minimalScene(set, "  duration: 0.1\n", box + "    motion: {velocity: [0, 0, 1], velocity_profile: [[0.2, 0, 0, 0], [0.1, 0, 0, 0.05], [1, 2]]}\n"));
+  const std::string b = errorText(backwards);
+  EXPECT_HAS(b, "velocity_profile[1]");
+  EXPECT_HAS(b, "velocity_profile[2]");
+  EXPECT_HAS(b, "not both");
 }
 }  // namespace
 }  // namespace pflow::frontend

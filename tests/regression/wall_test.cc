@@ -184,5 +184,43 @@ TEST(MeshMotion, ShakenFloorCarriesASphereBelowOneGAndThrowsItAbove) {
   EXPECT_GT(strong, 1e-4) << "it stayed on a floor accelerating downwards at 3 g";
 }
 
+// A piecewise-linear velocity profile: the displacement is the profile's exact integral (trapezoids), constant
+// velocity before the first point and after the last, and the velocity its derivative.
+TEST(MeshMotion, VelocityProfileIntegratesExactly) {
+  compute::MeshMotionParams m{{0, 0, 0}, {0, 0, 0}, {0, 0, 1}, 0.0, 0.1, {0, 0, 0}, 0.0, 0.0, 3, {0.0, 0.2, 0.5},
+                              {Vec3d{0, 0, 0}, Vec3d{0, 0, 0.4}, Vec3d{0.3, 0, 0.4}}};
+  auto z = [&](double t) { return m.transform({0, 0, 0}, t); };
+  EXPECT_EQ(norm(z(0.1)), 0.0);
+  EXPECT_NEAR(z(0.1 + 0.2).z, 0.5 * 0.2 * 0.4, 1e-15);                       // the ramp: a triangle
+  EXPECT_NEAR(z(0.1 + 0.35).z, 0.04 + 0.15 * 0.4, 1e-15);                    // then constant 0.4 in z
+  EXPECT_NEAR(z(0.1 + 0.35).x, 0.5 * 0.15 * (0.3 * 0.15 / 0.3), 1e-15);      // x ramps from 0.2 s
+  EXPECT_NEAR(z(0.1 + 1.0).x, 0.5 * 0.3 * 0.3 + 0.5 * 0.3, 1e-14);           // after the last point: 0.3 m/s
+  const double h = 1e-7;
+  for (double t : {0.15, 0.33, 0.52, 0.9}) {
+    const Vec3d fd = (1.0 / (2 * h)) * (z(t + h) - z(t - h));
+    const Vec3d v = m.velocityAt(z(t), t);
+    EXPECT_NEAR(v.x, fd.x, 1e-7) << t;
+    EXPECT_NEAR(v.z, fd.z, 1e-7) << t;
+  }
+}
+
+// A floor lifted by a velocity profile (accelerate, cruise, stop: never faster than g downwards) carries a resting
+// sphere along its closed-form path: at the end the sphere is up by the profile's integral.
+TEST(MeshMotion, ProfiledLiftCarriesSphere) {
+  RunConfig c = floorScene(true, {0.0011, 0.0007, kR}, {0, 0, 0}, {0, 0, 0}, 0.1, 0.5);
+  c.meshes[0].motion.startTime = 0.05;
+  c.meshes[0].motion.profile = {{0.0, {0, 0, 0}}, {0.1, {0, 0, 0.05}}, {0.2, {0, 0, 0.05}}, {0.3, {0, 0, 0}}};
+  auto sim = Simulation::create(c);
+  ASSERT_TRUE(sim.isOk()) << sim.status().toString();
+  const double before = [&] {
+    EXPECT_TRUE(sim.value()->runUntil(0.05).isOk());
+    return sim.value()->snapshot({"position"}).find("position")->as<Vec3d>()[0].z;
+  }();
+  ASSERT_TRUE(sim.value()->runUntil(0.45).isOk());
+  const double after = sim.value()->snapshot({"position"}).find("position")->as<Vec3d>()[0].z;
+  const double lift = 0.5 * 0.1 * 0.05 + 0.1 * 0.05 + 0.5 * 0.1 * 0.05;  // 0.01 m
+  EXPECT_NEAR(after - before, lift, 1e-6) << "lifted " << after - before << " m";
+}
+
 }  // namespace
 }  // namespace pflow::test

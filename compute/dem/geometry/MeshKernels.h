@@ -23,14 +23,42 @@ struct MeshMotionParams {
   Vec3d vibration;    // amplitude [m]; zero: none
   double omega;       // vibration's angular frequency 2 pi f [rad/s]
   double phase;       // [rad]
+  // A piecewise-linear translation velocity in place of `velocity` (profilePoints >= 1): points (tau, v).
+  int profilePoints;
+  double profileTau[kMaxProfilePoints];
+  Vec3d profileVelocity[kMaxProfilePoints];
 
   PFLOW_HOSTDEVICE double elapsed(double t) const { return t > startTime ? t - startTime : 0.0; }
-  // The translation after tau of motion: velocity tau + A (sin(omega tau + phase) - sin(phase)).
+  // The profile's velocity at tau, and its integral from 0 to tau (exact: trapezoids, and a partial one).
+  PFLOW_HOSTDEVICE Vec3d profileAt(double tau) const {
+    const int n = profilePoints;
+    if (tau <= profileTau[0]) return profileVelocity[0];
+    for (int k = 0; k + 1 < n; ++k)
+      if (tau < profileTau[k + 1]) {
+        const double f = (tau - profileTau[k]) / (profileTau[k + 1] - profileTau[k]);
+        return profileVelocity[k] + f * (profileVelocity[k + 1] - profileVelocity[k]);
+      }
+    return profileVelocity[n - 1];
+  }
+  PFLOW_HOSTDEVICE Vec3d profileDisplacement(double tau) const {
+    const int n = profilePoints;
+    const double first = tau < profileTau[0] ? tau : profileTau[0];
+    Vec3d d = first * profileVelocity[0];  // constant before the first point
+    for (int k = 0; k + 1 < n && tau > profileTau[k]; ++k) {
+      const double b = tau < profileTau[k + 1] ? tau : profileTau[k + 1];
+      d = d + (0.5 * (b - profileTau[k])) * (profileVelocity[k] + profileAt(b));
+    }
+    if (tau > profileTau[n - 1]) d = d + (tau - profileTau[n - 1]) * profileVelocity[n - 1];
+    return d;
+  }
+  // The translation after tau of motion: velocity tau (or the profile's integral) + A (sin(omega tau + phase) -
+  // sin(phase)).
   PFLOW_HOSTDEVICE Vec3d translation(double tau) const {
-    Vec3d d = tau * velocity;
+    Vec3d d = profilePoints > 0 ? profileDisplacement(tau) : tau * velocity;
     if (omega != 0.0) d = d + (std::sin(omega * tau + phase) - std::sin(phase)) * vibration;
     return d;
   }
+  PFLOW_HOSTDEVICE Vec3d translationVelocity(double tau) const { return profilePoints > 0 ? profileAt(tau) : velocity; }
   // Position at time t of a point that was at x0 before the motion started.
   PFLOW_HOSTDEVICE Vec3d transform(Vec3d x0, double t) const {
     const double tau = elapsed(t);
@@ -42,7 +70,7 @@ struct MeshMotionParams {
     if (t <= startTime) return zero3<double>();
     const double tau = elapsed(t);
     const Vec3d c = axisPoint + translation(tau);
-    Vec3d v = velocity + cross(angularSpeed * axis, x - c);
+    Vec3d v = translationVelocity(tau) + cross(angularSpeed * axis, x - c);
     if (omega != 0.0) v = v + (omega * std::cos(omega * tau + phase)) * vibration;
     return v;
   }
