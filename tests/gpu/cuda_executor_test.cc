@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <string>
 #include <cmath>
+#include <numbers>
 #include <map>
 #include <random>
 
@@ -283,6 +284,44 @@ TEST(CudaExecutor, WallLoadsMatchCpu) {
   for (double v : loads[0]) scale = std::max(scale, std::abs(v));
   ASSERT_GT(scale, 0) << "no wall load: the scene does not press on its walls";
   for (std::size_t i = 0; i < loads[0].size(); ++i) EXPECT_NEAR(loads[1][i], loads[0][i], 1e-9 * scale) << "element " << i;
+}
+
+// A floor mesh that vibrates (Gamma = 3: the spheres fly) and slides along a velocity profile: the GPU moves the
+// mesh and evaluates its contacts as the CPU does (the same MeshMotionParams code), to round-off.
+TEST(CudaExecutor, VibratingProfiledWallMatchesCpu) {
+  SKIP_WITHOUT_GPU();
+  compute::RunConfig c;
+  c.materials = {material("ball", 1e8, 0.3, 2500, 0.5, 0.5), rigid(0.5, 0.5)};
+  const double r = 2e-3;
+  for (int i = 0; i < 4; ++i) addParticle(c, {0.01 * i, 0.003 * i, r}, r, 0);
+  compute::MeshConfig floor;
+  floor.name = "floor";
+  floor.material = 1;
+  floor.vertices = {{-0.1, -0.1, 0}, {0.1, -0.1, 0}, {0.1, 0.1, 0}, {-0.1, 0.1, 0}};
+  floor.triangles = {{0, 1, 2}, {0, 2, 3}};
+  floor.motion.vibration = {0, 0, 5e-4};
+  floor.motion.frequency = std::sqrt(3 * 9.81 / 5e-4) / (2 * std::numbers::pi);
+  floor.motion.profile = {{0.0, {0, 0, 0}}, {0.02, {0.05, 0, 0}}, {0.04, {0.05, 0.02, 0}}};
+  c.meshes.push_back(floor);
+  c.sim.gravity = {0, 0, -9.81};
+  c.sim.duration = 0.06;
+  auto cpu = make(c, ExecutorKind::kCpu), gpu = make(c, underTest(), compute::EngineSetup::Layout::kGpu);
+  ASSERT_TRUE(cpu && gpu);
+  ASSERT_TRUE(cpu->runUntil(0.06).isOk());
+  ASSERT_TRUE(gpu->runUntil(0.06).isOk());
+  const auto a = cpu->snapshot({"id", "position"}), b = gpu->snapshot({"id", "position"});
+  const Vec3d* pa = a.find("position")->as<Vec3d>();
+  const Vec3d* pb = b.find("position")->as<Vec3d>();
+  const Gid* ia = a.find("id")->as<Gid>();
+  const Gid* ib = b.find("id")->as<Gid>();
+  double lifted = 0;
+  for (std::size_t i = 0; i < a.n; ++i)
+    for (std::size_t j = 0; j < b.n; ++j)
+      if (ia[i] == ib[j]) {
+        EXPECT_LT(norm(pa[i] - pb[j]), 1e-9) << "particle " << ia[i];
+        lifted = std::max(lifted, pa[i].z - r);
+      }
+  EXPECT_GT(lifted, 1e-5) << "the shaker threw nothing: the scene tests too little";
 }
 
 TEST(CudaExecutor, BlowUpIsReported) {
