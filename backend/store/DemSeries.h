@@ -82,7 +82,7 @@ class DemSeriesRecorder {
     const auto stats = sim.contactStats();  // host copies: once a sample
     const double particles = domain.sum(double(sim.numParticles()));
     const double pairs = domain.sum(double(stats.particleContacts));
-    std::vector<double> v = {domain.sum(sim.engine().kineticEnergy()), pairs, domain.sum(double(stats.wallContacts)),
+    std::vector<double> v = {domain.sum(stats.kineticEnergy), pairs, domain.sum(double(stats.wallContacts)),
                              particles > 0 ? 2 * pairs / particles : 0.0};
     for (const auto& p : m_config.flowPlanes) v.push_back(domain.sum(sim.engine().massPastPlane(p.point, p.normal)));
     if (m_surfaces > 0) {

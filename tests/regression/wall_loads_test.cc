@@ -22,6 +22,23 @@ double last(const backend::ProbeSeries& s, const std::string& name) {
   return NAN;
 }
 
+// Runs `c` to `until` recording the DEM series every `interval` s; the series.
+backend::ProbeSeries runRecorded(const compute::RunConfig& c, double interval, double until) {
+  auto created = compute::Simulation::create(c);
+  EXPECT_TRUE(created.isOk()) << created.status().toString();
+  if (!created.isOk()) return {};
+  compute::Simulation& sim = *created.value();
+  compute::Domain single;
+  compute::SeriesConfig series;
+  series.interval = interval;
+  backend::DemSeriesRecorder recorder(sim, single, series, c.surfaceNames);
+  EXPECT_TRUE(sim.runUntil(until, [&](const compute::Simulation& s) {
+    recorder.sample(s, single);
+    return Status::ok();
+  }).isOk());
+  return recorder.series();
+}
+
 // A heap of 600 spheres poured into a box of five planes, each its own surface, settled for 1 s: the vertical loads
 // of the five walls add up to the heap's weight within 0.5 % (the rest is what still moves), most of it on the floor;
 // the side walls are pushed outwards, and the horizontal loads (the floor's friction with them) cancel.
@@ -29,18 +46,7 @@ TEST(WallLoads, RestingHeapWeighsOnItsWalls) {
   compute::RunConfig c = pouredHeap(1.5e-3);
   c.surfaceNames = {"floor", "x0", "x1", "y0", "y1"};
   for (std::size_t p = 0; p < c.planes.size(); ++p) c.planes[p].surface = std::int32_t(p);
-  auto created = compute::Simulation::create(c);
-  ASSERT_TRUE(created.isOk()) << created.status().toString();
-  compute::Simulation& sim = *created.value();
-  compute::Domain single;
-  compute::SeriesConfig series;
-  series.interval = 0.05;
-  backend::DemSeriesRecorder recorder(sim, single, series, c.surfaceNames);
-  ASSERT_TRUE(sim.runUntil(1.0, [&](const compute::Simulation& s) {
-    recorder.sample(s, single);
-    return Status::ok();
-  }).isOk());
-  const backend::ProbeSeries& s = recorder.series();
+  const backend::ProbeSeries s = runRecorded(c, 0.05, 1.0);
   ASSERT_GE(s.time.size(), 20u);
   EXPECT_TRUE(std::isnan(s.values[4][0])) << "the start's sample has no loads";
   double weight = 0;
@@ -70,27 +76,19 @@ TEST(WallLoads, RestingSphereTorqueAboutTheOrigin) {
   c.surfaceNames = {"floor"};
   c.sim.gravity = {0, 0, -g};
   c.sim.duration = 0.5;
-  auto created = compute::Simulation::create(c);
-  ASSERT_TRUE(created.isOk()) << created.status().toString();
-  compute::Simulation& sim = *created.value();
-  compute::Domain single;
-  compute::SeriesConfig series;
-  series.interval = 0.1;
-  backend::DemSeriesRecorder recorder(sim, single, series, c.surfaceNames);
-  ASSERT_TRUE(sim.runUntil(0.5, [&](const compute::Simulation& s) {
-    recorder.sample(s, single);
-    return Status::ok();
-  }).isOk());
+  const backend::ProbeSeries s = runRecorded(c, 0.1, 0.5);
+  ASSERT_FALSE(s.time.empty());
   const double mg = sphereMass(r, 2500) * g;
-  const auto& s = recorder.series();
   EXPECT_NEAR(last(s, "force_z:floor") / -mg, 1.0, 1e-6);
   EXPECT_NEAR(last(s, "force_x:floor"), 0.0, 1e-9 * mg);
   EXPECT_NEAR(last(s, "torque_x:floor") / (-mg * y), 1.0, 1e-5);
   EXPECT_NEAR(last(s, "torque_y:floor") / (mg * x), 1.0, 1e-5);
   EXPECT_NEAR(last(s, "torque_z:floor"), 0.0, 1e-9 * mg * x);
   // The particle's torque is written when output.fields names it, and only then.
-  EXPECT_EQ(sim.snapshot().find("torque"), nullptr);
-  const auto named = sim.snapshot({"id", "position", "torque"});
+  auto sim = compute::Simulation::create(c);
+  ASSERT_TRUE(sim.isOk());
+  EXPECT_EQ(sim.value()->snapshot().find("torque"), nullptr);
+  const auto named = sim.value()->snapshot({"id", "position", "torque"});
   ASSERT_NE(named.find("torque"), nullptr);
   EXPECT_EQ(named.find("torque")->components, 3);
   EXPECT_EQ(named.find("torque")->unit, "N m");

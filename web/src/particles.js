@@ -14,7 +14,6 @@ in float value;
 uniform float vmin, vmax;
 uniform vec4 clipPlane;   // (n, d): particles whose centre has dot(n, c) > d are not drawn
 uniform float clipOn;
-uniform float orthographic;
 uniform float viewportHeight;  // pixels
 #ifdef POINTS
 out float vGrow;
@@ -33,13 +32,11 @@ void main() {
   // The square around the sphere's outline in the plane through its centre facing the camera. In perspective the
   // outline's far edge, seen at theta + alpha off the view axis (theta: the centre's angle, sin alpha = r / d), lies
   // r / cos(theta + alpha) from the centre in that plane: d / (sqrt(d^2 - r^2) cos theta - r sin theta) radii.
-  float grow = 1.02;
-  if (orthographic < 0.5) {
-    float d = length(c.xyz);
-    float cosT = clamp(-c.z / d, 0.0, 1.0), sinT = sqrt(1.0 - cosT * cosT);
-    float den = sqrt(max(d * d - radius * radius, 0.0)) * cosT - radius * sinT;
-    grow = den > d / 8.0 ? 1.02 * d / den : 8.0;
-  }
+  // (The viewer's camera is always perspective.)
+  float d = length(c.xyz);
+  float cosT = clamp(-c.z / d, 0.0, 1.0), sinT = sqrt(1.0 - cosT * cosT);
+  float den = sqrt(max(d * d - radius * radius, 0.0)) * cosT - radius * sinT;
+  float grow = den > d / 8.0 ? 1.02 * d / den : 8.0;
   vCenter = c.xyz;
   vRadius = radius;
   vT = clamp((value - vmin) / max(vmax - vmin, 1e-30), 0.0, 1.0);
@@ -48,7 +45,7 @@ void main() {
   vGrow = grow;
   gl_Position = projectionMatrix * c;
   // Pixels across the square: its side in view space times the projection's scale at this depth.
-  gl_PointSize = 2.0 * radius * grow * projectionMatrix[1][1] * 0.5 * viewportHeight / (orthographic > 0.5 ? 1.0 : -c.z);
+  gl_PointSize = 2.0 * radius * grow * projectionMatrix[1][1] * 0.5 * viewportHeight / -c.z;
 #else
   vec3 corner = c.xyz + vec3(position.xy * radius * grow, 0.0);
   vView = corner;
@@ -60,7 +57,6 @@ const fragmentShader = /* glsl */ `
 uniform sampler2D lut;
 uniform mat4 projectionMatrix;
 layout(location = 0) out vec4 outColor;
-uniform float orthographic;
 #ifdef POINTS
 in float vGrow;
 #else
@@ -73,15 +69,14 @@ void main() {
 #ifdef POINTS
   vec3 vView = vCenter + vec3(2.0 * gl_PointCoord.x - 1.0, 1.0 - 2.0 * gl_PointCoord.y, 0.0) * vRadius * vGrow;
 #endif
-  vec3 ro = orthographic > 0.5 ? vec3(vView.xy, 0.0) : vec3(0.0);
-  vec3 rd = orthographic > 0.5 ? vec3(0.0, 0.0, -1.0) : normalize(vView);
-  vec3 oc = ro - vCenter;
+  vec3 rd = normalize(vView);  // the view ray from the eye, at the origin of view space
+  vec3 oc = -vCenter;
   float b = dot(oc, rd);
   float c = dot(oc, oc) - vRadius * vRadius;
   float disc = b * b - c;
   if (disc < 0.0) discard;
   float t = -b - sqrt(disc);
-  vec3 p = ro + t * rd;
+  vec3 p = t * rd;
   vec3 n = (p - vCenter) / vRadius;
   vec4 clip = projectionMatrix * vec4(p, 1.0);
   gl_FragDepth = 0.5 * (clip.z / clip.w) + 0.5;
@@ -114,7 +109,6 @@ export class ParticleCloud {
         lut: { value: this.lut },
         clipPlane: { value: new THREE.Vector4(0, 0, 1, 0) },
         clipOn: { value: 0 },
-        orthographic: { value: 0 },
         viewportHeight: { value: 1000 },
       },
     });
