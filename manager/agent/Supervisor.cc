@@ -395,6 +395,7 @@ Result<int> Supervisor::start(const LaunchPlan& plan) {
   c.logOffset = offset;
   c.started = std::chrono::steady_clock::now();
   m_children.emplace(plan.jobId, c);
+  std::erase(m_stoppedEnded, plan.jobId);
   spdlog::info("job {}: started pid {}: {}", plan.jobId, pid, quoteForLog(plan.argv));
   return static_cast<int>(pid);
 }
@@ -403,7 +404,11 @@ Status Supervisor::stop(const std::string& jobId) {
   {
     std::lock_guard lock(m_mutex);
     auto it = m_children.find(jobId);
-    if (it == m_children.end()) return notFound("job " + jobId + " does not run on this node");
+    if (it == m_children.end()) {
+      // A second stop that comes after the first one's exit was reaped is still harmless.
+      if (std::find(m_stoppedEnded.begin(), m_stoppedEnded.end(), jobId) != m_stoppedEnded.end()) return Status::ok();
+      return notFound("job " + jobId + " does not run on this node");
+    }
     Child& c = it->second;
     if (c.stopRequested || c.exited) return Status::ok();
     c.stopRequested = true;
@@ -502,7 +507,13 @@ void Supervisor::reaperLoop() {
         if (m_onExit) m_onExit(x);
       }
       lock.lock();
-      for (const WorkerExit& x : exits) m_children.erase(x.jobId);
+      for (const WorkerExit& x : exits) {
+        m_children.erase(x.jobId);
+        if (x.stopRequested) {
+          m_stoppedEnded.push_back(x.jobId);
+          if (m_stoppedEnded.size() > kStoppedMemory) m_stoppedEnded.pop_front();
+        }
+      }
       m_exitedCv.notify_all();
       continue;
     }

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <functional>
+#include <deque>
 #include <map>
 #include <mutex>
 #include <string>
@@ -105,7 +106,8 @@ class Supervisor {
 
   // SIGTERM to the worker's process group (mpirun forwards it to every rank); SIGKILL to every process of its
   // session once the grace period has passed. Returns at once; the exit arrives through the callback.
-  // NOT_FOUND if the job does not run. Calling it again for a stopping job is harmless.
+  // NOT_FOUND if the job does not run. Calling it again for a stopping job is harmless, also once the job was
+  // reaped: a stopped job's id is remembered (the last kStoppedMemory of them) until it starts again.
   Status stop(const std::string& jobId);
 
   // stop() for every worker, then waits up to `waitSeconds` for them to be reaped. True when none is left.
@@ -136,6 +138,8 @@ class Supervisor {
   std::condition_variable m_cv;       // wakes the reaper (stop, shutdown)
   std::condition_variable m_exitedCv; // a child was reaped
   std::map<std::string, Child> m_children;
+  static constexpr std::size_t kStoppedMemory = 256;
+  std::deque<std::string> m_stoppedEnded;  // jobs that ended after stop(), oldest first
   bool m_quit = false;
   std::thread m_reaper;
 };

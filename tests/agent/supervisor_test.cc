@@ -259,6 +259,22 @@ TEST_F(SupervisorTest, StopSendsSigterm) {
   EXPECT_NE(log("term").find("got TERM"), std::string::npos);
 }
 
+TEST_F(SupervisorTest, StopAgainAfterTheExitWasReapedIsHarmless) {
+  // The race one full-suite run hit: the worker exits on SIGTERM at once, the reaper hands the exit over and drops
+  // the job, and only then comes the second stop. It must still be OK; an id never started stays NOT_FOUND.
+  ASSERT_TRUE(m_sup.start(plan("quick", "trap 'exit 0' TERM; echo ready; while :; do sleep 0.05; done")));
+  ASSERT_TRUE(waitLog("quick", "ready"));
+  ASSERT_TRUE(m_sup.stop("quick").isOk());
+  ASSERT_TRUE(waitExit("quick"));
+  ASSERT_TRUE(waitUntil([&] { return !m_sup.isRunning("quick"); }, 5));
+  EXPECT_TRUE(m_sup.stop("quick").isOk());
+  EXPECT_EQ(m_sup.stop("never").code(), StatusCode::kNotFound);
+  // Started again, it is a new run: once it ends on its own, a stop is NOT_FOUND again.
+  ASSERT_TRUE(m_sup.start(plan("quick", "exit 0")));
+  ASSERT_TRUE(waitUntil([&] { return !m_sup.isRunning("quick"); }, 5));
+  EXPECT_EQ(m_sup.stop("quick").code(), StatusCode::kNotFound);
+}
+
 TEST_F(SupervisorTest, WorkerIgnoringSigtermIsKilledAfterGrace) {
   // The worker and a helper in a process group of its own (as mpirun's ranks are) both ignore SIGTERM.
   const std::string pidFile = m_dir / "helper.pid";
