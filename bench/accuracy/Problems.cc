@@ -610,8 +610,8 @@ std::vector<Problem> allProblems() {
   p.push_back(chungOoi(1, "limestone", 20e9, 0.25, 2500));
   p.push_back(chungOoi(2, "aluminium", 70e9, 0.30, 2699));
   p.push_back(chungOoi(2, "magnesium", 40e9, 0.35, 1800));
-  for (double e : {0.2, 0.4, 0.6, 0.8, 1.0}) p.push_back(restitution("alumina", 380e9, 0.23, 4000, e));
-  for (double e : {0.2, 0.4, 0.6, 0.8, 1.0}) p.push_back(restitution("cast_iron", 100e9, 0.25, 7000, e));
+  for (double e : {0.1, 0.2, 0.4, 0.6, 0.8, 1.0}) p.push_back(restitution("alumina", 380e9, 0.23, 4000, e));
+  for (double e : {0.1, 0.2, 0.4, 0.6, 0.8, 1.0}) p.push_back(restitution("cast_iron", 100e9, 0.25, 7000, e));
   p.push_back(bouncingSphere());
   p.push_back(averaged(settledBed(), 3));
   p.push_back(averaged(columnCollapse(), 3));

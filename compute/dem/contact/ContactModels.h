@@ -50,6 +50,67 @@ template <class T> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T hertzStiffness(T effYoun
 template <class T> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T hertzEnergy(T effYoung, T effRadius, T overlap) {
   return T(8) / T(15) * effYoung * std::sqrt(effRadius) * overlap * overlap * std::sqrt(overlap);
 }
+
+// The step of a contact in units of its Hertz time scale t0 = (m*/k)^{2/5} v^{-1/5} (k = 4/3 E* sqrt(R*); the
+// contact lasts about 3.2 t0): h = dt ((k/m*)^2 v)^{1/5}, with v the speed whose kinetic energy equals the
+// contact's present energy (1/2 m* vn^2 + 2/5 k delta^{5/2}), so it needs no memory of the impact.
+// kOverM = k / m*, sqrtDelta = delta^{1/2}.
+template <class T>
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T stepOfContact(T kOverM, T overlap, T sqrtDelta, T vn, T dt) {
+  const T v2 = vn * vn + T(0.8) * kOverM * overlap * overlap * sqrtDelta;
+  // In logarithms: (k/m*)^2 overflows float for particles of a few micrometres.
+  return v2 > T(0) ? dt * std::exp2(T(0.4) * std::log2(kOverM) + T(0.1) * std::log2(v2)) : T(0);
+}
+
+// The normal dashpot's force over one step, integrated so that the discrete step restitutes what the continuous
+// contact does. The dashpot C delta^{1/4} vn (C = c sqrt(2 E* sqrt(R*) m*)) is the time derivative of
+// (4/5) C delta^{5/4}, so its impulse over any interval is exact from the overlaps at its ends: this returns that
+// impulse over the step centred on the evaluation (overlaps delta -+ vn dt/2) divided by dt, and for a contact
+// that began within the last step from the first touch (lower end 0), wherever in the step it fell. Applying
+// C delta^{1/4} vn at the half-step velocity instead (as before) made the restitution depend at first order on
+// where in a step the contact began (-0.8 % to -4.5 % at e = 0.1 with 64 steps per contact).
+// The quotient (a^{5/4} - b^{5/4}) / (a - b) is formed from the fourth roots without cancellation, so a resting
+// contact (vn dt << delta) gets C delta^{1/4} vn to round-off. r0 = delta^{1/4}; returns the force along -n on i
+// (positive when approaching).
+template <class T>
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T stepDashpot(T C, T overlap, T r0, T vn, T dt) {
+  const T half = T(0.5) * vn * dt;
+  const bool fresh = overlap <= vn * dt;  // no overlap a step ago: the contact began within the step
+  const T lo = fresh ? T(0) : (overlap > half ? overlap - half : T(0));
+  const T hi = overlap + half > T(0) ? overlap + half : T(0);
+  const bool clipped = fresh || hi == T(0) || lo == T(0);
+  const T vMean = clipped ? (hi - lo) / dt : vn;  // d(delta)/dt over the interval
+  const T p = hi == overlap ? r0 : std::sqrt(std::sqrt(hi));
+  const T q = lo == overlap ? r0 : std::sqrt(std::sqrt(lo));
+  const T p2 = p * p, q2 = q * q, pq = p * q;
+  const T num = p2 * p2 + pq * (p2 + pq + q2) + q2 * q2;  // (p^5 - q^5) / (p - q)
+  const T den = (p + q) * (p2 + q2);                       // (p^4 - q^4) / (p - q)
+  return den > T(0) ? T(0.8) * C * vMean * (num / den) : T(0);
+}
+
+// The normal force magnitude on a contact, clipped at zero: Hertz elastic (4/3) E* sqrt(R*) delta^{3/2} plus the
+// dashpot (stepDashpot) with coefficient c (1 + a1 h + a2 h^2 + a3 h^3), h = stepOfContact clamped at 0.5.
+// sqrtRd = sqrt(R* delta). Also returns the continuous dashpot's coefficient c sqrt(S_n m*) in `dampN` (the
+// tangential dashpot's scale).
+template <class T>
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T hertzNormal(const ContactParams& p, T overlap, T sqrtRd, T vn, T effMass, T dt,
+                                                 T& dampN) {
+  const T E = T(p.effYoung), c = T(p.dampingCoeff);
+  const T sn = T(2) * E * sqrtRd;
+  T fn = T(4) / T(3) * E * sqrtRd * overlap;
+  dampN = c * std::sqrt(sn * effMass);
+  if (c > T(0)) {
+    const T sqrtDelta = std::sqrt(overlap);
+    const T r0 = std::sqrt(sqrtDelta);
+    // k / m* = (4/3) E* sqrt(R*) / m*, with sqrt(R*) = sqrtRd / sqrtDelta.
+    const T kOverM = T(4) / T(3) * E * sqrtRd / (sqrtDelta * effMass);
+    T h = stepOfContact(kOverM, overlap, sqrtDelta, vn, dt);
+    if (h > T(0.5)) h = T(0.5);
+    const T corr = T(1) + h * (T(p.dashpotStep[0]) + h * (T(p.dashpotStep[1]) + h * T(p.dashpotStep[2])));
+    fn += stepDashpot(corr * dampN / r0, overlap, r0, vn, dt);
+  }
+  return fn > T(0) ? fn : T(0);
+}
 }  // namespace normal
 
 namespace damping {
@@ -116,16 +177,12 @@ template <bool kTangential = true, bool kRolling = true, class T>
 PFLOW_HOSTDEVICE PFLOW_FORCEINLINE ContactOutput<T> hertzMindlin(const ContactParams& p, const ContactState<T>& s,
                                                                  Vec3<T> xiOld, T dt) {
   ContactOutput<T> out;
-  const T E = T(p.effYoung), G = T(p.effShear), c = T(p.dampingCoeff);
-  // Normal: positive vn means approaching. Written out (rather than through the sub-model helpers)
-  // so that sqrt(R* delta) and sqrt(S_n m*) are computed once; the helpers above are the reference
-  // the unit tests hold this to.
+  const T G = T(p.effShear);
+  // Normal: positive vn means approaching; sqrt(R* delta) is computed once for the normal and tangential parts.
   const T vn = dot(s.vRel, s.n);
   const T sqrtRd = std::sqrt(s.effRadius * s.overlap);
-  const T sn = T(2) * E * sqrtRd;
-  const T dampN = c * std::sqrt(sn * s.effMass);
-  T fn = T(4) / T(3) * E * sqrtRd * s.overlap + dampN * vn;
-  if (fn < T(0)) fn = T(0);
+  T dampN;
+  const T fn = normal::hertzNormal(p, s.overlap, sqrtRd, vn, s.effMass, dt, dampN);
   out.normalForce = fn;
   Vec3<T> force = (-fn) * s.n;
 

@@ -1,10 +1,12 @@
 #include "compute/dem/contact/ContactParams.h"
 
 #include <cmath>
+#include <array>
 #include <map>
 #include <mutex>
 #include <numbers>
 
+#include "compute/dem/contact/ContactModels.h"
 #include "compute/sim/RunConfig.h"
 
 namespace pflow::compute {
@@ -67,6 +69,97 @@ double dampingCoeffForRestitution(double e) {
   return c;
 }
 
+double restitutionOfStep(double c, const double poly[3], double h, double phase) {
+  // Units: k = 4/3 E* sqrt(R*) = 1 with R* = 1 (E* = 3/4), m* = 1, impact speed 1; the contact lasts about 3.2.
+  ContactParams p;
+  p.effYoung = 0.75;
+  p.dampingCoeff = c;
+  for (int k = 0; k < 3; ++k) p.dashpotStep[k] = poly[k];
+  auto accel = [&](double x, double v) {
+    if (x <= 0) return 0.0;
+    double dampN;
+    return -contact::normal::hertzNormal(p, x, std::sqrt(x), v, 1.0, h, dampN);
+  };
+  // pflow's velocity Verlet: the force at the new overlap with the half-step velocity.
+  double x = -phase * h, v = 1, a = 0;
+  bool touched = false;
+  for (long n = 0; n < 100'000'000; ++n) {
+    const double vh = v + 0.5 * h * a;
+    x += h * vh;
+    a = accel(x, vh);
+    v = vh + 0.5 * h * a;
+    touched |= x > 0;
+    if (touched && x <= 0) return -v;
+  }
+  return 0.0;
+}
+
+void calibrateDashpotForStep(double e, double poly[3]) {
+  poly[0] = poly[1] = poly[2] = 0;
+  if (e >= 1.0 || e < 0.1) return;
+  static std::mutex mutex;
+  static std::map<double, std::array<double, 3>> cache;
+  {
+    std::lock_guard lock(mutex);
+    if (auto it = cache.find(e); it != cache.end()) {
+      for (int k = 0; k < 3; ++k) poly[k] = it->second[k];
+      return;
+    }
+  }
+  const double c = dampingCoeffForRestitution(e);
+  constexpr double kSteps[] = {0.02, 0.05, 0.08, 0.12, 0.16, 0.2, 0.24, 0.28, 0.32, 0.36};
+  constexpr int kN = std::size(kSteps), kPhases = 8;
+  auto residuals = [&](const std::array<double, 3>& a) {
+    std::array<double, kN> r{};
+    for (int i = 0; i < kN; ++i) {
+      double sum = 0;
+      for (int k = 0; k < kPhases; ++k) sum += restitutionOfStep(c, a.data(), kSteps[i], (k + 0.5) / kPhases) / e - 1;
+      r[i] = sum / kPhases;
+    }
+    return r;
+  };
+  // Gauss-Newton on the three coefficients (the residuals are smooth in them), Jacobian by differences.
+  std::array<double, 3> a{0, 0, 0};
+  for (int it = 0; it < 8; ++it) {
+    const auto r = residuals(a);
+    double jac[kN][3];
+    for (int j = 0; j < 3; ++j) {
+      std::array<double, 3> b = a;
+      b[j] += 1e-4;
+      const auto rb = residuals(b);
+      for (int i = 0; i < kN; ++i) jac[i][j] = (rb[i] - r[i]) / 1e-4;
+    }
+    double m[3][4] = {};
+    for (int i = 0; i < kN; ++i)
+      for (int p = 0; p < 3; ++p) {
+        m[p][3] -= jac[i][p] * r[i];
+        for (int q = 0; q < 3; ++q) m[p][q] += jac[i][p] * jac[i][q];
+      }
+    for (int p = 0; p < 3; ++p) {  // Gauss-Jordan with partial pivoting
+      int piv = p;
+      for (int q = p + 1; q < 3; ++q)
+        if (std::fabs(m[q][p]) > std::fabs(m[piv][p])) piv = q;
+      for (int k = 0; k < 4; ++k) std::swap(m[p][k], m[piv][k]);
+      if (m[p][p] == 0) return;
+      for (int q = 0; q < 3; ++q)
+        if (q != p) {
+          const double f = m[q][p] / m[p][p];
+          for (int k = 0; k < 4; ++k) m[q][k] -= f * m[p][k];
+        }
+    }
+    double step = 0;
+    for (int p = 0; p < 3; ++p) {
+      const double d = m[p][3] / m[p][p];
+      a[p] += d;
+      step = std::max(step, std::fabs(d));
+    }
+    if (step < 1e-7) break;
+  }
+  for (int k = 0; k < 3; ++k) poly[k] = a[k];
+  std::lock_guard lock(mutex);
+  cache[e] = a;
+}
+
 double linearSpringDampingCoeff(double e) {
   const double l = std::log(e);
   return -2.0 * std::sqrt(5.0 / 6.0) * l / std::sqrt(l * l + std::numbers::pi * std::numbers::pi);
@@ -95,6 +188,7 @@ std::vector<ContactParams> buildContactTable(const std::vector<MaterialConfig>& 
         }
       }
       p.dampingCoeff = dampingCoeffForRestitution(p.restitution);
+      calibrateDashpotForStep(p.restitution, p.dashpotStep);
       p.tangentialRatio = std::sqrt(4.0 * p.effShear / p.effYoung);
       table[a * nm + b] = p;
       table[b * nm + a] = p;

@@ -13,6 +13,10 @@ struct ContactParams {
   double effYoung = 0;       // E*  [Pa]:   1/E* = (1-nu_i^2)/E_i + (1-nu_j^2)/E_j
   double effShear = 0;       // G*  [Pa]:   1/G* = (2-nu_i)/G_i + (2-nu_j)/G_j
   double dampingCoeff = 0;   // c [-]: F_d = -c sqrt(S m*) v, chosen so the Hertz contact restitutes e exactly
+  // The step correction of the normal dashpot: c is multiplied by 1 + a1 h + a2 h^2 + a3 h^3, where h is the
+  // contact's step in units of its Hertz time scale (contact::normal::stepOfContact), so that the discrete step
+  // restitutes e as the continuous contact does (calibrateDashpotForStep). All 0 when e = 1 or e < 0.1.
+  double dashpotStep[3] = {0, 0, 0};
   double tangentialRatio = 0;  // sqrt(S_t / S_n) = sqrt(4 G* / E*), so the tangential dashpot costs no sqrt
   double restitution = 1;    // e [-], the requested value (kept for reports)
   double friction = 0;       // mu_s [-]
@@ -32,6 +36,16 @@ double dampingCoeffForRestitution(double e);
 
 // The restitution realised by damping coefficient c (the forward map of the above), for tests.
 double restitutionForDampingCoeff(double c);
+
+// The restitution the discrete step realises for a normal impact (pflow's velocity Verlet and contact function,
+// dimensionless: unit stiffness k = 4/3 E* sqrt(R*), unit mass, unit impact speed) with damping coefficient c,
+// step correction `poly`, step h (in units of (m*/k)^{2/5} v^{-1/5}) and the contact's first overlap (1 - phase) h.
+double restitutionOfStep(double c, const double poly[3], double h, double phase);
+
+// The step correction (a1, a2, a3) for requested restitution e: least squares over contacts resolved by 9 to 160
+// steps (h = 0.02 ... 0.36), averaged over the phase of the first overlap. e >= 1 or e < 0.1: zeros (below 0.1 the
+// correction does not converge; such contacts keep the continuous coefficient).
+void calibrateDashpotForStep(double e, double poly[3]);
 
 // The linear-spring mapping others use, c = -2 sqrt(5/6) ln e / sqrt(ln^2 e + pi^2): exact for a
 // linear spring, not for Hertz. Kept only so tests can show the difference.

@@ -128,6 +128,45 @@ TEST(Restitution, MapIsExactAndMonotone) {
   EXPECT_EQ(dampingCoeffForRestitution(1.0), 0.0);
 }
 
+TEST(StepDashpot, RestingContactGetsTheContinuousDashpot) {
+  // vn dt << delta: the exact-impulse form is C delta^{1/4} vn to round-off (no cancellation between the ends).
+  const double C = 3.0, d = 1e-5, r0 = std::sqrt(std::sqrt(d));
+  for (double vn : {1e-9, -1e-9, 1e-3, -1e-3}) {
+    const double dt = 1e-8;
+    EXPECT_NEAR(normal::stepDashpot(C, d, r0, vn, dt), C * r0 * vn, 1e-6 * std::fabs(C * r0 * vn)) << vn;
+  }
+  EXPECT_EQ(normal::stepDashpot(C, d, r0, 0.0, 1e-8), 0.0);
+}
+
+TEST(StepDashpot, NewContactTakesTheImpulseFromTheFirstTouch) {
+  // Began within the step (delta <= vn dt): the impulse over [touch, t + dt/2] is (4/5) C (delta + vn dt/2)^{5/4}.
+  const double C = 2.0, vn = 1.0, dt = 1e-6, d = 0.3e-6;
+  const double f = normal::stepDashpot(C, d, std::sqrt(std::sqrt(d)), vn, dt);
+  EXPECT_NEAR(f * dt, 0.8 * C * std::pow(d + 0.5 * vn * dt, 1.25), 1e-12 * f * dt);
+  // Separating past zero overlap within the half step: the impulse down to the last touch, negative.
+  const double g = normal::stepDashpot(C, d, std::sqrt(std::sqrt(d)), -vn, dt);
+  EXPECT_NEAR(g * dt, -0.8 * C * std::pow(d + 0.5 * vn * dt, 1.25), 1e-12 * std::fabs(g * dt));
+}
+
+TEST(StepDashpot, DiscreteStepRestitutesTheRequestedValue) {
+  // pflow's step on the dimensionless impact: within 1 % for every e from 0.1 to 1 when the contact lasts at
+  // least 12 steps (h <= 0.268), wherever in its first step the contact begins; exact as the step vanishes.
+  for (double e : {0.1, 0.15, 0.2, 0.3, 0.5, 0.7, 0.9, 1.0}) {
+    double poly[3];
+    calibrateDashpotForStep(e, poly);
+    const double c = dampingCoeffForRestitution(e);
+    for (double h : {0.005, 0.05, 0.1, 0.16, 0.2, 0.25, 0.268})
+      for (int k = 0; k < 16; ++k) {
+        const double phase = (k + 0.5) / 16;
+        EXPECT_NEAR(restitutionOfStep(c, poly, h, phase), e, 0.01 * e) << "e " << e << " h " << h << " phase " << phase;
+      }
+    EXPECT_NEAR(restitutionOfStep(c, poly, 0.002, 0.5), e, 1e-4 * e);
+  }
+  // Without the step correction, e = 0.1 at 32 steps per contact comes out about 7 % low: it is needed.
+  const double none[3] = {0, 0, 0};
+  EXPECT_LT(restitutionOfStep(dampingCoeffForRestitution(0.1), none, 0.1, 0.5), 0.95 * 0.1);
+}
+
 TEST(Restitution, LinearSpringMappingIsWrongForHertz) {
   // The mapping valid for linear springs restitutes far more than asked for with Hertz at low e.
   EXPECT_GT(restitutionForDampingCoeff(linearSpringDampingCoeff(0.1)), 0.2);
