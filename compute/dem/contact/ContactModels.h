@@ -7,6 +7,8 @@
 // half-step velocities in the velocity-Verlet loop, as LAMMPS and LIGGGHTS do).
 #pragma once
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 
 #include "compute/dem/contact/ContactParams.h"
 #include "compute/core/VectorMath.h"
@@ -51,63 +53,97 @@ template <class T> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T hertzEnergy(T effYoung, 
   return T(8) / T(15) * effYoung * std::sqrt(effRadius) * overlap * overlap * std::sqrt(overlap);
 }
 
-// The step of a contact in units of its Hertz time scale t0 = (m*/k)^{2/5} v^{-1/5} (k = 4/3 E* sqrt(R*); the
-// contact lasts about 3.2 t0): h = dt ((k/m*)^2 v)^{1/5}, with v the speed whose kinetic energy equals the
-// contact's present energy (1/2 m* vn^2 + 2/5 k delta^{5/2}), so it needs no memory of the impact.
-// kOverM = k / m*, sqrtDelta = delta^{1/2}.
+// x^{1/5} for float x, from operations that round the same on every executor (bit fields, products, fused
+// multiply-adds: no library transcendental, no contraction left to the compiler), so the CPU and the GPU get the
+// same bits; relative error below 3e-6. 0 for x <= 0 and subnormal x.
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE float fifthRoot(float x) {
+  std::uint32_t b;
+  std::memcpy(&b, &x, sizeof b);
+  const int biased = int((b >> 23) & 0xffu);
+  if (!(x > 0.0f) || biased == 0) return 0.0f;
+  if (biased == 255) return x;
+  const int e = biased - 127;
+  const int q = e >= 0 ? e / 5 : -((4 - e) / 5);  // floor(e / 5)
+  const int r = e - 5 * q;                        // 0 .. 4
+  b = (b & 0x007fffffu) | 0x3f800000u;
+  float m;
+  std::memcpy(&m, &b, sizeof m);  // in [1, 2)
+  const float t = m - 1.5f;       // exact
+  // m^{1/5} on [1, 2): Chebyshev fit of degree 5 in t, Horner with explicit fused multiply-adds.
+  float y = std::fma(t, 0.004127787426114082f, -0.00792188011109829f);
+  y = std::fma(t, y, 0.01536706741899252f);
+  y = std::fma(t, y, -0.03849686682224274f);
+  y = std::fma(t, y, 0.1445978283882141f);
+  y = std::fma(t, y, 1.0844709873199463f);
+  const float rootR = r == 0 ? 1.0f : r == 1 ? 1.1486983f : r == 2 ? 1.319508f : r == 3 ? 1.5157166f : 1.7411011f;
+  const std::uint32_t pb = std::uint32_t(q + 127) << 23;  // 2^q, q in [-26, 25]
+  float p2;
+  std::memcpy(&p2, &pb, sizeof p2);
+  return y * rootR * p2;
+}
+
+// The dashpot's step factor 1 + a1 h + a2 h^2 + a3 h^3 (ContactParams::dashpotStep), where h is the contact's
+// step in units of its Hertz time scale t0 = (m*/k)^{2/5} v^{-1/5} (k = 4/3 E* sqrt(R*); the contact lasts about
+// 3.2 t0): h = dt (k/m*)^{2/5} v^{1/5}, clamped at 0.5, with v the speed whose kinetic energy equals the contact's
+// present energy (v^2 = vn^2 + 4/5 (k/m*) delta^{5/2}), so no memory of the impact is needed. A correction factor
+// needs no more than float: it is formed in float by operations that round alike on every executor (products,
+// quotients, square roots, explicit fused multiply-adds, fifthRoot), so double runs agree across executors.
+// h^5 = (dt^2 k/m*)^2 (v dt) keeps the factors within float's range for micrometre to metre grains.
 template <class T>
-PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T stepOfContact(T kOverM, T overlap, T sqrtDelta, T vn, T dt) {
-  const T v2 = vn * vn + T(0.8) * kOverM * overlap * overlap * sqrtDelta;
-  // In logarithms: (k/m*)^2 overflows float for particles of a few micrometres.
-  return v2 > T(0) ? dt * std::exp2(T(0.4) * std::log2(kOverM) + T(0.1) * std::log2(v2)) : T(0);
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE float dashpotStepFactor(const ContactParams& p, T overlap, T sqrtRd, T vn,
+                                                           T effRadius, T effMass, T dt) {
+  const float E = float(p.effYoung), m = float(effMass), d = float(overlap), v = float(vn), tau = float(dt);
+  const float kOverM = 1.3333334f * E * std::sqrt(float(effRadius)) / m;
+  const float w = 1.0666667f * E * float(sqrtRd) * d * d / m;  // 4/5 (k/m*) delta^{5/2}
+  const float v2 = std::fma(v, v, w);
+  const float a = tau * tau * kOverM;
+  float h = fifthRoot(a * a * (tau * std::sqrt(v2)));
+  if (h > 0.5f) h = 0.5f;
+  return std::fma(h, std::fma(h, std::fma(h, float(p.dashpotStep[2]), float(p.dashpotStep[1])),
+                              float(p.dashpotStep[0])), 1.0f);
 }
 
 // The normal dashpot's force over one step, integrated so that the discrete step restitutes what the continuous
 // contact does. The dashpot C delta^{1/4} vn (C = c sqrt(2 E* sqrt(R*) m*)) is the time derivative of
 // (4/5) C delta^{5/4}, so its impulse over any interval is exact from the overlaps at its ends: this returns that
-// impulse over the step centred on the evaluation (overlaps delta -+ vn dt/2) divided by dt, and for a contact
-// that began within the last step from the first touch (lower end 0), wherever in the step it fell. Applying
+// impulse over the step just taken (from the overlap a step ago, delta - vn dt, clipped at 0: a contact that began
+// within the step counts from its first touch, wherever in the step that fell) divided by dt. Applying
 // C delta^{1/4} vn at the half-step velocity instead (as before) made the restitution depend at first order on
-// where in a step the contact began (-0.8 % to -4.5 % at e = 0.1 with 64 steps per contact).
-// The quotient (a^{5/4} - b^{5/4}) / (a - b) is formed from the fourth roots without cancellation, so a resting
-// contact (vn dt << delta) gets C delta^{1/4} vn to round-off. r0 = delta^{1/4}; returns the force along -n on i
-// (positive when approaching).
+// where in a step the contact began (-1.4 % to -4.5 % at e = 0.1 with 64 steps per contact); what this leaves is
+// smooth in the step and calibrated away (dashpotStepFactor). It is continuous in the state: 0 at first touch.
+// dampN = C delta^{1/4} (the continuous coefficient). Most evaluations (|vn dt| <= delta / 10) take the quotient
+// (a^{5/4} - b^{5/4}) / (a - b) from its series in eps = vn dt / delta (accurate to 5e-8 there), the others from
+// the fourth roots without cancellation. Returns the force along -n on i (positive when approaching).
 template <class T>
-PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T stepDashpot(T C, T overlap, T r0, T vn, T dt) {
-  const T half = T(0.5) * vn * dt;
-  const bool fresh = overlap <= vn * dt;  // no overlap a step ago: the contact began within the step
-  const T lo = fresh ? T(0) : (overlap > half ? overlap - half : T(0));
-  const T hi = overlap + half > T(0) ? overlap + half : T(0);
-  const bool clipped = fresh || hi == T(0) || lo == T(0);
-  const T vMean = clipped ? (hi - lo) / dt : vn;  // d(delta)/dt over the interval
-  const T p = hi == overlap ? r0 : std::sqrt(std::sqrt(hi));
-  const T q = lo == overlap ? r0 : std::sqrt(std::sqrt(lo));
-  const T p2 = p * p, q2 = q * q, pq = p * q;
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T stepDashpot(T dampN, T overlap, T vn, T dt) {
+  const T step = vn * dt;  // the overlap gained over the step
+  if (T(100) * step * step <= overlap * overlap) {
+    const T e = step / overlap;
+    return dampN * vn *
+           (T(1) - e * (T(0.125) + e * (T(0.03125) + e * (T(0.013671875) + e * T(0.00751953125)))));
+  }
+  const T before = overlap > step ? overlap - step : T(0);
+  const T r0 = std::sqrt(std::sqrt(overlap));
+  const T q = std::sqrt(std::sqrt(before));
+  const T p2 = r0 * r0, q2 = q * q, pq = r0 * q;
   const T num = p2 * p2 + pq * (p2 + pq + q2) + q2 * q2;  // (p^5 - q^5) / (p - q)
-  const T den = (p + q) * (p2 + q2);                       // (p^4 - q^4) / (p - q)
-  return den > T(0) ? T(0.8) * C * vMean * (num / den) : T(0);
+  const T den = (r0 + q) * (p2 + q2);                      // (p^4 - q^4) / (p - q)
+  return den > T(0) ? T(0.8) * (dampN / r0) * ((overlap - before) / dt) * (num / den) : T(0);
 }
 
 // The normal force magnitude on a contact, clipped at zero: Hertz elastic (4/3) E* sqrt(R*) delta^{3/2} plus the
-// dashpot (stepDashpot) with coefficient c (1 + a1 h + a2 h^2 + a3 h^3), h = stepOfContact clamped at 0.5.
-// sqrtRd = sqrt(R* delta). Also returns the continuous dashpot's coefficient c sqrt(S_n m*) in `dampN` (the
-// tangential dashpot's scale).
+// dashpot (stepDashpot, its coefficient times dashpotStepFactor). sqrtRd = sqrt(R* delta). Also returns the
+// continuous dashpot's coefficient c sqrt(S_n m*) in `dampN` (the tangential dashpot's scale).
 template <class T>
-PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T hertzNormal(const ContactParams& p, T overlap, T sqrtRd, T vn, T effMass, T dt,
-                                                 T& dampN) {
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T hertzNormal(const ContactParams& p, T overlap, T sqrtRd, T vn, T effRadius,
+                                                 T effMass, T dt, T& dampN) {
   const T E = T(p.effYoung), c = T(p.dampingCoeff);
   const T sn = T(2) * E * sqrtRd;
   T fn = T(4) / T(3) * E * sqrtRd * overlap;
   dampN = c * std::sqrt(sn * effMass);
   if (c > T(0)) {
-    const T sqrtDelta = std::sqrt(overlap);
-    const T r0 = std::sqrt(sqrtDelta);
-    // k / m* = (4/3) E* sqrt(R*) / m*, with sqrt(R*) = sqrtRd / sqrtDelta.
-    const T kOverM = T(4) / T(3) * E * sqrtRd / (sqrtDelta * effMass);
-    T h = stepOfContact(kOverM, overlap, sqrtDelta, vn, dt);
-    if (h > T(0.5)) h = T(0.5);
-    const T corr = T(1) + h * (T(p.dashpotStep[0]) + h * (T(p.dashpotStep[1]) + h * T(p.dashpotStep[2])));
-    fn += stepDashpot(corr * dampN / r0, overlap, r0, vn, dt);
+    const T factor = T(dashpotStepFactor(p, overlap, sqrtRd, vn, effRadius, effMass, dt));
+    fn += stepDashpot(factor * dampN, overlap, vn, dt);
   }
   return fn > T(0) ? fn : T(0);
 }
@@ -182,7 +218,7 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE ContactOutput<T> hertzMindlin(const ContactPa
   const T vn = dot(s.vRel, s.n);
   const T sqrtRd = std::sqrt(s.effRadius * s.overlap);
   T dampN;
-  const T fn = normal::hertzNormal(p, s.overlap, sqrtRd, vn, s.effMass, dt, dampN);
+  const T fn = normal::hertzNormal(p, s.overlap, sqrtRd, vn, s.effRadius, s.effMass, dt, dampN);
   out.normalForce = fn;
   Vec3<T> force = (-fn) * s.n;
 

@@ -14,7 +14,7 @@ struct ContactParams {
   double effShear = 0;       // G*  [Pa]:   1/G* = (2-nu_i)/G_i + (2-nu_j)/G_j
   double dampingCoeff = 0;   // c [-]: F_d = -c sqrt(S m*) v, chosen so the Hertz contact restitutes e exactly
   // The step correction of the normal dashpot: c is multiplied by 1 + a1 h + a2 h^2 + a3 h^3, where h is the
-  // contact's step in units of its Hertz time scale (contact::normal::stepOfContact), so that the discrete step
+  // contact's step in units of its Hertz time scale (contact::normal::dashpotStepFactor), so that the discrete step
   // restitutes e as the continuous contact does (calibrateDashpotForStep). All 0 when e = 1 or e < 0.1.
   double dashpotStep[3] = {0, 0, 0};
   double tangentialRatio = 0;  // sqrt(S_t / S_n) = sqrt(4 G* / E*), so the tangential dashpot costs no sqrt

@@ -129,28 +129,55 @@ TEST(Restitution, MapIsExactAndMonotone) {
 }
 
 TEST(StepDashpot, RestingContactGetsTheContinuousDashpot) {
-  // vn dt << delta: the exact-impulse form is C delta^{1/4} vn to round-off (no cancellation between the ends).
+  // vn dt << delta: the exact-impulse form is C delta^{1/4} vn at the step's mean overlap, to round-off.
   const double C = 3.0, d = 1e-5, r0 = std::sqrt(std::sqrt(d));
   for (double vn : {1e-9, -1e-9, 1e-3, -1e-3}) {
-    const double dt = 1e-8;
-    EXPECT_NEAR(normal::stepDashpot(C, d, r0, vn, dt), C * r0 * vn, 1e-6 * std::fabs(C * r0 * vn)) << vn;
+    const double dt = 1e-8, mid = std::sqrt(std::sqrt(d - 0.5 * vn * dt));
+    EXPECT_NEAR(normal::stepDashpot(C * r0, d, vn, dt), C * mid * vn, 1e-9 * std::fabs(C * mid * vn)) << vn;
   }
-  EXPECT_EQ(normal::stepDashpot(C, d, r0, 0.0, 1e-8), 0.0);
+  EXPECT_EQ(normal::stepDashpot(C * r0, d, 0.0, 1e-8), 0.0);
 }
 
-TEST(StepDashpot, NewContactTakesTheImpulseFromTheFirstTouch) {
-  // Began within the step (delta <= vn dt): the impulse over [touch, t + dt/2] is (4/5) C (delta + vn dt/2)^{5/4}.
-  const double C = 2.0, vn = 1.0, dt = 1e-6, d = 0.3e-6;
-  const double f = normal::stepDashpot(C, d, std::sqrt(std::sqrt(d)), vn, dt);
-  EXPECT_NEAR(f * dt, 0.8 * C * std::pow(d + 0.5 * vn * dt, 1.25), 1e-12 * f * dt);
-  // Separating past zero overlap within the half step: the impulse down to the last touch, negative.
-  const double g = normal::stepDashpot(C, d, std::sqrt(std::sqrt(d)), -vn, dt);
-  EXPECT_NEAR(g * dt, -0.8 * C * std::pow(d + 0.5 * vn * dt, 1.25), 1e-12 * std::fabs(g * dt));
+TEST(StepDashpot, SeriesAndFourthRootsAgreeWhereTheyMeet) {
+  // The series in eps = vn dt / delta is used up to |eps| = 0.1; just past it the fourth roots take over.
+  const double C = 2.0, d = 1e-6, r0 = std::sqrt(std::sqrt(d)), dt = 1e-6;
+  for (double sign : {1.0, -1.0}) {
+    const double below = normal::stepDashpot(C * r0, d, sign * 0.0999999 * d / dt, dt);
+    const double above = normal::stepDashpot(C * r0, d, sign * 0.1000001 * d / dt, dt);
+    EXPECT_NEAR(below / above, 0.0999999 / 0.1000001, 1e-7) << sign;
+  }
+}
+
+TEST(StepDashpot, ImpulseOverTheStepFromTheFirstTouch) {
+  // A contact that began within the step: the impulse over [touch, t] is (4/5) C delta^{5/4}; it vanishes as the
+  // overlap does, so the force is continuous at the first touch.
+  const double C = 2.0, vn = 1.0, dt = 1e-6;
+  for (double d : {0.3e-6, 1e-9, 1e-15}) {
+    const double f = normal::stepDashpot(C * std::sqrt(std::sqrt(d)), d, vn, dt);
+    EXPECT_NEAR(f * dt, 0.8 * C * std::pow(d, 1.25), 1e-12 * f * dt) << d;
+  }
+  // Deeper: the impulse over [t - dt, t]; separating, the same with the sign of the motion.
+  const double d = 2.7e-6, r = std::sqrt(std::sqrt(d));
+  const double g = normal::stepDashpot(C * r, d, vn, dt);
+  EXPECT_NEAR(g * dt, 0.8 * C * (std::pow(d, 1.25) - std::pow(d - vn * dt, 1.25)), 1e-12 * g * dt);
+  const double u = normal::stepDashpot(C * r, d, -vn, dt);
+  EXPECT_NEAR(u * dt, 0.8 * C * (std::pow(d, 1.25) - std::pow(d + vn * dt, 1.25)), 1e-12 * std::fabs(u * dt));
+}
+
+TEST(StepDashpot, FifthRootIsAccurate) {
+  for (float x = 1e-30f; x < 1e30f; x *= 1.37f) {
+    const double want = std::pow(double(x), 0.2);
+    EXPECT_NEAR(normal::fifthRoot(x) / want, 1.0, 3e-6) << x;
+  }
+  EXPECT_NEAR(normal::fifthRoot(32.0f), 2.0f, 6e-6f);
+  EXPECT_NEAR(normal::fifthRoot(1.0f / 32.0f), 0.5f, 1.5e-6f);
+  EXPECT_EQ(normal::fifthRoot(0.0f), 0.0f);
+  EXPECT_EQ(normal::fifthRoot(-1.0f), 0.0f);
 }
 
 TEST(StepDashpot, DiscreteStepRestitutesTheRequestedValue) {
   // pflow's step on the dimensionless impact: within 1 % for every e from 0.1 to 1 when the contact lasts at
-  // least 12 steps (h <= 0.268), wherever in its first step the contact begins; exact as the step vanishes.
+  // least 12 steps (h <= 0.268), wherever in its first step the contact begins; to 3e-4 at 1600 steps.
   for (double e : {0.1, 0.15, 0.2, 0.3, 0.5, 0.7, 0.9, 1.0}) {
     double poly[3];
     calibrateDashpotForStep(e, poly);
@@ -160,11 +187,11 @@ TEST(StepDashpot, DiscreteStepRestitutesTheRequestedValue) {
         const double phase = (k + 0.5) / 16;
         EXPECT_NEAR(restitutionOfStep(c, poly, h, phase), e, 0.01 * e) << "e " << e << " h " << h << " phase " << phase;
       }
-    EXPECT_NEAR(restitutionOfStep(c, poly, 0.002, 0.5), e, 1e-4 * e);
+    EXPECT_NEAR(restitutionOfStep(c, poly, 0.002, 0.5), e, 3e-4 * e);
   }
-  // Without the step correction, e = 0.1 at 32 steps per contact comes out about 7 % low: it is needed.
+  // Without the step correction, e = 0.1 at 32 steps per contact comes out about 3 % high: it is needed.
   const double none[3] = {0, 0, 0};
-  EXPECT_LT(restitutionOfStep(dampingCoeffForRestitution(0.1), none, 0.1, 0.5), 0.95 * 0.1);
+  EXPECT_GT(restitutionOfStep(dampingCoeffForRestitution(0.1), none, 0.1, 0.5), 1.02 * 0.1);
 }
 
 TEST(Restitution, LinearSpringMappingIsWrongForHertz) {
