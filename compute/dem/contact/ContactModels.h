@@ -7,9 +7,8 @@
 // half-step velocities in the velocity-Verlet loop, as LAMMPS and LIGGGHTS do).
 #pragma once
 #include <cmath>
-#include <cstdint>
-#include <cstring>
 
+#include "compute/core/FastMath.h"
 #include "compute/dem/contact/ContactParams.h"
 #include "compute/core/VectorMath.h"
 
@@ -53,56 +52,6 @@ template <class T> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T hertzEnergy(T effYoung, 
   return T(8) / T(15) * effYoung * std::sqrt(effRadius) * overlap * overlap * std::sqrt(overlap);
 }
 
-// x^{1/5} for float x, from operations that round the same on every executor (bit fields, products, fused
-// multiply-adds: no library transcendental, no contraction left to the compiler), so the CPU and the GPU get the
-// same bits; relative error below 3e-6. 0 for x <= 0 and subnormal x.
-PFLOW_HOSTDEVICE PFLOW_FORCEINLINE float fifthRoot(float x) {
-  std::uint32_t b;
-  std::memcpy(&b, &x, sizeof b);
-  const int biased = int((b >> 23) & 0xffu);
-  if (!(x > 0.0f) || biased == 0) return 0.0f;
-  if (biased == 255) return x;
-  const int e = biased - 127;
-  const int q = e >= 0 ? e / 5 : -((4 - e) / 5);  // floor(e / 5)
-  const int r = e - 5 * q;                        // 0 .. 4
-  b = (b & 0x007fffffu) | 0x3f800000u;
-  float m;
-  std::memcpy(&m, &b, sizeof m);  // in [1, 2)
-  const float t = m - 1.5f;       // exact
-  // m^{1/5} on [1, 2): Chebyshev fit of degree 5 in t, Horner with explicit fused multiply-adds.
-  float y = std::fma(t, 0.004127787426114082f, -0.00792188011109829f);
-  y = std::fma(t, y, 0.01536706741899252f);
-  y = std::fma(t, y, -0.03849686682224274f);
-  y = std::fma(t, y, 0.1445978283882141f);
-  y = std::fma(t, y, 1.0844709873199463f);
-  const float rootR = r == 0 ? 1.0f : r == 1 ? 1.1486983f : r == 2 ? 1.319508f : r == 3 ? 1.5157166f : 1.7411011f;
-  const std::uint32_t pb = std::uint32_t(q + 127) << 23;  // 2^q, q in [-26, 25]
-  float p2;
-  std::memcpy(&p2, &pb, sizeof p2);
-  return y * rootR * p2;
-}
-
-// The dashpot's step factor 1 + a1 h + a2 h^2 + a3 h^3 (ContactParams::dashpotStep), where h is the contact's
-// step in units of its Hertz time scale t0 = (m*/k)^{2/5} v^{-1/5} (k = 4/3 E* sqrt(R*); the contact lasts about
-// 3.2 t0): h = dt (k/m*)^{2/5} v^{1/5}, clamped at 0.5, with v the speed whose kinetic energy equals the contact's
-// present energy (v^2 = vn^2 + 4/5 (k/m*) delta^{5/2}), so no memory of the impact is needed. A correction factor
-// needs no more than float: it is formed in float by operations that round alike on every executor (products,
-// quotients, square roots, explicit fused multiply-adds, fifthRoot), so double runs agree across executors.
-// h^5 = (dt^2 k/m*)^2 (v dt) keeps the factors within float's range for micrometre to metre grains.
-template <class T>
-PFLOW_HOSTDEVICE PFLOW_FORCEINLINE float dashpotStepFactor(const ContactParams& p, T overlap, T sqrtRd, T vn,
-                                                           T effRadius, T effMass, T dt) {
-  const float E = float(p.effYoung), m = float(effMass), d = float(overlap), v = float(vn), tau = float(dt);
-  const float kOverM = 1.3333334f * E * std::sqrt(float(effRadius)) / m;
-  const float w = 1.0666667f * E * float(sqrtRd) * d * d / m;  // 4/5 (k/m*) delta^{5/2}
-  const float v2 = std::fma(v, v, w);
-  const float a = tau * tau * kOverM;
-  float h = fifthRoot(a * a * (tau * std::sqrt(v2)));
-  if (h > 0.5f) h = 0.5f;
-  return std::fma(h, std::fma(h, std::fma(h, float(p.dashpotStep[2]), float(p.dashpotStep[1])),
-                              float(p.dashpotStep[0])), 1.0f);
-}
-
 // The normal dashpot's force over one step, integrated so that the discrete step restitutes what the continuous
 // contact does. The dashpot C delta^{1/4} vn (C = c sqrt(2 E* sqrt(R*) m*)) is the time derivative of
 // (4/5) C delta^{5/4}, so its impulse over any interval is exact from the overlaps at its ends: this returns that
@@ -110,7 +59,7 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE float dashpotStepFactor(const ContactParams& 
 // within the step counts from its first touch, wherever in the step that fell) divided by dt. Applying
 // C delta^{1/4} vn at the half-step velocity instead (as before) made the restitution depend at first order on
 // where in a step the contact began (-1.4 % to -4.5 % at e = 0.1 with 64 steps per contact); what this leaves is
-// smooth in the step and calibrated away (dashpotStepFactor). It is continuous in the state: 0 at first touch.
+// smooth in the step and calibrated away (the factor in hertzNormal). It is continuous in the state: 0 at first touch.
 // dampN = C delta^{1/4} (the continuous coefficient). Most evaluations (|vn dt| <= delta / 10) take the quotient
 // (a^{5/4} - b^{5/4}) / (a - b) from its series in eps = vn dt / delta (accurate to 5e-8 there), the others from
 // the fourth roots without cancellation. Returns the force along -n on i (positive when approaching).
@@ -132,18 +81,29 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T stepDashpot(T dampN, T overlap, T vn, T dt)
 }
 
 // The normal force magnitude on a contact, clipped at zero: Hertz elastic (4/3) E* sqrt(R*) delta^{3/2} plus the
-// dashpot (stepDashpot, its coefficient times dashpotStepFactor). sqrtRd = sqrt(R* delta). Also returns the
-// continuous dashpot's coefficient c sqrt(S_n m*) in `dampN` (the tangential dashpot's scale).
+// dashpot (stepDashpot) with coefficient c (1 + a1 u + a2 u^2 + a3 u^3) sqrt(S_n m*), where u = omega dt is the
+// step in units of the contact's present normal frequency omega = sqrt(S_n / m*) (clamped at 0.75) and
+// (a1, a2, a3) = ContactParams::dashpotStep, fitted so that the discrete step restitutes e (calibrateDashpotForStep).
+// u comes from what the dashpot needs anyway (omega dt = c sqrt(S_n m*) dt / (c m*)): no extra root.
+// sqrtRd = sqrt(R* delta). Also returns the continuous dashpot's coefficient c sqrt(S_n m*) in `dampN` (the
+// tangential dashpot's scale).
 template <class T>
-PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T hertzNormal(const ContactParams& p, T overlap, T sqrtRd, T vn, T effRadius,
-                                                 T effMass, T dt, T& dampN) {
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T hertzNormal(const ContactParams& p, T overlap, T sqrtRd, T vn, T effMass, T dt,
+                                                 T& dampN) {
   const T E = T(p.effYoung), c = T(p.dampingCoeff);
   const T sn = T(2) * E * sqrtRd;
   T fn = T(4) / T(3) * E * sqrtRd * overlap;
   dampN = c * std::sqrt(sn * effMass);
   if (c > T(0)) {
-    const T factor = T(dashpotStepFactor(p, overlap, sqrtRd, vn, effRadius, effMass, dt));
-    fn += stepDashpot(factor * dampN, overlap, vn, dt);
+    T u = divFast(dampN * dt, c * effMass);
+    if (u > T(0.75)) u = T(0.75);
+    const T factor = T(1) + u * (T(p.dashpotStep[0]) + u * (T(p.dashpotStep[1]) + u * T(p.dashpotStep[2])));
+    // No dashpot can do more within one step than stop the relative normal motion: where a contact is resolved by
+    // a handful of steps the explicit dashpot would otherwise overshoot and reverse it (the damping instability
+    // of strongly damped contacts, docs/accuracy.md). Inactive at 12 or more steps per contact for e >= 0.1.
+    const T fd = stepDashpot(factor * dampN, overlap, vn, dt);
+    const T limit = effMass * (vn < T(0) ? -vn : vn) / dt;
+    fn += fd > limit ? limit : (fd < -limit ? -limit : fd);
   }
   return fn > T(0) ? fn : T(0);
 }
@@ -218,7 +178,7 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE ContactOutput<T> hertzMindlin(const ContactPa
   const T vn = dot(s.vRel, s.n);
   const T sqrtRd = std::sqrt(s.effRadius * s.overlap);
   T dampN;
-  const T fn = normal::hertzNormal(p, s.overlap, sqrtRd, vn, s.effRadius, s.effMass, dt, dampN);
+  const T fn = normal::hertzNormal(p, s.overlap, sqrtRd, vn, s.effMass, dt, dampN);
   out.normalForce = fn;
   Vec3<T> force = (-fn) * s.n;
 

@@ -78,7 +78,7 @@ double restitutionOfStep(double c, const double poly[3], double h, double phase)
   auto accel = [&](double x, double v) {
     if (x <= 0) return 0.0;
     double dampN;
-    return -contact::normal::hertzNormal(p, x, std::sqrt(x), v, 1.0, 1.0, h, dampN);
+    return -contact::normal::hertzNormal(p, x, std::sqrt(x), v, 1.0, h, dampN);
   };
   // pflow's velocity Verlet: the force at the new overlap with the half-step velocity.
   double x = -phase * h, v = 1, a = 0;

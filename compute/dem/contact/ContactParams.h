@@ -13,9 +13,9 @@ struct ContactParams {
   double effYoung = 0;       // E*  [Pa]:   1/E* = (1-nu_i^2)/E_i + (1-nu_j^2)/E_j
   double effShear = 0;       // G*  [Pa]:   1/G* = (2-nu_i)/G_i + (2-nu_j)/G_j
   double dampingCoeff = 0;   // c [-]: F_d = -c sqrt(S m*) v, chosen so the Hertz contact restitutes e exactly
-  // The step correction of the normal dashpot: c is multiplied by 1 + a1 h + a2 h^2 + a3 h^3, where h is the
-  // contact's step in units of its Hertz time scale (contact::normal::dashpotStepFactor), so that the discrete step
-  // restitutes e as the continuous contact does (calibrateDashpotForStep). All 0 when e = 1 or e < 0.1.
+  // The step correction of the normal dashpot: c is multiplied by 1 + a1 u + a2 u^2 + a3 u^3, where u = omega dt is
+  // the step in units of the contact's present normal frequency (contact::normal::hertzNormal), so that the discrete
+  // step restitutes e as the continuous contact does (calibrateDashpotForStep). All 0 when e = 1 or e < 0.1.
   double dashpotStep[3] = {0, 0, 0};
   double tangentialRatio = 0;  // sqrt(S_t / S_n) = sqrt(4 G* / E*), so the tangential dashpot costs no sqrt
   double restitution = 1;    // e [-], the requested value (kept for reports)

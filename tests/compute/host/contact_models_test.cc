@@ -164,17 +164,6 @@ TEST(StepDashpot, ImpulseOverTheStepFromTheFirstTouch) {
   EXPECT_NEAR(u * dt, 0.8 * C * (std::pow(d, 1.25) - std::pow(d + vn * dt, 1.25)), 1e-12 * std::fabs(u * dt));
 }
 
-TEST(StepDashpot, FifthRootIsAccurate) {
-  for (float x = 1e-30f; x < 1e30f; x *= 1.37f) {
-    const double want = std::pow(double(x), 0.2);
-    EXPECT_NEAR(normal::fifthRoot(x) / want, 1.0, 3e-6) << x;
-  }
-  EXPECT_NEAR(normal::fifthRoot(32.0f), 2.0f, 6e-6f);
-  EXPECT_NEAR(normal::fifthRoot(1.0f / 32.0f), 0.5f, 1.5e-6f);
-  EXPECT_EQ(normal::fifthRoot(0.0f), 0.0f);
-  EXPECT_EQ(normal::fifthRoot(-1.0f), 0.0f);
-}
-
 TEST(StepDashpot, DiscreteStepRestitutesTheRequestedValue) {
   // pflow's step on the dimensionless impact: within 1 % for every e from 0.1 to 1 when the contact lasts at
   // least 12 steps (h <= 0.268), wherever in its first step the contact begins; to 3e-4 at 1600 steps.
