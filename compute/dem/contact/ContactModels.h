@@ -8,7 +8,6 @@
 #pragma once
 #include <cmath>
 
-#include "compute/core/FastMath.h"
 #include "compute/dem/contact/ContactParams.h"
 #include "compute/core/VectorMath.h"
 
@@ -61,15 +60,18 @@ template <class T> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T hertzEnergy(T effYoung, 
 // where in a step the contact began (-1.4 % to -4.5 % at e = 0.1 with 64 steps per contact); what this leaves is
 // smooth in the step and calibrated away (the factor in hertzNormal). It is continuous in the state: 0 at first touch.
 // dampN = C delta^{1/4} (the continuous coefficient). Most evaluations (|vn dt| <= delta / 10) take the quotient
-// (a^{5/4} - b^{5/4}) / (a - b) from its series in eps = vn dt / delta (accurate to 5e-8 there), the others from
+// (a^{5/4} - b^{5/4}) / (a - b) from its series in eps = vn dt / delta (to float's rounding, 1e-7), the others from
 // the fourth roots without cancellation. Returns the force along -n on i (positive when approaching).
 template <class T>
 PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T stepDashpot(T dampN, T overlap, T vn, T dt) {
   const T step = vn * dt;  // the overlap gained over the step
   if (T(100) * step * step <= overlap * overlap) {
-    const T e = step / overlap;
-    return dampN * vn *
-           (T(1) - e * (T(0.125) + e * (T(0.03125) + e * (T(0.013671875) + e * T(0.00751953125)))));
+    // A relative correction below 1.3 % needs no more than float, formed by operations that round alike on every
+    // executor (a correctly rounded quotient, explicit fused multiply-adds), so double runs agree across them.
+    const float e = float(step) / float(overlap);
+    const float series =
+        std::fma(-e, std::fma(e, std::fma(e, std::fma(e, 0.00751953125f, 0.013671875f), 0.03125f), 0.125f), 1.0f);
+    return dampN * vn * T(series);
   }
   const T before = overlap > step ? overlap - step : T(0);
   const T r0 = std::sqrt(std::sqrt(overlap));
@@ -95,15 +97,18 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T hertzNormal(const ContactParams& p, T overl
   T fn = T(4) / T(3) * E * sqrtRd * overlap;
   dampN = c * std::sqrt(sn * effMass);
   if (c > T(0)) {
-    T u = divFast(dampN * dt, c * effMass);
-    if (u > T(0.75)) u = T(0.75);
-    const T factor = T(1) + u * (T(p.dashpotStep[0]) + u * (T(p.dashpotStep[1]) + u * T(p.dashpotStep[2])));
+    // The factor in float, by operations that round alike on every executor (as stepDashpot's series).
+    float u = float(dampN) * float(dt) / (float(c) * float(effMass));
+    if (u > 0.75f) u = 0.75f;
+    const float factor = std::fma(
+        u, std::fma(u, std::fma(u, float(p.dashpotStep[2]), float(p.dashpotStep[1])), float(p.dashpotStep[0])), 1.0f);
     // No dashpot can do more within one step than stop the relative normal motion: where a contact is resolved by
     // a handful of steps the explicit dashpot would otherwise overshoot and reverse it (the damping instability
     // of strongly damped contacts, docs/accuracy.md). Inactive at 12 or more steps per contact for e >= 0.1.
-    const T fd = stepDashpot(factor * dampN, overlap, vn, dt);
-    const T limit = effMass * (vn < T(0) ? -vn : vn) / dt;
-    fn += fd > limit ? limit : (fd < -limit ? -limit : fd);
+    T fd = stepDashpot(T(factor) * dampN, overlap, vn, dt);
+    const T mv = effMass * (vn < T(0) ? -vn : vn);
+    if ((fd < T(0) ? -fd : fd) * dt > mv) fd = (fd < T(0) ? -mv : mv) / dt;
+    fn += fd;
   }
   return fn > T(0) ? fn : T(0);
 }
