@@ -7,7 +7,9 @@
 // half-step velocities in the velocity-Verlet loop, as LAMMPS and LIGGGHTS do).
 #pragma once
 #include <cmath>
+#include <type_traits>
 
+#include "compute/core/FastMath.h"
 #include "compute/dem/contact/ContactParams.h"
 #include "compute/core/VectorMath.h"
 
@@ -51,6 +53,15 @@ template <class T> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T hertzEnergy(T effYoung, 
   return T(8) / T(15) * effYoung * std::sqrt(effRadius) * overlap * overlap * std::sqrt(overlap);
 }
 
+// a / b for the dashpot's float corrections: correctly rounded in double runs (the same bits on both executors,
+// which double runs are held to), the special-function unit's quotient in float runs on the GPU (divFast; float
+// runs agree across executors to float's rounding only).
+template <class T>
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE float dashpotQuotient(float a, float b) {
+  if constexpr (std::is_same_v<T, float>) return divFast(a, b);
+  return a / b;
+}
+
 // The normal dashpot's force over one step, integrated so that the discrete step restitutes what the continuous
 // contact does. The dashpot C delta^{1/4} vn (C = c sqrt(2 E* sqrt(R*) m*)) is the time derivative of
 // (4/5) C delta^{5/4}, so its impulse over any interval is exact from the overlaps at its ends: this returns that
@@ -67,8 +78,8 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T stepDashpot(T dampN, T overlap, T vn, T dt)
   const T step = vn * dt;  // the overlap gained over the step
   if (T(100) * step * step <= overlap * overlap) {
     // A relative correction below 1.3 % needs no more than float, formed by operations that round alike on every
-    // executor (a correctly rounded quotient, explicit fused multiply-adds), so double runs agree across them.
-    const float e = float(step) / float(overlap);
+    // executor in double runs (a correctly rounded quotient, explicit fused multiply-adds).
+    const float e = dashpotQuotient<T>(float(step), float(overlap));
     const float series =
         std::fma(-e, std::fma(e, std::fma(e, std::fma(e, 0.00751953125f, 0.013671875f), 0.03125f), 0.125f), 1.0f);
     return dampN * vn * T(series);
@@ -97,8 +108,8 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T hertzNormal(const ContactParams& p, T overl
   T fn = T(4) / T(3) * E * sqrtRd * overlap;
   dampN = c * std::sqrt(sn * effMass);
   if (c > T(0)) {
-    // The factor in float, by operations that round alike on every executor (as stepDashpot's series).
-    float u = float(dampN) * float(dt) / (float(c) * float(effMass));
+    // The factor in float, by operations that round alike on every executor in double runs (as stepDashpot's series).
+    float u = dashpotQuotient<T>(float(dampN) * float(dt), float(c) * float(effMass));
     if (u > 0.75f) u = 0.75f;
     const float factor = std::fma(
         u, std::fma(u, std::fma(u, float(p.dashpotStep[2]), float(p.dashpotStep[1])), float(p.dashpotStep[0])), 1.0f);
