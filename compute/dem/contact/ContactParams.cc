@@ -74,7 +74,7 @@ double restitutionOfStep(double c, const double poly[3], double h, double phase)
   ContactParams p;
   p.effYoung = 0.75;
   p.dampingCoeff = c;
-  for (int k = 0; k < 3; ++k) p.dashpotStep[k] = poly[k];
+  for (int k = 0; k < 3; ++k) p.dashpotStep[k] = float(poly[k]);
   auto accel = [&](double x, double v) {
     if (x <= 0) return 0.0;
     double dampN;
@@ -188,7 +188,9 @@ std::vector<ContactParams> buildContactTable(const std::vector<MaterialConfig>& 
         }
       }
       p.dampingCoeff = dampingCoeffForRestitution(p.restitution);
-      calibrateDashpotForStep(p.restitution, p.dashpotStep);
+      double step[3];
+      calibrateDashpotForStep(p.restitution, step);
+      for (int k = 0; k < 3; ++k) p.dashpotStep[k] = float(step[k]);
       p.tangentialRatio = std::sqrt(4.0 * p.effShear / p.effYoung);
       table[a * nm + b] = p;
       table[b * nm + a] = p;

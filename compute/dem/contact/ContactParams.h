@@ -16,7 +16,7 @@ struct ContactParams {
   // The step correction of the normal dashpot: c is multiplied by 1 + a1 u + a2 u^2 + a3 u^3, where u = omega dt is
   // the step in units of the contact's present normal frequency (contact::normal::hertzNormal), so that the discrete
   // step restitutes e as the continuous contact does (calibrateDashpotForStep). All 0 when e = 1 or e < 0.1.
-  double dashpotStep[3] = {0, 0, 0};
+  float dashpotStep[3] = {0, 0, 0};  // float: the kernels use them in float (and read 12 bytes, not 24)
   double tangentialRatio = 0;  // sqrt(S_t / S_n) = sqrt(4 G* / E*), so the tangential dashpot costs no sqrt
   double restitution = 1;    // e [-], the requested value (kept for reports)
   double friction = 0;       // mu_s [-]
