@@ -73,6 +73,11 @@ std::optional<backend::CheckpointData> JobCheckpoints::fetch() {
 void JobCheckpoints::send(compute::SimulationState state) {
   const std::int64_t step = state.step;
   const double time = state.time;
+  if (m_delivered && !m_delivered()) {
+    spdlog::warn("job {}: no checkpoint of step {}: earlier output still waits for the back-end in the spool (a resume "
+                 "from it would skip that output); the next checkpoint is due on the schedule", m_jobId, step);
+    return;
+  }
   m_data.state = std::move(state);
   Status s = backend::writeCheckpoint(m_path, m_data, /*scratch=*/true);  // the back-end's copy is the durable one
   m_data.state = {};

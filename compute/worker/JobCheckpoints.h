@@ -11,6 +11,7 @@
 //     number). With no checkpoint, or one that does not belong to this model, the run starts from the scene's start.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -31,6 +32,10 @@ class JobCheckpoints {
   // output.checkpoint_interval (0: none).
   JobCheckpoints(const WorkerOptions& o, const char* solver, const char* precision, double everySeconds, bool lead, compute::Domain& all);
   ~JobCheckpoints();
+  // Asked (on rank 0) before a checkpoint is sent: whether every snapshot and series written so far has reached the
+  // back-end (SnapshotSink::delivered). A checkpoint past a snapshot still in the worker's spool would let a resumed
+  // run skip that snapshot for good if the worker died with its spool; such a checkpoint is not sent.
+  void setOutputsDelivered(std::function<bool()> delivered) { m_delivered = std::move(delivered); }
 
   // With --resume: the run `sim` (just created from the model) goes on from the job's latest checkpoint. Collective.
   // Returns whether it resumed (the same on every rank); an error only when the resume itself failed midway.
@@ -72,6 +77,7 @@ class JobCheckpoints {
   compute::CheckpointSchedule m_schedule;
   backend::CheckpointData m_data;  // the scene and the run's kind; the state per checkpoint
   std::unique_ptr<backend::BackendClient> m_backend;
+  std::function<bool()> m_delivered;
 };
 
 }  // namespace pflow::worker

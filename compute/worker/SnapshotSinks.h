@@ -17,6 +17,9 @@ class SnapshotSink {
   // Appends probe samples (an SPH run's, since the last call) to the job's /probes.
   virtual Status writeProbes(const backend::ProbeSeries& samples) = 0;
   virtual Status close() = 0;
+  // Whether every output written so far has reached its destination (a sink that spools tries its spool first).
+  // A checkpoint is sent only when this holds: a run resumed from it does not write its step's snapshot again.
+  virtual bool delivered() { return true; }
 };
 
 Result<std::unique_ptr<SnapshotSink>> makeFileSink(const std::string& h5Path);

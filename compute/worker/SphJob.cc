@@ -70,6 +70,7 @@ int runSphRank(const WorkerOptions& o, int rank, int ranks, const frontend::Load
     if (opened.isOk()) opened = sink->writeGeometry({});
   }
   if (Status s = all.agree(opened); !s.isOk()) return fail(2, s.message());
+  checkpoints.setOutputsDelivered([&] { return !sink || sink->delivered(); });
   const auto& fields = scene.outputFields;
 
   // Probes: sampled on every rank (a collective), kept and sent by rank 0.

@@ -62,6 +62,11 @@ Status SpoolingSink::deliver(const Item& item) {
   return std::visit([this](const auto& x) { return deliver(x); }, item);
 }
 
+bool SpoolingSink::delivered() {
+  if (Status st = drain(); !st.isOk()) m_lastFailure = st;
+  return m_queue.empty();
+}
+
 Status SpoolingSink::drain() {
   while (!m_queue.empty()) {
     Status st = deliver(m_queue.front().first);

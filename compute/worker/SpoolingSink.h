@@ -39,6 +39,8 @@ class SpoolingSink final : public SnapshotSink {
   Status write(const compute::ParticleSnapshot& snapshot) override;
   Status writeProbes(const backend::ProbeSeries& samples) override;
   Status close() override;
+  // Tries the spool (oldest first) and says whether it is empty now.
+  bool delivered() override;
 
   static bool retryable(const Status& s);
   std::size_t spooled() const { return m_queue.size(); }

@@ -104,6 +104,7 @@ int runRank(const worker::WorkerOptions& o, int rank, int ranks) {
     if (opened.isOk()) opened = sink->writeGeometry(sim.geometry());
   }
   if (Status s = all.agree(opened); !s.isOk()) return fail(2, s.message());
+  checkpoints.setOutputsDelivered([&] { return !sink || sink->delivered(); });
   const auto& fields = scene.value().outputFields;
   auto write = [&]() -> Status {  // collective: every rank's particles gathered on rank 0
     auto t = sim.timers().time(compute::Phase::kOutput);

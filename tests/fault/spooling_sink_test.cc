@@ -85,6 +85,20 @@ TEST(SpoolingSink, BackEndDownForThreeIntervalsLosesNothing) {
   EXPECT_TRUE(f.backend->closed);
 }
 
+// delivered() (asked before a checkpoint is sent) tries the spool and is true only when nothing waits in it: the
+// chaos run that lost a snapshot had its checkpoint of that step reach the back-end while the snapshot was still
+// spooled, then the worker died with its spool and the resumed run began after that snapshot.
+TEST(SpoolingSink, DeliveredOnlyWhenTheSpoolIsEmpty) {
+  Fixture f(1 << 20);
+  EXPECT_TRUE(f.sink->delivered());
+  f.backend->downFor = 2;  // the write and the first retry fail
+  ASSERT_TRUE(f.sink->write(snapshot(10)).isOk());
+  EXPECT_FALSE(f.sink->delivered());
+  EXPECT_EQ(f.sink->spooled(), 1u);
+  EXPECT_TRUE(f.sink->delivered());  // the back-end is back: the spool drains now
+  EXPECT_EQ(f.backend->stored, (std::vector<std::string>{"snapshot 10"}));
+}
+
 // With the back-end up and nothing waiting, a snapshot goes through as the caller's object (a snapshot may be
 // hundreds of MB: only what must wait is copied into the spool).
 TEST(SpoolingSink, NoCopyWhenNothingWaits) {
