@@ -45,12 +45,11 @@ Status Simulation::stepPhases() {
   // checkpoint never holds a state the detector would reject.
   const std::int64_t next = m_step + 1;
   const bool slotsGrew = reportSlotGrowth();  // logged in every mode
+  const bool outputStep = (m_nextOutput >= 0 && next >= m_nextOutput) || next == m_endOutput;
   m_checkpointDue = m_onInstability == OnInstability::kReduceDt &&
-                    (slotsGrew || (m_nextOutput >= 0 && next >= m_nextOutput) || next == m_endOutput ||
-                     next - m_checkpoint.step >= m_checkpointSteps);
+                    (slotsGrew || outputStep || next - m_checkpoint.step >= m_checkpointSteps);
   // The energy detector: every kEnergyCheckSteps, at checkpoints, and at every output and the run's end, so that no
   // state it would reject is written or ends a run (one reduction: 8 bytes to the host).
-  const bool outputStep = (m_nextOutput >= 0 && next >= m_nextOutput) || next == m_endOutput;
   if (m_energyCheck && (next % kEnergyCheckSteps == 0 || m_checkpointDue || outputStep)) {
     auto t = m_timers.time(Phase::kIntegrate2);  // the integration's own check, like the non-finite one
     PFLOW_RETURN_IF_ERROR(checkEnergy());

@@ -1,5 +1,5 @@
 // Contact physics, written once as stateless host+device functions over plain structs, split into
-// sub-models the way LAMMPS's granular model is (normal, damping, tangential, rolling).
+// sub-models the way LAMMPS's granular model is (normal with its dashpot, tangential, rolling).
 //
 // Conventions: n is the unit normal from particle i towards its partner j (for a wall, towards the
 // wall); overlap delta > 0 in contact; vRel = velocity of i's contact point minus j's; forces and
@@ -128,13 +128,6 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T hertzNormal(const ContactParams& p, T overl
   return fn > T(0) ? fn : T(0);
 }
 }  // namespace normal
-
-namespace damping {
-// Viscoelastic dashpot -c sqrt(S m*) v for one direction's stiffness S; c from dampingCoeffForRestitution.
-template <class T> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T coefficient(T dampingCoeff, T stiffness, T effMass) {
-  return dampingCoeff * std::sqrt(stiffness * effMass);
-}
-}  // namespace damping
 
 namespace tangential {
 // Rotates the stored displacement into the tangent plane of the current normal, keeping its length.

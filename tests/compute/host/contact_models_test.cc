@@ -37,6 +37,23 @@ TEST(NormalModel, HertzForceAndStiffness) {
   EXPECT_NEAR(normal::hertzForce(E, R, d), fe, 1e-6 * fe);
 }
 
+TEST(NormalModel, KernelNormalForceIsTheReferenceHertzAndDashpot) {
+  // hertzNormal (what the kernels call) against the sub-model helpers: elastic alone at rest and without damping;
+  // the continuous dashpot's coefficient c sqrt(S_n m*) returned for the tangential part.
+  const double R = 5e-3, d = 1e-5, m = 1e-3, dt = 1e-7, sqrtRd = std::sqrt(R * d);
+  for (double e : {1.0, 0.5, 0.1}) {
+    const ContactParams p = params(0.5, e);
+    double dampN = -1;
+    EXPECT_NEAR(normal::hertzNormal(p, d, sqrtRd, 0.0, m, dt, dampN), normal::hertzForce(p.effYoung, R, d),
+                1e-12 * normal::hertzForce(p.effYoung, R, d)) << e;
+    EXPECT_NEAR(dampN, p.dampingCoeff * std::sqrt(normal::hertzStiffness(p.effYoung, R, d) * m), 1e-12 * (dampN + 1e-30)) << e;
+  }
+  // Approaching, a damped contact pushes harder than the elastic force alone; e = 1 does not.
+  double dampN;
+  EXPECT_GT(normal::hertzNormal(params(0.5, 0.5), d, sqrtRd, 1.0, m, dt, dampN), normal::hertzForce(5e9, R, d));
+  EXPECT_DOUBLE_EQ(normal::hertzNormal(params(0.5, 1.0), d, sqrtRd, 1.0, m, dt, dampN), normal::hertzForce(5e9, R, d));
+}
+
 TEST(HertzMindlin, NormalForceIsRepulsive) {
   const auto out = hertzMindlin(params(), state({1, 0, 0}, 1e-5, {0, 0, 0}), Vec3d{0, 0, 0}, 1e-7);
   EXPECT_LT(out.force.x, 0);  // pushes i away from j
