@@ -189,8 +189,10 @@ template <class Exec, class R>
 double EngineImpl<Exec, R>::elasticEnergy() const {
   const HostView h = hostView();
   const int nm = m_setup.numMaterials;
-  auto table = [&](int a, int b) { return m_setup.contactTable[std::size_t(a) * nm + std::size_t(b)].effYoung; };
-  const auto hertz = contact::normal::hertzEnergy<double>;
+  // Hertz's energy, or with adhesion the work done on the contact since it formed (contactEnergy); a JKR contact
+  // held past zero overlap is left out (its energy, positive, is what breaking it will dissipate).
+  auto table = [&](int a, int b) -> const ContactParams& { return m_setup.contactTable[std::size_t(a) * nm + std::size_t(b)]; };
+  const auto hertz = [](const ContactParams& p, double effRadius, double ov) { return contactEnergy(p, effRadius, ov); };
   double u = 0;
   for (Index i = 0; i < m_owned; ++i) {
     const double ri = double(h.rad[i]);

@@ -299,24 +299,29 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   // The pair kernel, then the wall kernel, over the particles of `set`: every owned one, or one part of
   // the list splitBoundary made (boundary rows first, then interior ones).
   void launchForces(double dt, double time, ForceSet set, bool storeOnly) {
+    if (m_setup.model.cohesion) launchForcesWith<true>(dt, time, set, storeOnly);  // adhesion: kernels of their own
+    else launchForcesWith<false>(dt, time, set, storeOnly);
+  }
+  template <bool kC>
+  void launchForcesWith(double dt, double time, ForceSet set, bool storeOnly) {
     const kernels::ForceArgs<R> args = forceArgs(dt, time, storeOnly);
     if (set == ForceSet::kAll || (m_numBoundary == 0 && set == ForceSet::kInterior)) {
       if constexpr (Exec::kPairsOnce) {
         if (m_numSlabs) {
-          m_exec.forEachTwoColours(m_numSlabs, kernels::ComputePairsOnce<R>{{args}, m_slabStart.as<Index>(), m_slabItems.as<Index>(),
+          m_exec.forEachTwoColours(m_numSlabs, kernels::ComputePairsOnce<R, kC>{{args}, m_slabStart.as<Index>(), m_slabItems.as<Index>(),
                                                                             m_owned1.as<std::uint32_t>(), m_numSlabs});
-          if (m_anyWalls) m_exec.forEach(m_owned, kernels::ComputeWallForces<R>{args});
+          if (m_anyWalls) m_exec.forEach(m_owned, kernels::ComputeWallForces<R, kC>{args});
           return;
         }
       }
-      m_exec.forEach(m_owned, kernels::ComputeForces<R>{args});
-      if (m_anyWalls) m_exec.forEach(m_owned, kernels::ComputeWallForces<R>{args});
+      m_exec.forEach(m_owned, kernels::ComputeForces<R, kC>{args});
+      if (m_anyWalls) m_exec.forEach(m_owned, kernels::ComputeWallForces<R, kC>{args});
       return;
     }
     const Index* list = m_split.as<Index>() + (set == ForceSet::kBoundary ? 0 : m_numBoundary);
     const Index count = set == ForceSet::kBoundary ? m_numBoundary : m_owned - m_numBoundary;
-    m_exec.forEach(count, kernels::OverList<kernels::ComputeForces<R>>{{args}, list});
-    if (m_anyWalls) m_exec.forEach(count, kernels::OverList<kernels::ComputeWallForces<R>>{{args}, list});
+    m_exec.forEach(count, kernels::OverList<kernels::ComputeForces<R, kC>>{{args}, list});
+    if (m_anyWalls) m_exec.forEach(count, kernels::OverList<kernels::ComputeWallForces<R, kC>>{{args}, list});
   }
   // After the candidate lists, where each pair is evaluated once (EngineSetup::pairsOnce): the particles by
   // slab, one cell layer thick along the slower of y and z with more layers (x when both have fewer than 4:

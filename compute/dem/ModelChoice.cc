@@ -118,9 +118,22 @@ ModelChoice deriveModel(const RunConfig& c, const ModelOptions& options) {
   // ---- tangential history, rolling torque ----
   const std::vector<ContactParams> table = buildContactTable(c.materials, c.pairs);
   {
+    std::string adhesive;  // the first pair with adhesion
+    for (const auto& pr : c.pairs)
+      if (pr.cohesion != CohesionModel::kNone && pr.workOfAdhesion > 0 && adhesive.empty() && pr.a >= 0 && pr.b >= 0 &&
+          std::size_t(pr.a) < c.materials.size() && std::size_t(pr.b) < c.materials.size())
+        adhesive = c.materials[std::size_t(pr.a)].name + "-" + c.materials[std::size_t(pr.b)].name;
+    m.flags.cohesion = !adhesive.empty();
+    decide("adhesion", m.flags.cohesion ? "on" : "off",
+           m.flags.cohesion ? "the pair " + adhesive + " asks for it (pairs[].cohesion): the force loop with adhesion"
+                            : "no pair asks for it (pairs[].cohesion)");
+  }
+  {
     const std::string nonzero = firstNonzero(c, table, &ContactParams::friction, "friction");
     if (m.full) {
       decide("tangential history", "on", fullReason);
+    } else if (m.flags.cohesion) {
+      decide("tangential history", "on", "adhesion: a JKR contact holds past zero overlap, and its slot says it exists");
     } else if (nonzero.empty()) {
       m.flags.tangential = false;
       decide("tangential history", "off",

@@ -9,6 +9,7 @@ struct ModelFlags {
   bool tangential = true;  // tangential forces and their history slots (particle and wall)
   bool rolling = true;     // rolling-resistance torque
   bool walls = true;       // the wall phases (wall candidates at rebuild, wall forces)
+  bool cohesion = false;   // a material pair has adhesion (pairs[].cohesion); implies tangential (its slots)
 };
 
 }  // namespace pflow::compute

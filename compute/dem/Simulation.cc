@@ -7,6 +7,7 @@
 #include "common/Log.h"
 #include "compute/core/Memory.h"
 #include "compute/dem/ModelChoice.h"
+#include "compute/dem/contact/ForceKernel.h"
 
 namespace pflow::compute {
 
@@ -268,7 +269,7 @@ Status Simulation::initialise() {
     m_energyStart = m_domain->sum(m_engine->mechanicalEnergy());
     const double kinetic = m_domain->sum(m_engine->kineticEnergy()), elastic = m_domain->sum(m_engine->elasticEnergy());
     m_energyScale = kinetic + elastic + m_energyScale;  // m_energyScale held M |g| H (create)
-    m_energyAllowance = elastic + kEnergyTolerance * m_energyScale;
+    m_energyAllowance = elastic + kEnergyTolerance * m_energyScale + m_adhesionAllowance;
     m_elasticStart = elastic;
   }
   return Status::ok();
@@ -346,7 +347,7 @@ Status Simulation::finishRun() {
   if (!m_energyCheck || m_step == 0) return Status::ok();
   const double mechanical = m_domain->sum(m_engine->mechanicalEnergy()), elastic = m_domain->sum(m_engine->elasticEnergy());
   const double excess = (mechanical + elastic) - (m_energyStart + m_elasticStart);
-  if (excess <= kEnergyTolerance * m_energyScale) return Status::ok();
+  if (excess <= kEnergyTolerance * m_energyScale + m_adhesionAllowance) return Status::ok();
   const ParticleProbe p = m_engine->fastestParticle();
   char buf[512];
   std::snprintf(buf, sizeof buf,
@@ -386,6 +387,19 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const RunConfig& config, 
   std::shared_ptr<Domain> domain = options.domain ? options.domain : std::make_shared<Domain>();
   double totalMass = 0;  // the whole scene's (every rank prepares it), before the partition keeps a share
   for (double m : setup.value().mass) totalMass += m;
+  // Adhesion releases kinetic energy as contacts form: at most one well depth a contact (adhesionWellDepth at
+  // R* = r_i, which bounds both a pair's R* and a wall's), for max_contacts pair contacts (each counted by both
+  // partners: half each) and kMaxWallContacts wall contacts per particle.
+  double adhesion = 0;
+  if (setup.value().model.cohesion) {
+    const EngineSetup& su = setup.value();
+    for (std::size_t i = 0; i < su.radius.size(); ++i) {
+      double depth = 0;
+      for (int m = 0; m < su.numMaterials; ++m)
+        depth = std::max(depth, adhesionWellDepth(su.contactTable[std::size_t(su.material[i]) * su.numMaterials + m], su.radius[i]));
+      adhesion += (0.5 * su.maxContacts + kMaxWallContacts) * depth;
+    }
+  }
   if (Status s = domain->partition(setup.value()); !s.isOk()) return s;
   std::unique_ptr<Simulation> sim(new Simulation(setup.value(), ts.value(), nullptr));
   sim->m_domain = std::move(domain);
@@ -406,6 +420,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const RunConfig& config, 
                                    std::fabs(config.sim.gravity.z) * ext.z) / g : 0.0;
     sim->m_energyScale = totalMass * g * height;
   }
+  sim->m_adhesionAllowance = adhesion;
   sim->m_rebuildInterval = config.sim.rebuildInterval;
   ExecutorKind kind = options.executor;
   if (kind == ExecutorKind::kAuto) kind = cudaDeviceCount() > 0 ? ExecutorKind::kCuda : ExecutorKind::kCpu;

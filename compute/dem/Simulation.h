@@ -146,6 +146,7 @@ class Simulation {
   // Energy detector (disabled while a mesh moves: its work is not accounted for).
   bool m_energyCheck = false;
   double m_energyStart = 0, m_energyAllowance = 0, m_energyScale = 0, m_elasticStart = 0;
+  double m_adhesionAllowance = 0;  // the kinetic energy adhesion may release (a bound; 0 without adhesion)
   // reduce_dt
   OnInstability m_onInstability = OnInstability::kStop;
   int m_checkpointSteps = 1000;

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <limits>
 #include <map>
+#include <numbers>
 #include <string>
 #include <utility>
 #include <vector>
@@ -102,6 +103,34 @@ void validateMaterials(const RunConfig& c, ErrorList& e) {
   }
 }
 
+// Adhesion: a work of adhesion > 0, and a JKR contact's reach past zero overlap (its break distance for the
+// largest particles of the pair, sphere-sphere and sphere-wall) within half the neighbour skin, so that every contact
+// that holds is among the candidates of every rebuild.
+void validateCohesion(const RunConfig& c, const MaterialPairConfig& pr, const std::string& p, ErrorList& e) {
+  const std::string w = p + ".work_of_adhesion";
+  if (!std::isfinite(pr.workOfAdhesion) || pr.workOfAdhesion <= 0) {
+    e.add(w, "must be > 0 (J/m^2), got " + num(pr.workOfAdhesion));
+    return;
+  }
+  const int nMat = int(c.materials.size());
+  if (pr.cohesion != CohesionModel::kJkr || pr.a < 0 || pr.b < 0 || pr.a >= nMat || pr.b >= nMat) return;
+  double rMax = 0;
+  for (double r : c.particles.radius) rMax = std::max(rMax, r);
+  double skin = c.sim.skin;
+  if (skin < 0) skin = 0.2 * rMax;
+  const MaterialConfig& ma = c.materials[std::size_t(pr.a)];
+  const MaterialConfig& mb = c.materials[std::size_t(pr.b)];
+  if (!(ma.youngsModulus > 0) || !(mb.youngsModulus > 0) || rMax <= 0 || !(skin > 0)) return;
+  const double effYoung = 1.0 / ((1 - ma.poissonRatio * ma.poissonRatio) / ma.youngsModulus +
+                                 (1 - mb.poissonRatio * mb.poissonRatio) / mb.youngsModulus);
+  const double pg = std::numbers::pi * pr.workOfAdhesion / effYoung;
+  const double reach = 0.75 * std::cbrt(pg * pg) * std::cbrt(rMax);  // R* <= r_max (a wall contact)
+  if (reach > 0.5 * skin)
+    e.add(w, num(pr.workOfAdhesion) + " J/m^2 lets a JKR contact of the largest particles hold " + num(reach) +
+                 " m past touching, more than half the neighbour skin " + num(skin) +
+                 " m: such contacts could be lost at a rebuild; raise simulation.skin above " + num(2 * reach) + " m");
+}
+
 void validatePairs(const RunConfig& c, ErrorList& e) {
   const std::size_t nMat = c.materials.size();
   std::map<std::pair<int, int>, std::size_t> seen;
@@ -115,6 +144,7 @@ void validatePairs(const RunConfig& c, ErrorList& e) {
     if (pr.restitution) leftOpenInterval(e, p + ".restitution", *pr.restitution, 0.0, 1.0);
     if (pr.friction) nonNegative(e, p + ".friction", *pr.friction);
     if (pr.rollingFriction) nonNegative(e, p + ".rolling_friction", *pr.rollingFriction);
+    if (pr.cohesion != CohesionModel::kNone) validateCohesion(c, pr, p + ".cohesion", e);
   }
 }
 

@@ -25,9 +25,14 @@ struct MaterialConfig {
 };
 
 // Optional per-pair overrides (symmetric). Unset members use the pair's mixing rule.
+// Adhesion between two materials (pairs[].cohesion): off unless a scene asks (the least model).
+enum class CohesionModel { kNone = 0, kJkr = 1, kConstant = 2 };
+
 struct MaterialPairConfig {
   int a = 0, b = 0;  // material indices
   std::optional<double> restitution, friction, rollingFriction;
+  CohesionModel cohesion = CohesionModel::kNone;  // jkr: Johnson-Kendall-Roberts; constant: DMT's 2 pi dgamma R*
+  double workOfAdhesion = 0;                      // dgamma [J/m^2] (twice the surface energy for like surfaces)
 };
 
 // Explicit initial particles (the front-end's generators produce these).

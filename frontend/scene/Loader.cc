@@ -220,6 +220,23 @@ void Loader::parsePairs(const Fields& top) {
       if (get(*f, "restitution", v)) pair.restitution = v;
       if (get(*f, "friction", v)) pair.friction = v;
       if (get(*f, "rolling_friction", v)) pair.rollingFriction = v;
+      if (const Entry* c = f->find("cohesion")) {  // adhesion: {model: jkr | constant, work_of_adhesion: J/m^2}
+        const std::string cp = f->child("cohesion");
+        if (const auto cf = mapping(c->value, cp, c->loc, kCohesionKeys)) {
+          std::string model;
+          if (const Entry* me = cf->find("model")) {
+            if (read(me->value, cf->child("model"), me->loc, model)) {
+              if (model == "jkr") pair.cohesion = compute::CohesionModel::kJkr;
+              else if (model == "constant") pair.cohesion = compute::CohesionModel::kConstant;
+              else badValue(cf->child("model"), unknownName("model", model, kCohesionModels, "Choices"), me->loc);
+            }
+          } else {
+            missing(*cf, "model", "jkr (Johnson-Kendall-Roberts) or constant (DMT's 2 pi dgamma R*)");
+          }
+          if (cf->find("work_of_adhesion")) get(*cf, "work_of_adhesion", pair.workOfAdhesion);
+          else missing(*cf, "work_of_adhesion", "the work of adhesion dgamma (J/m^2)");
+        }
+      }
     }
     m_config.pairs.push_back(pair);
   }
@@ -319,6 +336,7 @@ void Loader::parseSimulation(const Fields& top) {
     if (const auto pf = mapping(p->value, "simulation.physics", p->loc, kPhysicsKeys)) {
       if (const Entry* fr = pf->find("friction")) read(fr->value, pf->child("friction"), fr->loc, m_friction);
       if (const Entry* rr = pf->find("rolling_resistance")) read(rr->value, pf->child("rolling_resistance"), rr->loc, m_rollingResistance);
+      if (const Entry* co = pf->find("cohesion")) read(co->value, pf->child("cohesion"), co->loc, m_cohesion);
     }
   }
 }
@@ -684,6 +702,7 @@ Result<LoadedScene> Loader::run(const std::string& yaml, const std::string& sour
     for (auto& pr : m_config.pairs) {
       if (!m_friction && pr.friction) pr.friction = 0.0;
       if (!m_rollingResistance && pr.rollingFriction) pr.rollingFriction = 0.0;
+      if (!m_cohesion) pr.cohesion = compute::CohesionModel::kNone;
     }
     appendValidation(m_config.validate());
   } catch (const YAML::Exception& ex) {

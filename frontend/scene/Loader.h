@@ -56,7 +56,9 @@ constexpr std::string_view kProbeKeys[] = {"name", "point", "gauge"};
 constexpr std::string_view kSphSimulationKeys[] = {"gravity", "duration", "snapshot_interval", "precision", "threads", "decomposition"};
 constexpr std::string_view kSphOutputKeys[] = {"file", "fields", "probe_interval", "checkpoint_interval"};
 constexpr std::string_view kMaterialKeys[] = {"name", "youngs_modulus", "poisson_ratio", "density", "restitution", "friction", "rolling_friction"};
-constexpr std::string_view kPairKeys[] = {"materials", "restitution", "friction", "rolling_friction"};
+constexpr std::string_view kPairKeys[] = {"materials", "restitution", "friction", "rolling_friction", "cohesion"};
+constexpr std::string_view kCohesionKeys[] = {"model", "work_of_adhesion"};
+constexpr std::string_view kCohesionModels[] = {"jkr", "constant"};
 constexpr std::string_view kParticleSetKeys[] = {"name", "material", "method", "size", "count", "solid_fraction", "region",
                                                  "velocity", "angular_velocity", "lattice", "tiled", "random", "list", "file"};
 constexpr std::string_view kMethods[] = {"lattice", "random", "tiled", "list"};
@@ -93,7 +95,7 @@ constexpr std::string_view kSimulationKeys[] = {"gravity", "duration", "dt", "dt
                                                 "model", "accuracy"};
 constexpr std::string_view kModelModes[] = {"auto", "full"};
 constexpr std::string_view kAccuracyKeys[] = {"quantity", "tolerance"};
-constexpr std::string_view kPhysicsKeys[] = {"friction", "rolling_resistance"};
+constexpr std::string_view kPhysicsKeys[] = {"friction", "rolling_resistance", "cohesion"};
 constexpr std::string_view kOutputKeys[] = {"file", "fields", "checkpoint_interval", "series_interval", "flow_planes"};
 constexpr std::string_view kFlowPlaneKeys[] = {"name", "point", "normal"};
 constexpr std::string_view kPrecisions[] = {"double", "float"};
@@ -235,7 +237,7 @@ class Loader {
   std::vector<ParticleSetInfo> m_setInfo;
   std::vector<std::string> m_files;
   std::shared_ptr<WallClearance> m_clearance;  // built at the first generated set, shared by all  // files the scene refers to, as written
-  bool m_friction = true, m_rollingResistance = true;  // simulation.physics switches
+  bool m_friction = true, m_rollingResistance = true, m_cohesion = true;  // simulation.physics switches
   std::vector<std::string> m_badPaths;
   std::unordered_map<std::string, Loc> m_marks;  // YAML path -> where its value starts
   std::vector<PathMap> m_pathMaps;

@@ -103,6 +103,17 @@ TEST_F(MalformedScenes, EachGivesItsPreciseMessage) {
       {"unknown material", scene("  - {material: glas, method: lattice, region: {box: {min: [0, 0, 0], max: [0.01, 0.01, 0.01]}}, size: 0.001}\n"),
        {"particles[0].material: unknown material 'glas'; did you mean 'glass'?"}},
       {"pair of unknown material", kMat + "pairs:\n  - {materials: [glass, steel], friction: 0.1}\n" + kSim, {"pairs[0].materials[1]: unknown material 'steel'"}},
+      {"adhesion model typo", kMat + "pairs:\n  - {materials: [glass, glass], cohesion: {model: jrk, work_of_adhesion: 0.1}}\n" + kSim,
+       {"pairs[0].cohesion.model: unknown model 'jrk'; did you mean 'jkr'?"}},
+      {"adhesion without its work", kMat + "pairs:\n  - {materials: [glass, glass], cohesion: {model: jkr}}\n" + kSim,
+       {"pairs[0].cohesion.work_of_adhesion: required key 'work_of_adhesion' is missing"}},
+      {"negative work of adhesion", kMat + "pairs:\n  - {materials: [glass, glass], cohesion: {model: constant, work_of_adhesion: -1}}\n" + kSim,
+       {"pairs[0].cohesion.work_of_adhesion: must be > 0 (J/m^2), got -1"}},
+      {"adhesion beyond the skin",
+       kMat + "pairs:\n  - {materials: [glass, glass], cohesion: {model: jkr, work_of_adhesion: 50}}\n" +
+           "particles:\n  - {method: lattice, region: {box: {min: [0, 0, 0], max: [0.01, 0.01, 0.01]}}, size: 0.001}\n" +
+           "simulation: {duration: 0.1, skin: 1.0e-6}\n",
+       {"pairs[0].cohesion.work_of_adhesion: 50 J/m^2 lets a JKR contact of the largest particles hold", "raise simulation.skin above"}},
       // ---- particle sets
       {"particles not a list", kMat + "particles: {method: lattice}\n" + kSim, {"particles: expected a list of particle sets"}},
       {"empty set", scene("  - {}\n"), {"particles[0].method: required key 'method' is missing"}},

@@ -10,6 +10,8 @@
 #include <set>
 #include <string>
 
+#include "compute/dem/ModelChoice.h"
+#include "compute/dem/contact/ContactParams.h"
 #include "frontend/SceneLoader.h"
 
 namespace pflow::frontend {
@@ -614,6 +616,30 @@ TEST(SceneLoader, PhysicsSwitchesZeroTheCoefficients) {
                                         "simulation: {duration: 0.1, physics: {rolling: false}}\n");
   ASSERT_FALSE(typo.isOk());
   EXPECT_NE(typo.status().message().find("simulation.physics.rolling: unknown key 'rolling'"), std::string::npos) << typo.status().message();
+}
+
+TEST(SceneLoader, AdhesionPerPairAndItsSwitch) {
+  const std::string yaml =
+      "materials:\n  - {name: a, youngs_modulus: 1e7, poisson_ratio: 0.3, density: 2500, restitution: 0.5, friction: 0.5}\n"
+      "  - {name: b, youngs_modulus: 1e8, poisson_ratio: 0.3, density: 2500, restitution: 0.5, friction: 0.5}\n"
+      "pairs:\n  - {materials: [a, a], cohesion: {model: jkr, work_of_adhesion: 0.05}}\n"
+      "  - {materials: [a, b], cohesion: {model: constant, work_of_adhesion: 0.02}}\n";
+  const auto r = loadSceneFromString(yaml + "simulation: {duration: 0.1}\n");
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  ASSERT_EQ(r->config.pairs.size(), 2u);
+  EXPECT_EQ(r->config.pairs[0].cohesion, compute::CohesionModel::kJkr);
+  EXPECT_EQ(r->config.pairs[0].workOfAdhesion, 0.05);
+  EXPECT_EQ(r->config.pairs[1].cohesion, compute::CohesionModel::kConstant);
+  const auto table = compute::buildContactTable(r->config.materials, r->config.pairs);
+  EXPECT_EQ(table[0].cohesion, 1);  // a-a
+  EXPECT_EQ(table[1].cohesion, 2);  // a-b
+  EXPECT_EQ(table[2].cohesion, 2);  // b-a
+  EXPECT_EQ(table[3].cohesion, 0);  // b-b: no pair asked
+  EXPECT_NE(compute::deriveModel(r->config).text().find("adhesion: on"), std::string::npos);
+  const auto off = loadSceneFromString(yaml + "simulation: {duration: 0.1, physics: {cohesion: false}}\n");
+  ASSERT_TRUE(off.isOk()) << off.status().message();
+  EXPECT_EQ(off->config.pairs[0].cohesion, compute::CohesionModel::kNone);
+  EXPECT_NE(compute::deriveModel(off->config).text().find("adhesion: off"), std::string::npos);
 }
 
 // ---- output: the DEM run's time series ------------------------------------------------------------------------------

@@ -205,6 +205,46 @@ TEST_P(CudaVsCpu, ImpactsMatchCpuAcrossRestitution) {
   }
 }
 
+// Adhesive impacts (JKR and the constant model; sphere-sphere and sphere-plane, one slow enough to stick and one
+// fast enough to break free) and an adhesive sphere pulled off a rising lid: the GPU gives the CPU's velocities.
+TEST_P(CudaVsCpu, AdhesiveContactsMatchCpu) {
+  SKIP_WITHOUT_GPU();
+  const bool single = GetParam() == compute::Precision::kFloat;
+  for (compute::CohesionModel model : {compute::CohesionModel::kJkr, compute::CohesionModel::kConstant}) {
+    compute::RunConfig c;
+    c.sim.precision = GetParam();
+    c.materials = {material("powder", 1e7, 0.3, 2500, model == compute::CohesionModel::kJkr ? 1.0 : 0.5, 0.3)};
+    compute::MaterialPairConfig pair;
+    pair.cohesion = model;
+    pair.workOfAdhesion = 0.5;
+    c.pairs = {pair};
+    const double r = 1e-3;
+    for (int k = 0; k < 2; ++k) {  // k = 0 sticks (v = 0.02 m/s), k = 1 breaks free (0.08 m/s), JKR's v_c ~ 0.035 m/s
+      const double v = k == 0 ? 0.02 : 0.08, x = 0.01 * k;
+      addParticle(c, {x, 0, r + 1e-7}, r, 0, {0, 0, -v}, {0, 30, 0});  // onto the floor, spinning
+      addParticle(c, {x + 0.05, 0, 0.01}, r, 0, {0, 0, -v / 2});      // sphere-sphere, slightly oblique
+      addParticle(c, {x + 0.05 + 2e-4, 0, 0.01 - 2 * r - 1e-7}, r, 0, {0, 0, v / 2});
+    }
+    c.planes = {plane({0, 0, 0}, {0, 0, 1}, 0, "floor")};
+    c.sim.gravity = {0, 0, 0};
+    c.sim.duration = 1;
+    auto cpu = make(c, ExecutorKind::kCpu);
+    auto gpu = makeUnderTest(c);
+    ASSERT_TRUE(cpu && gpu);
+    ASSERT_TRUE(cpu->runSteps(1500).isOk());
+    ASSERT_TRUE(gpu->runSteps(1500).isOk());
+    const auto vc = byGid(cpu->snapshot(), "velocity"), vg = byGid(gpu->snapshot(), "velocity");
+    const auto [d, scale] = maxDiff(vg, vc);
+    EXPECT_LE(d, (single ? 1e-4 : 1e-10) * 0.08) << (model == compute::CohesionModel::kJkr ? "JKR" : "constant");
+    // The slow floor impact sticks (JKR: within its contact's reach of the floor), the fast one leaves.
+    if (model == compute::CohesionModel::kJkr) {
+      const auto xg = byGid(gpu->snapshot(), "position");
+      EXPECT_LT(xg.at(0).z - r, 1e-5);
+      EXPECT_GT(xg.at(3).z - r, 1e-4);
+    }
+  }
+}
+
 // Solid fraction of the lower part of a bed and the mean coordination number.
 struct BedStats {
   double solidFraction = 0, coordination = 0;

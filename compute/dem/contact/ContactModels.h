@@ -35,7 +35,7 @@ struct ContactOutput {
   Vec3<T> tangentialForce;  // the tangential part of `force` [N]
   Vec3<T> rollingTorque;    // rolling resistance on i [N m]; the partner feels its negative
   Vec3<T> history;    // new tangential displacement xi [m]
-  T normalForce;      // |F_n| after clipping [N]
+  T normalForce;      // F_n along -n [N]: >= 0 without adhesion (clipped), negative when adhesion pulls
   bool sliding;       // Coulomb cap active
 };
 
@@ -178,28 +178,134 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE Vec3<T> constantTorque(T rollingFriction, T n
 }
 }  // namespace rolling
 
+namespace cohesion {
+inline constexpr int kNone = 0, kJkr = 1, kConstant = 2;  // ContactParams::cohesion
+
+// JKR (Johnson, Kendall & Roberts 1971): a contact of radius a has overlap delta = a^2/R* - B sqrt(a) with
+// B = sqrt(2 pi dgamma / E*), and normal force (4/3) E* a^3 / R* - 2 E* B a^{3/2} (= sqrt(8 pi dgamma E* a^3)).
+// With s = sqrt(a) everything is polynomial in s: s^3 is B R* at delta = 0 (a0), 3/2 B R* where the force is 0,
+// and B R* / 4 at the break point delta_c = -(3/4) B^{4/3} (R*/4)^{1/3} (ContactParams::jkrBreak).
+
+// sqrt(a) on the stable branch for overlap delta >= delta_c: Newton on f(s) = s^4/R* - B s - delta (convex,
+// increasing past the break point) from above, so the iterates fall monotonically onto the root. The start
+// max((2 B R*)^{1/3}, (2 R* delta)^{1/4}) makes s^4/R* at least twice each of B s and delta, so f >= 0 there.
+template <class T> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T jkrRootRadius(T B, T effRadius, T overlap) {
+  T s = std::cbrt(T(2) * B * effRadius);
+  if (overlap > T(0)) {
+    const T h = std::sqrt(std::sqrt(T(2) * effRadius * overlap));
+    if (h > s) s = h;
+  }
+  const T tol = std::is_same_v<T, float> ? T(3e-4) : T(1e-8);  // the next step is then below rounding
+  for (int it = 0; it < 60; ++it) {
+    const T s3 = s * s * s;
+    const T slope = T(4) * s3 / effRadius - B;
+    if (slope <= T(0)) break;  // at the break point (round-off)
+    const T ds = (s3 * s / effRadius - B * s - overlap) / slope;
+    if (ds <= T(0)) break;
+    s -= ds;
+    if (ds <= tol * s) break;
+  }
+  return s;
+}
+// The JKR normal force (positive repulsive) at s = sqrt(a).
+template <class T> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T jkrForce(T effYoung, T B, T effRadius, T s) {
+  const T s3 = s * s * s;
+  return effYoung * s3 * (T(4) / T(3) * s3 / effRadius - T(2) * B);
+}
+// The overlap at which a JKR contact breaks (negative): -jkrBreak R*^{1/3}.
+template <class T> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T jkrBreakOverlap(T jkrBreak, T effRadius) {
+  return -jkrBreak * std::cbrt(effRadius);
+}
+// The work done on the contact from its formation at delta = 0 to the state s = sqrt(a) along the JKR branch,
+// Phi = G(a) - G(a0) with G(a) = (8/15) E* a^5 / R*^2 - (4/3) E* B a^{7/2} / R* + (1/2) E* B^2 a^2
+// (dG/d delta = the JKR force). Negative in the adhesive well; at the break point it is the energy a contact
+// loses by breaking (the JKR hysteresis, which decides the sticking velocity).
+template <class T> PFLOW_HOSTDEVICE inline T jkrEnergy(T effYoung, T B, T effRadius, T s) {
+  auto g = [&](T q) {
+    const T q2 = q * q, q4 = q2 * q2;
+    return effYoung * q4 * (T(8) / T(15) * q4 * q2 / (effRadius * effRadius) - T(4) / T(3) * B * q2 * q / effRadius +
+                            T(0.5) * B * B);
+  };
+  return g(s) - g(std::cbrt(B * effRadius));
+}
+// DMT's constant adhesion 2 pi dgamma R* (= E* B^2 R*), for the constant model.
+template <class T> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T constantAdhesion(T effYoung, T B, T effRadius) {
+  return effYoung * B * B * effRadius;
+}
+}  // namespace cohesion
+
+// The normal part of a contact, for the tangential and rolling parts that follow it.
+template <class T>
+struct NormalPart {
+  T force;          // along -n on i (positive repulsive; negative when adhesion pulls)
+  T damp;           // the continuous dashpot's coefficient c sqrt(S_n m*) (the tangential dashpot's scale)
+  T contactRadius;  // a [m]: sqrt(R* delta) for Hertz, JKR's a with adhesion (the Mindlin stiffness is 8 G* a)
+  T load;           // what the Coulomb cap and rolling resistance scale with: the force, plus 2 F_c for JKR
+                    // (Thornton & Yin 1991) or the constant adhesion for DMT, never negative
+};
+
+// The normal part: Hertz with the step dashpot, clipped at zero; with adhesion (kCohesion, ContactParams::cohesion)
+// the adhesive force is added to it: JKR's force in place of Hertz's, or DMT's constant pull. A JKR contact holds
+// at negative overlap down to its break point (the caller keeps it, from its history slot); the dashpot acts only
+// while delta > 0.
+template <bool kCohesion, class T>
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE NormalPart<T> normalPart(const ContactParams& p, T overlap, T effRadius, T vn, T effMass,
+                                                            T dt) {
+  NormalPart<T> out;
+  if constexpr (kCohesion) {
+    if (p.cohesion != cohesion::kNone) {
+      const T E = T(p.effYoung), B = T(p.jkrB);
+      T fd = T(0), sqrtRd = T(0);
+      out.damp = T(0);
+      if (overlap > T(0)) {  // Hertz and its dashpot, clipped; the dashpot's share kept
+        sqrtRd = std::sqrt(effRadius * overlap);
+        fd = normal::hertzNormal(p, overlap, sqrtRd, vn, effMass, dt, out.damp);
+      }
+      if (p.cohesion == cohesion::kJkr) {
+        const T s = cohesion::jkrRootRadius(B, effRadius, overlap);
+        if (overlap > T(0)) fd -= normal::hertzForce(E, effRadius, overlap);
+        out.force = cohesion::jkrForce(E, B, effRadius, s) + fd;
+        out.contactRadius = s * s;
+        const T lift = out.force + T(1.5) * E * B * B * effRadius;  // F + 2 F_c, F_c = (3/2) pi dgamma R*
+        out.load = lift > T(0) ? lift : T(0);
+      } else {
+        const T f0 = cohesion::constantAdhesion(E, B, effRadius);
+        out.force = fd - f0;
+        out.contactRadius = sqrtRd;
+        out.load = fd;
+      }
+      return out;
+    }
+  }
+  const T sqrtRd = std::sqrt(effRadius * overlap);
+  out.force = normal::hertzNormal(p, overlap, sqrtRd, vn, effMass, dt, out.damp);
+  out.contactRadius = sqrtRd;
+  out.load = out.force;
+  return out;
+}
+
 // Hertz-Mindlin with history: normal elastic + dashpot (clipped at zero), tangential Mindlin spring
-// with history and Coulomb cap, optional rolling resistance. `xiOld` is the stored displacement.
+// with history and Coulomb cap, optional rolling resistance, optional adhesion. `xiOld` is the stored displacement.
 // kTangential = false leaves the tangential part out (the least model when every friction is 0: the Coulomb
-// cap would make that force exactly 0), kRolling = false the rolling torque (every rolling friction 0).
-template <bool kTangential = true, bool kRolling = true, class T>
+// cap would make that force exactly 0), kRolling = false the rolling torque (every rolling friction 0),
+// kCohesion = false adhesion (no pair asks for it).
+template <bool kTangential = true, bool kRolling = true, bool kCohesion = false, class T>
 PFLOW_HOSTDEVICE PFLOW_FORCEINLINE ContactOutput<T> hertzMindlin(const ContactParams& p, const ContactState<T>& s,
                                                                  Vec3<T> xiOld, T dt) {
   ContactOutput<T> out;
   const T G = T(p.effShear);
-  // Normal: positive vn means approaching; sqrt(R* delta) is computed once for the normal and tangential parts.
+  // Normal: positive vn means approaching.
   const T vn = dot(s.vRel, s.n);
-  const T sqrtRd = std::sqrt(s.effRadius * s.overlap);
-  T dampN;
-  const T fn = normal::hertzNormal(p, s.overlap, sqrtRd, vn, s.effMass, dt, dampN);
-  out.normalForce = fn;
-  Vec3<T> force = (-fn) * s.n;
+  const NormalPart<T> np = normalPart<kCohesion>(p, s.overlap, s.effRadius, vn, s.effMass, dt);
+  out.normalForce = np.force;
+  Vec3<T> force = (-np.force) * s.n;
 
   if constexpr (kTangential) {
     const Vec3<T> vt = s.vRel - vn * s.n;
     Vec3<T> xi = tangential::rotateHistory(xiOld, s.n) + dt * vt;
-    const T st = T(8) * G * sqrtRd;
-    const Vec3<T> ft = tangential::mindlinForce(st, dampN * T(p.tangentialRatio), T(p.friction), fn, vt, xi, out.sliding);
+    const T st = T(8) * G * np.contactRadius;
+    const Vec3<T> ft =
+        tangential::mindlinForce(st, np.damp * T(p.tangentialRatio), T(p.friction), np.load, vt, xi, out.sliding);
     force += ft;
     out.history = xi;
     out.tangentialForce = ft;
@@ -217,7 +323,7 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE ContactOutput<T> hertzMindlin(const ContactPa
   if (kRolling && p.rollingFriction > 0) {
     // Rolling resists the relative spin about tangent axes only; twisting about n is not rolling.
     const Vec3<T> wRoll = s.omegaRel - dot(s.omegaRel, s.n) * s.n;
-    out.rollingTorque = rolling::constantTorque(T(p.rollingFriction), fn, s.effRadius, wRoll, s.effInertia, dt);
+    out.rollingTorque = rolling::constantTorque(T(p.rollingFriction), np.load, s.effRadius, wRoll, s.effInertia, dt);
     out.torque += out.rollingTorque;
   }
   return out;

@@ -165,6 +165,35 @@ double linearSpringDampingCoeff(double e) {
   return -2.0 * std::sqrt(5.0 / 6.0) * l / std::sqrt(l * l + std::numbers::pi * std::numbers::pi);
 }
 
+double contactEnergy(const ContactParams& p, double effRadius, double overlap) {
+  if (overlap <= 0) return 0.0;
+  const double hertz = contact::normal::hertzEnergy(p.effYoung, effRadius, overlap);
+  if (p.cohesion == contact::cohesion::kJkr)
+    return contact::cohesion::jkrEnergy(p.effYoung, p.jkrB, effRadius, contact::cohesion::jkrRootRadius(p.jkrB, effRadius, overlap));
+  if (p.cohesion == contact::cohesion::kConstant)
+    return hertz - contact::cohesion::constantAdhesion(p.effYoung, p.jkrB, effRadius) * overlap;
+  return hertz;
+}
+
+double adhesionWellDepth(const ContactParams& p, double effRadius) {
+  if (p.cohesion == contact::cohesion::kJkr)
+    return -contact::cohesion::jkrEnergy(p.effYoung, p.jkrB, effRadius, std::cbrt(1.5 * p.jkrB * effRadius));
+  if (p.cohesion == contact::cohesion::kConstant) {
+    const double f0 = contact::cohesion::constantAdhesion(p.effYoung, p.jkrB, effRadius);
+    const double d = std::cbrt(std::pow(0.75 * f0 / (p.effYoung * std::sqrt(effRadius)), 2));
+    return 0.6 * f0 * d;
+  }
+  return 0.0;
+}
+
+void setCohesion(ContactParams& p, int model, double workOfAdhesion) {
+  p.cohesion = workOfAdhesion > 0 ? model : 0;
+  p.workOfAdhesion = p.cohesion ? workOfAdhesion : 0;
+  const double pg = std::numbers::pi * p.workOfAdhesion / p.effYoung;
+  p.jkrB = std::sqrt(2.0 * pg);
+  p.jkrBreak = 0.75 * std::cbrt(pg * pg);
+}
+
 std::vector<ContactParams> buildContactTable(const std::vector<MaterialConfig>& materials,
                                              const std::vector<MaterialPairConfig>& pairs) {
   const std::size_t nm = materials.size();
@@ -185,6 +214,7 @@ std::vector<ContactParams> buildContactTable(const std::vector<MaterialConfig>& 
           if (o.restitution) p.restitution = *o.restitution;
           if (o.friction) p.friction = *o.friction;
           if (o.rollingFriction) p.rollingFriction = *o.rollingFriction;
+          setCohesion(p, int(o.cohesion), o.workOfAdhesion);
         }
       }
       p.dampingCoeff = dampingCoeffForRestitution(p.restitution);

@@ -21,7 +21,25 @@ struct ContactParams {
   double restitution = 1;    // e [-], the requested value (kept for reports)
   double friction = 0;       // mu_s [-]
   double rollingFriction = 0;  // mu_r [-]
+  // Adhesion (contact::cohesion): 0 none, 1 JKR, 2 constant (DMT). dgamma is the work of adhesion [J/m^2].
+  int cohesion = 0;
+  double workOfAdhesion = 0;
+  double jkrB = 0;      // sqrt(2 pi dgamma / E*) [m^1/2]: the JKR overlap is delta = a^2 / R* - jkrB sqrt(a)
+  double jkrBreak = 0;  // (3/4) (pi dgamma / E*)^{2/3} [m^2/3]: a JKR contact breaks at delta = -jkrBreak R*^{1/3}
 };
+
+// The energy stored in a contact at overlap delta > 0, the work done on it since it formed at delta = 0: Hertz's
+// (8/15) E* sqrt(R*) delta^{5/2}, JKR's potential (contact::cohesion::jkrEnergy, negative in the adhesive well),
+// or Hertz's less the constant adhesion's F_0 delta. Host only (the energy detector).
+double contactEnergy(const ContactParams& p, double effRadius, double overlap);
+
+// The depth of a contact's adhesive energy well (the most kinetic energy one contact can release by forming),
+// 0 without adhesion: JKR's potential where its force is 0, or 0.6 F_0 delta* for the constant model (delta* where
+// Hertz balances F_0). Host only.
+double adhesionWellDepth(const ContactParams& p, double effRadius);
+
+// The adhesion constants of a pair with work of adhesion dgamma (ContactParams::jkrB, jkrBreak), for the table and tests.
+void setCohesion(ContactParams& p, int model, double workOfAdhesion);
 
 // Builds the nMaterials x nMaterials table (row-major, symmetric). Unset pair values are the
 // arithmetic means of the two materials' values; MaterialPairConfig entries override them.

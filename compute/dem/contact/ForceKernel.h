@@ -101,6 +101,7 @@ struct WallContact {
   std::int32_t material;
   bool isFace;
   std::int32_t surface;  // the wall's surface number (-1: none)
+  bool tensile;          // a JKR contact past zero overlap: kept only if it exists already (has its slot)
 };
 
 // The contact of particle i with partner j as i sees it, for d = x_j - x_i with |d|^2 = d2 < rs^2 (rs = r_i + r_j),
@@ -143,7 +144,9 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE contact::ContactState<R> pairState(Vec3d d, d
 // Contact forces of particle i from its candidate row. Every pair is evaluated by both partners
 // (operator(), the GPU's way: each thread writes only its own particle, no atomics), or, on the CPU, by
 // its owner only (kOnce, from ComputePairsOnce), which then also adds the reaction to the partner.
-template <class R>
+// kCohesion: the loop with adhesion (ModelFlags::cohesion), a kernel of its own so that its registers do not
+// weigh on scenes without it.
+template <class R, bool kCohesion = false>
 struct ComputeForces {
   static constexpr bool kVariableCost = true;  // work per particle varies (CpuExecutor::forEach)
   using V = Vec3<R>;
@@ -152,22 +155,26 @@ struct ComputeForces {
   PFLOW_HOSTDEVICE void operator()(Index i) const { dispatch<false>(i, nullptr); }
 
   // The least model picks the loop: without friction (ModelFlags::tangential) no slot is read or written;
-  // without rolling resistance either, spins do not enter (pairState's kSpin).
+  // without rolling resistance either, spins do not enter (pairState's kSpin). Adhesion (ModelFlags::cohesion)
+  // has a loop of its own, so that scenes without it pay nothing for it; it implies the slots.
   template <bool kOnce>
   PFLOW_HOSTDEVICE void dispatch(Index i, const std::uint32_t* owned) const {
-    if (!a.tangential) {
-      if (a.rolling) row<false, true, kOnce>(i, owned);
-      else row<false, false, kOnce>(i, owned);
+    if constexpr (kCohesion) {
+      if (a.rolling) row<true, true, true, kOnce>(i, owned);
+      else row<true, false, true, kOnce>(i, owned);
+    } else if (!a.tangential) {
+      if (a.rolling) row<false, true, false, kOnce>(i, owned);
+      else row<false, false, false, kOnce>(i, owned);
     } else if (a.rolling) {
-      row<true, true, kOnce>(i, owned);
+      row<true, true, false, kOnce>(i, owned);
     } else {
-      row<true, false, kOnce>(i, owned);
+      row<true, false, false, kOnce>(i, owned);
     }
   }
 
   // kOnce: only the first owned[i] candidates, the pairs i owns (OwnedFirst); -F and the partner's torque
   // are added to j's sums, and i's are added to what its partners already put there.
-  template <bool kTangential, bool kRolling, bool kOnce>
+  template <bool kTangential, bool kRolling, bool kAdhesion, bool kOnce>
   PFLOW_HOSTDEVICE void row(Index i, const std::uint32_t* owned) const {
     constexpr bool kSpin = kTangential || kRolling;
     // Local restrict copies: the int8 slot stores could otherwise alias every pointer in `a` and
@@ -212,7 +219,8 @@ struct ComputeForces {
         // Invariant: nbrSlot[e] >= 0 exactly when slot nbrSlot[e] holds j's history (set at rebuild,
         // on claiming, cleared here when the contact ends), so the hot path never reads gid[j].
         slot = nbrSlot[e * col];
-        if (d2 >= rs * rs) {
+        // A JKR contact holds past zero overlap, to its break point; only one that exists (has its slot) does.
+        if (d2 >= rs * rs && !(kAdhesion && slot >= 0 && holds(params[material[j]], d2, rs, ri, rj))) {
           if (slot >= 0) {  // the contact has ended: forget its history
             partner[slot] = kNoPartner;
             nbrSlot[e * col] = -1;
@@ -240,7 +248,7 @@ struct ComputeForces {
         flagDeepOverlap(a.cond, i);
         if (kOnce) flagDeepOverlap(a.cond, j);  // as j's own evaluation would
       }
-      const auto out = contact::hertzMindlin<kTangential, kRolling>(pp, s, xiOld, dt);
+      const auto out = contact::hertzMindlin<kTangential, kRolling, kAdhesion>(pp, s, xiOld, dt);
       if constexpr (kTangential) {
         if (slot >= 0) disp[slot] = out.history;
         nbrSlot[e * col] = std::int8_t(slot);
@@ -269,6 +277,13 @@ struct ComputeForces {
       force[i] = f;
       torque[i] = tq;
     }
+  }
+
+  // Does an existing JKR contact at centre distance sqrt(d2) > rs (negative overlap) still hold?
+  PFLOW_HOSTDEVICE static bool holds(const ContactParams& p, double d2, double rs, R ri, R rj) {
+    if (p.cohesion != contact::cohesion::kJkr) return false;
+    const R effRadius = ri * rj / (ri + rj);
+    return R(rs - std::sqrt(d2)) > contact::cohesion::jkrBreakOverlap(R(p.jkrBreak), effRadius);
   }
 
   // Claims an empty slot for partner g, or returns -1 when all are taken.
@@ -304,9 +319,9 @@ struct ComputeForces {
 // run in two colours (even ones, then odd ones), one slab per task, its particles in ascending order:
 // the sums are the same whatever the number of threads. An even slab's task zeroes its own and the next
 // slab's forces and torques first (only it writes into the next slab in that colour). Host only.
-template <class R>
+template <class R, bool kCohesion = false>
 struct ComputePairsOnce {
-  ComputeForces<R> pairs;
+  ComputeForces<R, kCohesion> pairs;
   const Index* slabStart;        // [numSlabs + 1]
   const Index* slabItems;        // particles by slab, ascending within each
   const std::uint32_t* owned;    // [particle]: how many candidates at the head of its row it owns (OwnedFirst)
@@ -413,7 +428,7 @@ struct PullHistory {
 // (the same summation order as one pass). A separate kernel because its per-thread contact list
 // (kMaxWallContacts entries) needs a stack frame and registers that would slow the pair loop for
 // every particle, while only the particles near a wall have work here; the others return at once.
-template <class R>
+template <class R, bool kCohesion = false>
 struct ComputeWallForces {
   static constexpr bool kVariableCost = true;  // work per particle varies (CpuExecutor::forEach)
   using V = Vec3<R>;
@@ -469,7 +484,7 @@ struct ComputeWallForces {
       const int p = lowestBit(mask);
       const PlaneParams& pl = a.planes[p];
       const double sd = dot(xi - pl.point, pl.normal);
-      if (sd >= double(ri)) continue;
+      if (sd >= double(ri) + reach(params[pl.material], ri)) continue;
       if (sd < 0) {  // the centre is behind the plane: it went through (the mask keeps planes behind)
         flagTunnelled(a.cond, i);
         continue;
@@ -477,7 +492,7 @@ struct ComputeWallForces {
       if (nwc == kMaxWallContacts) { tooMany = true; break; }
       if (double(ri) - sd > a.maxOverlap * double(ri)) flagDeepOverlap(a.cond, i);
       wc[nwc++] = {-pl.normal, xi - sd * pl.normal, pl.normal, zero3<double>(), double(ri) - sd, planeKey(Index(p)), pl.material, true,
-                   a.planeSurface ? a.planeSurface[p] : -1};
+                   a.planeSurface ? a.planeSurface[p] : -1, sd >= double(ri)};
     }
     const std::uint32_t nc = a.wallCandCount[i] < a.wallCandCapacity ? a.wallCandCount[i] : a.wallCandCapacity;
     for (std::uint32_t e = 0; e < nc; ++e) {
@@ -490,7 +505,8 @@ struct ComputeWallForces {
         flagTunnelled(a.cond, i);
         continue;
       }
-      if (d2 >= rid * rid) continue;
+      const double held = rid + reach(params[a.triMaterial[t]], ri);
+      if (d2 >= held * held) continue;
       if (nwc == kMaxWallContacts) { tooMany = true; break; }
       const Vec3d fn = geometry::triangleNormal(v[0], v[1], v[2]);
       const double d = std::sqrt(d2);
@@ -498,7 +514,8 @@ struct ComputeWallForces {
       if (rid - d > a.maxOverlap * rid) flagDeepOverlap(a.cond, i);
       const std::int32_t mesh = a.triMesh[t];
       wc[nwc++] = {n, cp.point, fn, a.meshMotion[mesh].velocityAt(cp.point, a.time), rid - d, triangleKey(mesh, t),
-                   a.triMaterial[t], cp.feature == geometry::Feature::kFace, a.triSurface ? a.triSurface[t] : -1};
+                   a.triMaterial[t], cp.feature == geometry::Feature::kFace, a.triSurface ? a.triSurface[t] : -1,
+                   d2 >= rid * rid};
     }
     if (tooMany) atomicOrU32(&a.cond->flags, kTooManyWallContacts);
     const SlotRow<std::uint64_t> key = a.wallLayout.at(a.wallKey, i);
@@ -531,7 +548,7 @@ struct ComputeWallForces {
     // Without friction (ModelFlags::tangential off) there are no wall slots: normal (and rolling) forces only.
     if (!a.tangential) {
       for (int k = 0; k < nwc; ++k) {
-        if (!keep[k]) continue;
+        if (!keep[k] || wc[k].tensile) continue;  // (adhesion implies the slots: never tensile here)
         const contact::ContactState<R> st = wallState(wc[k], vi, wi, ri, mi, Ii);
         const auto out = a.rolling ? contact::hertzMindlin<false, true>(params[wc[k].material], st, zero3<R>(), R(a.dt))
                                    : contact::hertzMindlin<false, false>(params[wc[k].material], st, zero3<R>(), R(a.dt));
@@ -563,6 +580,10 @@ struct ComputeWallForces {
         if (!matched[s] && key[s] != kNoGid && sameMesh(key[s], wc[k].key) &&
             sharesVertex(Index(key[s] & 0xffffffffu), Index(wc[k].key & 0xffffffffu)))
           slotOf[k] = s;  // inherit from the neighbouring triangle just left
+      if (wc[k].tensile && slotOf[k] < 0) {  // a JKR contact forms at zero overlap, never beyond it
+        keep[k] = false;
+        continue;
+      }
       for (int s = 0; s < a.wallSlots && slotOf[k] < 0; ++s)
         if (key[s] == kNoGid) { slotOf[k] = s; claimedNow[k] = true; disp[s] = zero3<R>(); }  // fresh
       if (slotOf[k] < 0) overflow = true;
@@ -582,13 +603,20 @@ struct ComputeWallForces {
       if (a.storeOnly && !claimedNow[k]) continue;  // the first pass handled it
       const contact::ContactState<R> st = wallState(c, vi, wi, ri, mi, Ii);
       const V xiOld = s >= 0 ? disp[s] : zero3<R>();
-      const auto out = a.rolling ? contact::hertzMindlin<true, true>(params[c.material], st, xiOld, R(a.dt))
-                                 : contact::hertzMindlin<true, false>(params[c.material], st, xiOld, R(a.dt));
+      const ContactParams& pc = params[c.material];
+      const auto out = a.rolling ? contact::hertzMindlin<true, true, kCohesion>(pc, st, xiOld, R(a.dt))
+                                 : contact::hertzMindlin<true, false, kCohesion>(pc, st, xiOld, R(a.dt));
       f += out.force;
       tq += out.torque;
       if (s >= 0) disp[s] = out.history;
       addLoad(c.surface, xi, out.force, out.torque);
     }
+  }
+
+  // How far past zero overlap a wall contact of this pair may hold [m]: JKR's break distance (R* = r_i), else 0.
+  PFLOW_HOSTDEVICE double reach(const ContactParams& p, R ri) const {
+    if (!kCohesion || p.cohesion != contact::cohesion::kJkr) return 0.0;
+    return -double(contact::cohesion::jkrBreakOverlap(R(p.jkrBreak), ri));
   }
 
   // The reaction of one wall contact on its surface: force -F, and torque -(x_i x F + tau) about the origin (the
