@@ -6,6 +6,9 @@
 //                 derived), rolling friction 0.01: 2D
 //   nowalls       the standard bed without its walls and gravity, spheres flying apart and colliding, rolling
 //                 friction 0.01: no wall phases
+//   adhesive      the standard bed with adhesion among the beads and with the walls (--adhesion jkr or constant,
+//                 --work-of-adhesion 0.1 J/m^2: JKR's pull-off about 9 times a bead's weight): the cost of adhesion,
+//                 against norolling's auto row
 // (frictionless also has no rolling friction, so its least model drops the rolling torque too.)
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -25,7 +28,12 @@ namespace {
 
 using pflow::compute::RunConfig;
 
-RunConfig caseScene(const std::string& name, long n, int threads) {
+struct Adhesion {
+  pflow::compute::CohesionModel model = pflow::compute::CohesionModel::kJkr;
+  double workOfAdhesion = 0.1;  // [J/m^2]
+};
+
+RunConfig caseScene(const std::string& name, long n, int threads, const Adhesion& adhesion) {
   pflow::bench::BedSpec spec = pflow::bench::bedSpecFor(n, false);
   if (name == "planar") {
     spec.ny = 1;
@@ -62,6 +70,11 @@ RunConfig caseScene(const std::string& name, long n, int threads) {
       const pflow::Vec3d d = c.particles.position[i] - centre;
       c.particles.velocity[i] = (0.1 / (pflow::norm(d) + 1e-3)) * d;
     }
+  } else if (name == "adhesive") {
+    pflow::compute::MaterialPairConfig pair;  // material 0 is the beads' and the walls'
+    pair.cohesion = adhesion.model;
+    pair.workOfAdhesion = adhesion.workOfAdhesion;
+    c.pairs = {pair};
   }
   return c;
 }
@@ -70,16 +83,22 @@ RunConfig caseScene(const std::string& name, long n, int threads) {
 
 int main(int argc, char** argv) {
   CLI::App app{"pflow-model-bench: least model against full model"};
-  std::vector<std::string> cases{"frictionless", "norolling", "planar", "nowalls"};
+  std::vector<std::string> cases{"frictionless", "norolling", "planar", "nowalls", "adhesive"};
   std::vector<std::string> models{"full", "auto"};
   long n = 20000;
   int settle = 20000, warm = 50, steps = 1000, threads = 0, repeats = 1;
   std::string executor = "cpu", precision = "double";
-  app.add_option("--case", cases, "frictionless, norolling, planar, nowalls (comma-separated)")
+  app.add_option("--case", cases, "frictionless, norolling, planar, nowalls, adhesive (comma-separated)")
       ->delimiter(',')
-      ->check(CLI::IsMember({"frictionless", "norolling", "planar", "nowalls"}));
+      ->check(CLI::IsMember({"frictionless", "norolling", "planar", "nowalls", "adhesive"}));
   app.add_option("--model", models, "full, auto, or both (comma-separated)")->delimiter(',')->check(CLI::IsMember({"full", "auto"}));
   app.add_option("-n,--particles", n, "particles (about)")->capture_default_str();
+  std::string adhesionModel = "jkr";
+  Adhesion adhesion;
+  app.add_option("--adhesion", adhesionModel, "the adhesive case's model: jkr or constant")
+      ->check(CLI::IsMember({"jkr", "constant"}))
+      ->capture_default_str();
+  app.add_option("--work-of-adhesion", adhesion.workOfAdhesion, "the adhesive case's work of adhesion [J/m^2]")->capture_default_str();
   app.add_option("--settle-steps", settle, "steps that settle each case's bed once, before any timing")->capture_default_str();
   app.add_option("--warm-steps", warm, "untimed steps of each timed run (history and lists refill)")->capture_default_str();
   app.add_option("--steps", steps, "timed steps")->capture_default_str();
@@ -88,6 +107,7 @@ int main(int argc, char** argv) {
   app.add_option("--executor", executor, "cpu, cuda or auto")->capture_default_str();
   app.add_option("--precision", precision, "double or float")->check(CLI::IsMember({"double", "float"}))->capture_default_str();
   CLI11_PARSE(app, argc, argv);
+  if (adhesionModel == "constant") adhesion.model = pflow::compute::CohesionModel::kConstant;
   pflow::log::init("pflow-model-bench", "warn");
   auto kind = pflow::compute::parseExecutorKind(executor);
   if (!kind) {
@@ -99,7 +119,7 @@ int main(int argc, char** argv) {
   for (const auto& name : cases) {
     // Settled once (least model), then every model is timed from that state (history starts empty and
     // rebuilds within a few steps).
-    RunConfig settled = caseScene(name, n, threads);
+    RunConfig settled = caseScene(name, n, threads, adhesion);
     {
       auto sim = pflow::compute::Simulation::create(settled, so);
       if (!sim) {
@@ -153,7 +173,9 @@ int main(int argc, char** argv) {
       const nlohmann::json j{{"case", name},
                              {"model", model},
                              {"flags", {{"planar_axis", choice.flags.planarAxis}, {"tangential", choice.flags.tangential},
-                                        {"rolling", choice.flags.rolling}, {"walls", choice.flags.walls}}},
+                                        {"rolling", choice.flags.rolling}, {"walls", choice.flags.walls},
+                                        {"cohesion", choice.flags.cohesion}}},
+                             {"adhesion", name == "adhesive" ? adhesionModel : std::string("none")},
                              {"executor", executor},
                              {"precision", precision},
                              {"particles", particles},

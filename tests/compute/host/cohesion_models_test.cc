@@ -57,7 +57,7 @@ TEST(Jkr, ForceHasTheLandmarksOfTheTheory) {
   const double fc = 1.5 * kPi * dgamma * R;  // the pull-off force
   const double dc = cohesion::jkrBreakOverlap(p.jkrBreak, R);
   EXPECT_NEAR(force(p, R, 0.0), -4.0 / 3.0 * kPi * dgamma * R, 1e-9 * fc);
-  EXPECT_NEAR(force(p, R, dc), -5.0 / 6.0 * kPi * dgamma * R, 1e-6 * fc);
+  EXPECT_NEAR(force(p, R, dc), -5.0 / 6.0 * kPi * dgamma * R, 1e-5 * fc);  // a double root: the solver's tolerance
   // Displacement control: the most tensile force along the branch is the pull-off force.
   double most = 0;
   for (int k = 0; k <= 20000; ++k) most = std::min(most, force(p, R, dc + (0.0 - dc) * k / 20000.0));
