@@ -53,6 +53,8 @@ struct Problem {
 };
 
 std::vector<Problem> allProblems();
+// The adhesion problems (AdhesionProblems.cc), part of allProblems().
+std::vector<Problem> adhesionProblems();
 
 // The failure mode named by a run's error (the run-time detectors' messages start with a cause keyword:
 // "energy growth:", "tunnelling:", "excessive overlap:", "non-finite:"; older messages are matched by content).
