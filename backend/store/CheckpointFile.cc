@@ -50,6 +50,9 @@ Status writeFile(const std::string& file, const CheckpointData& d) {
   PFLOW_TRY(attr(root, "time_base", s.timeBase, file));
   PFLOW_TRY(attr(root, "dt", s.dt, file));
   PFLOW_TRY(attr(root, "dt_before", s.dtBefore, file));
+  if (!s.wallDrive.empty())  // the driven walls' state (compute/dem/WallDrive.h), 6 values a wall
+    PFLOW_TRY(writeDataset(root, "wall_drive", fileTypeOf(compute::ScalarType::kF64), memTypeOf(compute::ScalarType::kF64),
+                           s.wallDrive.data(), s.wallDrive.size(), 1, "", file, "/"));
   auto group = createGroup(root, kParticles, true, file);
   if (!group) return group.status();
   for (const compute::SnapshotArray& a : s.particles.arrays)
@@ -188,6 +191,15 @@ Result<CheckpointData> readCheckpoint(const std::string& path) {
   PFLOW_READ(dt, "dt", double)
   PFLOW_READ(dtBefore, "dt_before", double)
 #undef PFLOW_READ
+  if (H5Lexists(root, "wall_drive", H5P_DEFAULT) > 0) {
+    auto meta = datasetMeta(root, "wall_drive", path, "/");
+    if (!meta) return meta.status();
+    if (meta->shape.size() != 1) return invalidArgument("checkpoint '" + path + "': '/wall_drive' is not a list of values");
+    s.wallDrive.resize(std::size_t(meta->shape[0]));
+    Hid dset = datasetHid(H5Dopen2(root, "wall_drive", H5P_DEFAULT));
+    if (!dset.valid()) return h5Error(path, "cannot open '/wall_drive'");
+    PFLOW_TRY(readRowsOf(dset.get(), 0, s.wallDrive.size(), H5T_NATIVE_DOUBLE, s.wallDrive.data(), path, "'/wall_drive'"));
+  }
   auto count = readAttr<std::int64_t>(root, "particles", path);
   if (!count) return count.status();
   s.particles.step = s.step;

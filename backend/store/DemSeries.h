@@ -12,6 +12,11 @@
 //                             surface number; a '/' in its name becomes '.'), force and torque about the origin (about p: T - p x F), summed during
 //                             the forces of the sampled step itself (Simulation::recordWallLoads); the start's
 //                             sample, taken before any step, has none (NaN)
+//   wall_position:<mesh> [m], wall_velocity:<mesh> [m/s], drive_force:<mesh> [N]
+//                             a wall driven along a guide (motion.drive with a mass): its displacement and velocity
+//                             along the guide since the start, and the force its drive applied at the sampled step
+//   wall_angle:<mesh> [rad], wall_angular_velocity:<mesh> [rad/s], drive_torque:<mesh> [N m]
+//                             the same for a wall driven about an axis (motion.drive with a moment of inertia)
 // A series' point is the flow plane's point, or NaN for the global ones. Sampled at the start, then every
 // output.series_interval of simulated time (the first step at or past each multiple), or at every snapshot when
 // none is given. Sampling is collective in a distributed run: every rank calls sample() after every step.
@@ -54,6 +59,20 @@ class DemSeriesRecorder {
       for (const char* axis : {"x", "y", "z"}) add(std::string("force_") + axis + ":" + name, "N", {nan, nan, nan});
       for (const char* axis : {"x", "y", "z"}) add(std::string("torque_") + axis + ":" + name, "N m", {nan, nan, nan});
     }
+    for (const auto& w : sim.wallDrives().walls()) {
+      std::string name = w.name;
+      std::replace(name.begin(), name.end(), '/', '.');
+      if (w.drive.translates()) {
+        add("wall_position:" + name, "m", {nan, nan, nan});
+        add("wall_velocity:" + name, "m/s", {nan, nan, nan});
+        add("drive_force:" + name, "N", {nan, nan, nan});
+      }
+      if (w.drive.rotates()) {
+        add("wall_angle:" + name, "rad", {nan, nan, nan});
+        add("wall_angular_velocity:" + name, "rad/s", {nan, nan, nan});
+        add("drive_torque:" + name, "N m", {nan, nan, nan});
+      }
+    }
     m_series.add(sim.time(), values(sim, domain));
   }
 
@@ -93,6 +112,10 @@ class DemSeriesRecorder {
         const double total = domain.sum(local);  // collective on every rank alike
         v.push_back(fresh ? total : std::numeric_limits<double>::quiet_NaN());
       }
+    }
+    for (const auto& w : sim.wallDrives().walls()) {  // the same on every rank
+      if (w.drive.translates()) v.insert(v.end(), {w.s, w.v, w.driveForce});
+      if (w.drive.rotates()) v.insert(v.end(), {w.theta, w.omega, w.driveTorque});
     }
     return v;
   }

@@ -124,6 +124,8 @@ class Engine : public DistributedRows {
   // rebuild (particles and mesh vertices), for the skin criterion.
   virtual double integrateFirstHalf(double dt) = 0;
   virtual double moveMeshes(double time) = 0;
+  // A mesh's motion from now on (a driven wall's, each step: WallDrives); the mesh then counts as moving.
+  virtual void setMeshMotion(int mesh, const MeshMotionParams& motion) = 0;
   // A rebuild is sortByCell then buildContacts, always both: buildContacts restarts the skin reference,
   // which the sort does not carry through the reorder.
   virtual void sortByCell() = 0;

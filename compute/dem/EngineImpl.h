@@ -47,6 +47,10 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     return m_exec.maxOf(m_owned, kernels::IntegrateFirstHalf<R>{integrateArgs(dt)});
   }
 
+  void setMeshMotion(int mesh, const MeshMotionParams& motion) override {
+    m_anyMeshMoves = true;
+    m_mem.copyFromHost(m_meshMotion.as<MeshMotionParams>() + mesh, &motion, sizeof motion);
+  }
   double moveMeshes(double time) override {
     if (m_numTri == 0 || !m_anyMeshMoves) return 0.0;
     return m_exec.maxOf(m_numTri, kernels::MoveTriangles{m_triRef.as<Vec3d>(), m_triVerts.as<Vec3d>(),

@@ -28,18 +28,21 @@ Status Simulation::stepPhases() {
   const double dt = m_timeStep.dt, tNext = timeAt(m_step + 1);
   double moved, meshMoved;
   { auto t = m_timers.time(Phase::kIntegrate1); moved = std::sqrt(m_engine->integrateFirstHalf(dt)); }
-  { auto t = m_timers.time(Phase::kMeshes);     meshMoved = std::sqrt(m_engine->moveMeshes(tNext)); }
+  { auto t = m_timers.time(Phase::kMeshes);     m_drives.beginStep(m_time, dt, *m_engine);  // driven walls' half kick
+                                                 meshMoved = std::sqrt(m_engine->moveMeshes(tNext)); }
   Status s;
   const bool due = m_rebuildInterval > 0 ? (m_step + 1) % m_rebuildInterval == 0  // fixed interval: may miss contacts
                                          : 2 * moved > m_skin || moved + meshMoved > m_skin;
   const bool rebuildNow = m_domain->anyRebuild(due);
   const bool loads = (m_loadsAtOutputs && ((m_nextOutput >= 0 && m_step + 1 >= m_nextOutput) || m_step + 1 == m_endOutput)) ||
-                     seriesSampleDue(m_time, tNext, m_loadsInterval);  // the steps advanceOutput will call due
+                     seriesSampleDue(m_time, tNext, m_loadsInterval) ||  // the steps advanceOutput will call due
+                     !m_drives.empty();                                   // driven walls move by their loads
   m_engine->recordWallLoads(loads);
   if (rebuildNow) s = rebuild(), m_rebuiltAt = m_step + 1;
   if (!rebuildNow && m_domain->ranks() > 1) s = haloAndForces(dt, tNext);  // ghosts refreshed (ranks)
   else if (s.isOk()) { auto t = m_timers.time(Phase::kForces);     s = m_engine->computeForces(dt, tNext); }
   if (s.isOk()) { auto t = m_timers.time(Phase::kIntegrate2); s = m_engine->integrateSecondHalf(dt); }
+  if (s.isOk() && !m_drives.empty()) { auto t = m_timers.time(Phase::kMeshes); driveWalls(tNext, dt); }
   PFLOW_RETURN_IF_ERROR(m_domain->agree(s));  // every rank stops on any rank's error
   // reduce_dt checkpoints: every checkpointSteps, at outputs (a reduction never goes back past one) and
   // when slots grew (a checkpoint holds rows of one slot count); the energy is checked there too, so a
@@ -59,6 +62,14 @@ Status Simulation::stepPhases() {
   m_time = tNext;
   if (loads) m_loadsStep = m_step;
   return Status::ok();
+}
+
+// Driven walls (WallDrive.h): their contact loads of this step, summed over ranks (every rank moves them alike),
+// their drives and second half kick.
+void Simulation::driveWalls(double tNext, double dt) {
+  std::vector<double> loads = m_engine->wallLoads();
+  m_domain->sum(loads);
+  m_drives.endStep(loads, tNext, dt);
 }
 
 // Neighbour rebuild: particles to the ranks that own them, sort by cell (reordering every field), the
@@ -259,7 +270,13 @@ Status Simulation::initialise() {
   m_historySlots = m_engine->historySlots();
   m_wallHistorySlots = m_engine->wallHistorySlots();
   Status s = rebuild();
+  m_engine->recordWallLoads(!m_drives.empty());  // a driven wall's first acceleration comes from them
   if (s.isOk()) s = m_engine->computeForces(0.0, 0.0);
+  if (s.isOk() && !m_drives.empty()) {
+    std::vector<double> loads = m_engine->wallLoads();
+    m_domain->sum(loads);
+    m_drives.start(loads, m_time, m_timeStep.dt);
+  }
   PFLOW_RETURN_IF_ERROR(m_domain->agree(s));
   reportSlotGrowth();
   m_started = true;
@@ -294,6 +311,7 @@ Result<SimulationState> Simulation::state() const {
   s.timeBase = m_timeBase;
   s.dt = m_timeStep.dt;
   s.reductions = m_reductions;
+  s.wallDrive = m_drives.state();
   return s;
 }
 
@@ -318,6 +336,7 @@ Status Simulation::resume(const SimulationState& state) {
     m_timeBase = s.timeBase;
     m_timeStep.dt = s.dt;
     m_reductions = s.reductions;
+    PFLOW_RETURN_IF_ERROR(m_drives.restore(s.wallDrive, s.time, *m_engine));
     m_engine->moveMeshes(s.time);
     PFLOW_RETURN_IF_ERROR(rebuild());
   } catch (...) {
@@ -401,7 +420,10 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const RunConfig& config, 
     }
   }
   if (Status s = domain->partition(setup.value()); !s.isOk()) return s;
+  auto drives = WallDrives::create(config, setup.value());
+  if (!drives) return drives.status();
   std::unique_ptr<Simulation> sim(new Simulation(setup.value(), ts.value(), nullptr));
+  sim->m_drives = std::move(drives).value();
   sim->m_domain = std::move(domain);
   sim->m_overlapHalo = options.overlapHalo;
   sim->m_onInstability = config.sim.onInstability;
@@ -525,7 +547,8 @@ Result<EngineSetup> prepareEngineSetup(const RunConfig& c) {
     const double axisLen = norm(mo.axis);
     MeshMotionParams mp{mo.velocity, mo.axisPoint, axisLen > 0 ? (1.0 / axisLen) * mo.axis : Vec3d{0, 0, 1}, mo.angularSpeed,
                         mo.startTime, mo.vibrates() ? mo.vibration : Vec3d{0, 0, 0},
-                        mo.vibrates() ? 2 * std::numbers::pi * mo.frequency : 0.0, mo.phase, 0, {}, {}};
+                        mo.vibrates() ? 2 * std::numbers::pi * mo.frequency : 0.0, mo.phase, 0, {}, {}, Vec3d{0, 0, 0}, 0.0};
+    if (mo.drive) mp.velocity = Vec3d{0, 0, 0}, mp.angularSpeed = 0;  // held still: its drive moves it (WallDrives)
     for (const auto& p : mo.profile) {
       if (mp.profilePoints == kMaxProfilePoints) break;  // validate() refuses more
       mp.profileTau[mp.profilePoints] = p.tau;

@@ -14,6 +14,7 @@
 #include "compute/sim/RunConfig.h"
 #include "compute/sim/SimulationState.h"
 #include "compute/dem/TimeStep.h"
+#include "compute/dem/WallDrive.h"
 
 namespace pflow::compute {
 
@@ -95,6 +96,8 @@ class Simulation {
   // wallLoads(): 6 per surface number from the last such step, wallLoadsStep() (-1: none yet).
   void recordWallLoads(bool atOutputs, double interval) { m_loadsAtOutputs = atOutputs, m_loadsInterval = interval; }
   std::vector<double> wallLoads() const { return m_engine->wallLoads(); }
+  // Walls driven by a force or torque (motion.drive): their state after the last step.
+  const WallDrives& wallDrives() const { return m_drives; }
   std::int64_t wallLoadsStep() const { return m_loadsStep; }
   const PhaseTimers& timers() const { return m_timers; }
   PhaseTimers& timers() { return m_timers; }
@@ -112,6 +115,7 @@ class Simulation {
   Status initialise();
   Status rebuild();
   Status haloAndForces(double dt, double time);
+  void driveWalls(double tNext, double dt);
   Status withStep(Status s) const;
   bool reportSlotGrowth();  // true when slots grew
   Status guardedStep();      // stepPhases, exceptions as errors
@@ -147,6 +151,7 @@ class Simulation {
   bool m_energyCheck = false;
   double m_energyStart = 0, m_energyAllowance = 0, m_energyScale = 0, m_elasticStart = 0;
   double m_adhesionAllowance = 0;  // the kinetic energy adhesion may release (a bound; 0 without adhesion)
+  WallDrives m_drives;             // walls moved by a force or torque drive (none: empty)
   // reduce_dt
   OnInstability m_onInstability = OnInstability::kStop;
   int m_checkpointSteps = 1000;

@@ -162,6 +162,45 @@ void validatePlanes(const RunConfig& c, ErrorList& e) {
   }
 }
 
+// motion.drive: a translation drive (mass) with a constant force or a force limit on holding the velocity, a rotation
+// drive (moment of inertia) with a constant torque or a torque limit on holding the angular velocity; no vibration
+// or velocity profile beside it.
+void validateDrive(const MeshMotion& mo, const std::string& mp, ErrorList& e) {
+  const MeshMotion::Drive& d = *mo.drive;
+  const std::string dp = mp + ".drive";
+  if (!(d.mass >= 0)) e.add(dp + ".mass", num(d.mass) + " must be > 0 (kg)");
+  if (!(d.inertia >= 0)) e.add(dp + ".moment_of_inertia", num(d.inertia) + " must be > 0 (kg m^2)");
+  finiteVec(e, dp + ".force", d.force);
+  nonNegative(e, dp + ".force_limit", d.forceLimit);
+  finite(e, dp + ".torque", d.torque);
+  nonNegative(e, dp + ".torque_limit", d.torqueLimit);
+  const bool force = isFinite(d.force) && norm2(d.force) > 0, speed = isFinite(mo.velocity) && norm2(mo.velocity) > 0;
+  if (!d.translates() && !d.rotates())
+    e.add(dp, "drives nothing: give mass (kg, with force or force_limit) and/or moment_of_inertia (kg m^2, with torque or "
+              "torque_limit)");
+  if (d.translates()) {
+    if (force && d.forceLimit > 0) e.add(dp + ".force_limit", "give force (a constant drive) or force_limit (holding motion.velocity), not both");
+    else if (!force && !(d.forceLimit > 0)) e.add(dp + ".force", "a translation drive (mass " + num(d.mass) + " kg) needs force (N) or force_limit (N) with motion.velocity");
+    else if (d.forceLimit > 0 && !speed) e.add(mp + ".velocity", "force_limit holds a velocity: give motion.velocity (its direction is the guide's)");
+    else if (force && speed) e.add(mp + ".velocity", "a constant-force drive starts at rest along the force: leave motion.velocity out");
+  } else if (force || d.forceLimit > 0) {
+    e.add(dp + ".mass", "a drive force needs the wall's mass (kg)");
+  }
+  if (d.rotates()) {
+    if (d.torque != 0 && d.torqueLimit > 0) e.add(dp + ".torque_limit", "give torque (a constant drive) or torque_limit (holding motion.angular_velocity), not both");
+    else if (d.torque == 0 && !(d.torqueLimit > 0)) e.add(dp + ".torque", "a rotation drive (moment of inertia " + num(d.inertia) + " kg m^2) needs torque (N m) or torque_limit (N m) with motion.angular_velocity");
+    else if (d.torqueLimit > 0 && mo.angularSpeed == 0) e.add(mp + ".angular_velocity", "torque_limit holds an angular velocity: give motion.angular_velocity");
+    else if (d.torque != 0 && mo.angularSpeed != 0) e.add(mp + ".angular_velocity", "a constant-torque drive starts at rest: leave motion.angular_velocity out");
+    if (isFinite(mo.axis) && norm2(mo.axis) == 0.0) e.add(mp + ".axis", "[0, 0, 0] is not a direction: a rotation drive turns about motion.axis");
+  } else if (d.torque != 0 || d.torqueLimit > 0) {
+    e.add(dp + ".moment_of_inertia", "a drive torque needs the wall's moment of inertia about the axis (kg m^2)");
+  }
+  if (mo.vibrates()) e.add(mp + ".vibration", "a driven wall moves by its drive: no vibration beside it");
+  if (!mo.profile.empty()) e.add(mp + ".velocity_profile", "a driven wall moves by its drive: no velocity profile beside it");
+  if (!d.translates() && speed) e.add(mp + ".velocity", "a rotation drive alone: the wall does not translate (give drive.mass to drive it)");
+  if (!d.rotates() && mo.angularSpeed != 0) e.add(mp + ".angular_velocity", "a translation drive alone: the wall does not turn (give drive.moment_of_inertia to drive it)");
+}
+
 void validateMeshes(const RunConfig& c, ErrorList& e) {
   for (std::size_t i = 0; i < c.meshes.size(); ++i) {
     const MeshConfig& m = c.meshes[i];
@@ -243,6 +282,7 @@ void validateMeshes(const RunConfig& c, ErrorList& e) {
           e.add(pp, "time " + num(mo.profile[k].tau) + " s must be after the previous point's " + num(mo.profile[k - 1].tau) + " s");
       }
     }
+    if (mo.drive) validateDrive(mo, mp, e);
   }
 }
 

@@ -75,8 +75,26 @@ struct MeshMotion {
     Vec3d velocity;
   };
   std::vector<ProfilePoint> profile;
+  // A wall driven by a force or a torque (motion.drive; compute/dem/WallDrive.h): a rigid body on a guide that moves
+  // by Newton's law under the particles' contact forces and its drive, instead of a prescribed motion. Translation
+  // (mass > 0) along one direction: a constant force `force` (the direction is its own), or a drive that holds
+  // `velocity` while that takes at most `forceLimit` [N] (the direction is the velocity's). Rotation (inertia > 0)
+  // about `axis` through `axisPoint`: a constant torque `torque` [N m], or one that holds `angularSpeed` while that
+  // takes at most `torqueLimit`. From startTime; held still before it.
+  struct Drive {
+    double mass = 0;           // [kg]; 0: no translation drive
+    Vec3d force{0, 0, 0};      // [N]
+    double forceLimit = 0;     // [N]
+    double inertia = 0;        // [kg m^2] about the axis; 0: no rotation drive
+    double torque = 0;         // [N m], right-handed about the axis
+    double torqueLimit = 0;    // [N m]
+    bool translates() const { return mass > 0; }
+    bool rotates() const { return inertia > 0; }
+  };
+  std::optional<Drive> drive;
   bool moves() const {
-    return velocity.x != 0 || velocity.y != 0 || velocity.z != 0 || angularSpeed != 0 || vibrates() || !profile.empty();
+    return velocity.x != 0 || velocity.y != 0 || velocity.z != 0 || angularSpeed != 0 || vibrates() || !profile.empty() ||
+           drive.has_value();
   }
 };
 

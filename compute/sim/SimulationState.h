@@ -18,15 +18,20 @@ struct SimulationState {
   double dt = 0;                  // [s] DEM: the step; SPH: the last step taken
   double dtBefore = 0;            // [s] SPH Verlet: the step before it
   int reductions = 0;             // DEM: simulation.on_instability: reduce_dt's so far
+  std::vector<double> wallDrive;  // DEM: the driven walls' state (WallDrives::state), empty without them
 
-  // Everything but the particles, as exact doubles (a distributed resume broadcasts rank 0's), and back.
+  // Everything but the particles, as exact doubles (a distributed resume broadcasts rank 0's), and back: kScalars
+  // values, then the driven walls' state.
   static constexpr std::size_t kScalars = 10;
   std::vector<double> scalars() const {
-    return {double(contactSlots), double(wallSlots), double(step), double(stepBase), double(rebuilds), time, timeBase, dt, dtBefore,
-            double(reductions)};
+    std::vector<double> v{double(contactSlots), double(wallSlots), double(step), double(stepBase), double(rebuilds), time, timeBase, dt, dtBefore,
+                          double(reductions)};
+    v.insert(v.end(), wallDrive.begin(), wallDrive.end());
+    return v;
   }
   void setScalars(const std::vector<double>& v) {
-    if (v.size() != kScalars) return;
+    if (v.size() < kScalars) return;
+    wallDrive.assign(v.begin() + kScalars, v.end());
     contactSlots = int(v[0]);
     wallSlots = int(v[1]);
     step = std::int64_t(v[2]);

@@ -46,6 +46,18 @@ void Loader::parseMotion(const Fields& g, MeshMotion& motion) {
       get(*vf, "phase", motion.phase);
     }
   }
+  if (const Entry* d = f->find("drive")) {  // a wall moved by a force or torque (compute/dem/WallDrive.h)
+    if (const auto df = mapping(d->value, f->child("drive"), d->loc, kDriveKeys)) {
+      compute::MeshMotion::Drive drive;
+      get(*df, "mass", drive.mass);
+      get(*df, "force", drive.force);
+      get(*df, "force_limit", drive.forceLimit);
+      get(*df, "moment_of_inertia", drive.inertia);
+      get(*df, "torque", drive.torque);
+      get(*df, "torque_limit", drive.torqueLimit);
+      motion.drive = drive;
+    }
+  }
   if (get(*f, "axis", motion.axis)) {
     const double len = norm(motion.axis);
     if (std::isfinite(len) && len > 0) motion.axis = (1.0 / len) * motion.axis;
@@ -482,7 +494,11 @@ void Loader::parseGeometry(const Fields& top) {
     std::vector<std::size_t> count(static_cast<std::size_t>(local), 0);
     std::vector<double> surfaceArea(static_cast<std::size_t>(local), 0.0);
     const bool numbered = mesh->surface.size() == mesh->triangles.size();
-    const bool indicesOk = checkIndices(*mesh).isOk();
+    // The corners index real vertices (checkIndices would also ask for one surface number a triangle, which an inline
+    // mesh without `surfaces` does not give: its area came out 0).
+    const bool indicesOk = std::all_of(mesh->triangles.begin(), mesh->triangles.end(), [&](const auto& tri) {
+      return tri[0] < mesh->vertices.size() && tri[1] < mesh->vertices.size() && tri[2] < mesh->vertices.size();
+    });
     for (std::size_t t = 0; t < mesh->triangles.size(); ++t) {
       const std::int32_t s = numbered ? mesh->surface[t] : 0;
       if (s < 0) continue;  // reported by validate()

@@ -87,7 +87,8 @@ constexpr std::string_view kSides[] = {"inside", "outside"};
 constexpr std::string_view kCapNames[] = {"bottom", "top"};
 constexpr std::string_view kHopperOpenings[] = {"orifice", "top"};
 constexpr std::string_view kMotionKeys[] = {"velocity", "angular_velocity", "axis", "axis_point", "start_time", "vibration",
-                                            "velocity_profile"};
+                                            "velocity_profile", "drive"};
+constexpr std::string_view kDriveKeys[] = {"mass", "force", "force_limit", "moment_of_inertia", "torque", "torque_limit"};
 constexpr std::string_view kVibrationKeys[] = {"amplitude", "frequency", "phase"};
 constexpr std::string_view kSimulationKeys[] = {"gravity", "duration", "dt", "dt_fraction", "skin", "snapshot_interval",
                                                 "domain", "precision", "decomposition", "history_slots", "wall_history_slots", "threads", "seed", "physics",

@@ -693,5 +693,45 @@ TEST(SceneLoader, WallVibration) {
   EXPECT_HAS(b, "velocity_profile[2]");
   EXPECT_HAS(b, "not both");
 }
+
+// motion.drive: a press with a force limit and a motor with a torque limit load; each way of getting a drive wrong is
+// named at its key.
+TEST(SceneLoader, WallDrive) {
+  const std::string set = latticeSet("{min: [0, 0, 0.002], max: [0.01, 0.01, 0.01]}", "0.001");
+  const std::string box = "  - box: {min: [-0.001, -0.001, 0], max: [0.011, 0.011, 0.02]}\n    name: pan\n";
+  const auto press = loadSceneFromString(minimalScene(set, "  duration: 0.1\n", box + "    motion: {velocity: [0, 0, -0.01], drive: {mass: 2, force_limit: 50}}\n"));
+  ASSERT_TRUE(press.isOk()) << errorText(press);
+  const auto& m = press->config.meshes[0].motion;
+  ASSERT_TRUE(m.drive.has_value());
+  EXPECT_DOUBLE_EQ(m.drive->mass, 2);
+  EXPECT_DOUBLE_EQ(m.drive->forceLimit, 50);
+  EXPECT_TRUE(m.moves());
+  // An inline mesh without `surfaces` has its area (it was reported as 0).
+  const auto plate = loadSceneFromString(minimalScene(
+      set, "  duration: 0.1\n",
+      "  - mesh: {vertices: [[0, 0, 0.03], [0.01, 0, 0.03], [0.01, 0.01, 0.03], [0, 0.01, 0.03]], triangles: [[0, 2, 1], [0, 3, 2]]}\n"
+      "    name: press\n    motion: {drive: {mass: 1, force: [0, 0, -1]}}\n"));
+  ASSERT_TRUE(plate.isOk()) << errorText(plate);
+  ASSERT_EQ(plate->surfaces.size(), 1u);
+  EXPECT_NEAR(plate->surfaces[0].area, 1e-4, 1e-12);
+  const auto motor = loadSceneFromString(minimalScene(set, "  duration: 0.1\n", box + "    motion: {angular_velocity: 2, axis: [0, 0, 1], drive: {moment_of_inertia: 0.4, torque_limit: 3}}\n"));
+  ASSERT_TRUE(motor.isOk()) << errorText(motor);
+  EXPECT_DOUBLE_EQ(motor->config.meshes[0].motion.drive->torqueLimit, 3);
+  struct Case {
+    const char* motion;
+    const char* expected;
+  };
+  for (const Case& c : {Case{"{drive: {mass: 2}}", "drive.force: a translation drive (mass 2 kg) needs force (N) or force_limit (N)"},
+                        Case{"{drive: {mass: 2, force_limit: 5}}", "velocity: force_limit holds a velocity"},
+                        Case{"{velocity: [0, 0, 1], drive: {mass: 2, force: [0, 0, 1], force_limit: 5}}", "not both"},
+                        Case{"{drive: {force: [0, 0, 1]}}", "drive.mass: a drive force needs the wall's mass"},
+                        Case{"{drive: {moment_of_inertia: 1, torque: 2}, vibration: {amplitude: [0, 0, 0.001], frequency: 5}}", "no vibration beside it"},
+                        Case{"{drive: {moment_of_inertia: 1}}", "drive.torque: a rotation drive"},
+                        Case{"{drive: {mass: 1, forse: 3}}", "unknown key 'forse'; did you mean 'force'?"},
+                        Case{"{drive: {}}", "drives nothing"}}) {
+    const auto bad = loadSceneFromString(minimalScene(set, "  duration: 0.1\n", box + "    motion: " + c.motion + "\n"));
+    EXPECT_HAS(errorText(bad), c.expected);
+  }
+}
 }  // namespace
 }  // namespace pflow::frontend

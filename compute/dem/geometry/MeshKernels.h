@@ -27,6 +27,10 @@ struct MeshMotionParams {
   int profilePoints;
   double profileTau[kMaxProfilePoints];
   Vec3d profileVelocity[kMaxProfilePoints];
+  // A driven wall (compute/dem/WallDrive.h) over one step: where it was at startTime (its axis point moved by
+  // `offset`, turned by `angle0`), then `velocity` and `angularSpeed`; 0 for every other mesh.
+  Vec3d offset;
+  double angle0;
 
   PFLOW_HOSTDEVICE double elapsed(double t) const { return t > startTime ? t - startTime : 0.0; }
   // The profile's velocity at tau, and its integral from 0 to tau (exact: trapezoids, and a partial one).
@@ -62,14 +66,15 @@ struct MeshMotionParams {
   // Position at time t of a point that was at x0 before the motion started.
   PFLOW_HOSTDEVICE Vec3d transform(Vec3d x0, double t) const {
     const double tau = elapsed(t);
-    const Vec3d r = angularSpeed != 0.0 ? rotateAbout(x0 - axisPoint, axis, angularSpeed * tau) : x0 - axisPoint;
-    return axisPoint + translation(tau) + r;
+    const double angle = angle0 + angularSpeed * tau;
+    const Vec3d r = angle != 0.0 ? rotateAbout(x0 - axisPoint, axis, angle) : x0 - axisPoint;
+    return axisPoint + offset + translation(tau) + r;
   }
   // Velocity at time t of the mesh point currently at x.
   PFLOW_HOSTDEVICE Vec3d velocityAt(Vec3d x, double t) const {
     if (t <= startTime) return zero3<double>();
     const double tau = elapsed(t);
-    const Vec3d c = axisPoint + translation(tau);
+    const Vec3d c = axisPoint + offset + translation(tau);
     Vec3d v = translationVelocity(tau) + cross(angularSpeed * axis, x - c);
     if (omega != 0.0) v = v + (omega * std::cos(omega * tau + phase)) * vibration;
     return v;
