@@ -245,6 +245,47 @@ TEST_P(CudaVsCpu, AdhesiveContactsMatchCpu) {
   }
 }
 
+// A press driven with a force limit (motion.drive) comes down on four spheres on the floor: the GPU moves the press
+// as the CPU does (its loads come from the GPU's wall kernel each step) and the spheres with it.
+TEST_P(CudaVsCpu, DrivenPressMatchesCpu) {
+  SKIP_WITHOUT_GPU();
+  const bool single = GetParam() == compute::Precision::kFloat;
+  const double r = 1e-3;
+  compute::RunConfig c;
+  c.sim.precision = GetParam();
+  c.materials = {material("bead", 1e7, 0.3, 2500, 0.3, 0.4)};
+  for (int k = 0; k < 4; ++k) addParticle(c, {2.2 * r * (k % 2), 2.2 * r * (k / 2), r + 1e-6 * k}, r, 0);
+  c.planes = {plane({0, 0, 0}, {0, 0, 1}, 0, "floor")};
+  c.planes[0].surface = 1;
+  compute::MeshConfig press;
+  press.name = "press";
+  const double L = 0.01, z = 2 * r + 2e-4;
+  press.vertices = {{-L, -L, z}, {L, -L, z}, {L, L, z}, {-L, L, z}};
+  press.triangles = {{0, 2, 1}, {0, 3, 2}};
+  press.surface = {0, 0};
+  press.motion.velocity = {0, 0, -0.02};
+  compute::MeshMotion::Drive d;
+  d.mass = 2e-4, d.forceLimit = 0.2;
+  press.motion.drive = d;
+  c.meshes = {press};
+  c.surfaceNames = {"press", "floor"};
+  c.sim.gravity = {0, 0, -9.81};
+  c.sim.duration = 1;
+  auto cpu = make(c, ExecutorKind::kCpu);
+  auto gpu = makeUnderTest(c);
+  ASSERT_TRUE(cpu && gpu);
+  ASSERT_TRUE(cpu->runSteps(6000).isOk());
+  ASSERT_TRUE(gpu->runSteps(6000).isOk());
+  const auto& wc = cpu->wallDrives().walls().at(0);
+  const auto& wg = gpu->wallDrives().walls().at(0);
+  EXPECT_GT(-wc.s, 1.5e-4) << "the press came down onto the spheres";
+  EXPECT_NEAR(wg.s, wc.s, (single ? 1e-6 : 1e-12) * 1e-3);
+  EXPECT_NEAR(wg.driveForce, wc.driveForce, (single ? 1e-3 : 1e-9) * 0.2);
+  const auto xc = byGid(cpu->snapshot(), "position"), xg = byGid(gpu->snapshot(), "position");
+  const auto [dx, scale] = maxDiff(xg, xc);
+  EXPECT_LE(dx, (single ? 1e-6 : 1e-12) * 1e-3);
+}
+
 // Solid fraction of the lower part of a bed and the mean coordination number.
 struct BedStats {
   double solidFraction = 0, coordination = 0;
