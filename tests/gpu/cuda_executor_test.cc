@@ -278,7 +278,7 @@ TEST_P(CudaVsCpu, DrivenPressMatchesCpu) {
   ASSERT_TRUE(gpu->runSteps(6000).isOk());
   const auto& wc = cpu->wallDrives().walls().at(0);
   const auto& wg = gpu->wallDrives().walls().at(0);
-  EXPECT_GT(-wc.s, 1.5e-4) << "the press came down onto the spheres";
+  EXPECT_GT(wc.s, 1.5e-4) << "the press came down (along its guide, -z) onto the spheres";
   EXPECT_NEAR(wg.s, wc.s, (single ? 1e-6 : 1e-12) * 1e-3);
   EXPECT_NEAR(wg.driveForce, wc.driveForce, (single ? 1e-3 : 1e-9) * 0.2);
   const auto xc = byGid(cpu->snapshot(), "position"), xg = byGid(gpu->snapshot(), "position");
