@@ -14,7 +14,7 @@ namespace pflow::bench {
 
 struct JanssenOptions {
   double radius = 0.02;       // silo radius R [m] (D = 2R)
-  double fillHeight = 0.25;   // height of the lattice the beads start on [m]
+  double fillHeight = 0.5;    // height of the lattice the beads start on [m]: a settled bed about 4 lambda deep
   double rMin = 0.0009, rMax = 0.0011, spacing = 0.0023;
   double youngs = 5e7, friction = 0.5, wallFriction = 0.3, rolling = 0.02, restitution = 0.3;
   double bandHeight = 0.01;   // [m]

@@ -1,4 +1,4 @@
-// Janssen's wall-stress saturation on the GPU (docs/accuracy.md, "Janssen"): ~2e4 beads settle in a silo of
+// Janssen's wall-stress saturation on the GPU (docs/accuracy.md, "Janssen"): ~4e4 beads settle in a silo of
 // diameter 40 mm (20 mean diameters), the floor sinks 0.5 mm to mobilise the wall friction, and the per-surface
 // loads of the side wall's bands give the wall's normal and shear stress against depth (bench/JanssenSilo.h). Held:
 // the floor and the wall's shear carry the weight (1 %); the wall friction mobilised stays within the wall's
