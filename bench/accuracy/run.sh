@@ -2,7 +2,8 @@
 # The accuracy-speed study in one command (docs/accuracy.md): runs pflow-accuracy, then draws the charts.
 # Builds nothing: the binary comes from $PFLOW_BIN or build/bin/pflow-accuracy.
 #   bench/accuracy/run.sh [--executor cpu|cuda] [--quick] [other pflow-accuracy options]
-# Writes docs/accuracy/{study,stability}.csv and PNGs (--quick: build/accuracy-quick/, so the committed
+# With --executor cuda also the bulk laws of the GPU (pflow-beverloo, pflow-janssen: Beverloo's and Janssen's CSVs
+# and charts). Writes docs/accuracy/{study,stability}.csv and PNGs (--quick: build/accuracy-quick/, so the committed
 # study is not touched). Rows of the other executor already in study.csv are kept.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
@@ -24,4 +25,19 @@ done
 start=$(date +%s)
 if [[ -n "$given" ]]; then "$bin" "$@"; else "$bin" --out "$out" "$@"; fi
 /usr/bin/python3 "$root/bench/accuracy/plot.py" "$out"
+# The bulk laws on the GPU (docs/accuracy.md, "Beverloo", "Janssen"): with --executor cuda and not --quick, when
+# pflow-beverloo and pflow-janssen were built beside pflow-accuracy.
+bindir="$(dirname "$bin")"
+if [[ " $* " == *" cuda "* || " $* " == *"--executor=cuda"* ]] && [[ " $* " != *" --quick "* ]]; then
+  for p in double float; do
+    if [[ -x "$bindir/pflow-beverloo" ]]; then
+      "$bindir/pflow-beverloo" --executor cuda --precision "$p" --csv "$out/beverloo_cuda_$p.csv"
+    fi
+    if [[ -x "$bindir/pflow-janssen" ]]; then
+      "$bindir/pflow-janssen" --executor cuda --precision "$p" --csv "$out/janssen_cuda_$p.csv"
+    fi
+  done
+  [[ -s "$out/beverloo_cuda_double.csv" ]] && /usr/bin/python3 "$root/bench/accuracy/plot_beverloo.py" "$out/beverloo.png" "$out"/beverloo_cuda_*.csv
+  [[ -s "$out/janssen_cuda_double.csv" ]] && /usr/bin/python3 "$root/bench/accuracy/plot_janssen.py" "$out/janssen.png" "$out"/janssen_cuda_*.csv
+fi
 echo "run.sh: done in $(( $(date +%s) - start )) s; results in $out" >&2
