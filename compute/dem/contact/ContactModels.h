@@ -314,14 +314,7 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE ContactOutput<T> hertzMindlin(const ContactPa
 
   if constexpr (kTangential) {
     const Vec3<T> vt = s.vRel - vn * s.n;
-    // The tangential displacement grows by vt over the time in contact within the step: all of it, except in the step
-    // the contact began, which counts from the first touch (the overlap a step ago, delta - vn dt, was negative), as
-    // the dashpot's impulse does (stepDashpot). Counting the whole step there made the micro-slip rebound depend on
-    // where in a step the contact began (Chung & Ooi test 4 at 2 degrees: u'/u from 0.97 to 1.02 over the phase at
-    // 0.2 T_R, against 0.949 converged; 0.95-0.97 with this).
-    T inContact = dt;
-    if (vn * dt > s.overlap && s.overlap > T(0)) inContact = s.overlap / vn;
-    Vec3<T> xi = tangential::rotateHistory(xiOld, s.n) + inContact * vt;
+    Vec3<T> xi = tangential::rotateHistory(xiOld, s.n) + dt * vt;
     const T st = T(8) * G * np.contactRadius;
     const Vec3<T> ft =
         tangential::mindlinForce(st, np.damp * T(p.tangentialRatio), T(p.friction), np.load, vt, xi, out.sliding);
