@@ -1,16 +1,18 @@
-// Oblique impacts across the micro-slip regime (Chung & Ooi 2011, test 4: an alumina sphere, R = 2.5 mm, E = 380 GPa,
-// nu = 0.23, rho = 4000, mu = 0.092, e = 0.98, at 3.9 m/s from 2 to 80 degrees off the normal), where at small
-// incidence the tangential spring, not friction, decides the rebound. Three ways of computing the same impact must
-// agree at pflow's default step (0.2 Rayleigh times):
+// Oblique impacts across the micro-slip regime, Chung & Ooi (2011) tests 4-6: an alumina sphere (R = 2.5 mm,
+// E = 380 GPa, nu = 0.23, rho = 4000, mu = 0.092, e = 0.98) at 3.9 m/s from 2 to 80 degrees off the normal (test 4);
+// an aluminium-alloy sphere (R = 0.1 m, E = 70 GPa, nu = 0.33, rho = 2700, mu = 0.4, e = 0.5) at a normal 0.2 m/s
+// with tangential velocities from 0.02 to 1.6 m/s (test 5) and with spins (no tangential velocity) giving its contact
+// point 0.02 to 1.6 m/s (test 6). At small incidence the tangential spring, not friction, decides the rebound. Three
+// ways of computing the same impact must agree at pflow's default step (0.2 Rayleigh times):
 //   - the sphere on a rigid plane (the wall kernel),
-//   - two identical spheres in a symmetric collision (the pair kernel; the same dimensionless problem: Hertz-Mindlin
-//     outcomes depend on the incidence, mu, e and the ratio of tangential to normal stiffness 2(1-nu)/(2-nu), which
-//     are the same for an elastic pair and for a sphere on a rigid wall),
+//   - two identical spheres in a mirror-symmetric collision (the pair kernel; the same dimensionless problem:
+//     Hertz-Mindlin outcomes depend on the incidence, mu, e and the stiffness ratio 2(1-nu)/(2-nu), which are the same
+//     for an elastic pair and for a sphere on a rigid wall),
 //   - an independent integration of the same contact law (Hertz, the dashpot for e, Mindlin's spring 8 G* a with its
 //     dashpot and Coulomb cap, lever arm R - delta/2) for the sphere on the plane, at a step 1/50 of pflow's,
-// and at large incidence (gross sliding throughout) the rigid-body closed form: omega' R / V = (5/2) mu (1 + e)
-// cos(theta). Measured: the contact point's tangential velocity ratio u'/u and the spin omega' R / V. The published
-// curves of Chung & Ooi and the Maw-Barber-Fawcett analysis are not in this repository; docs/accuracy.md says so.
+// and, in gross sliding, the rigid-body closed form: the spin changes by (5/2) mu (1 + e) v_n / R. Measured: the
+// contact point's tangential velocity ratio u'/u and the spin change (omega' - omega) R / |u|. The published curves and
+// the Maw-Barber-Fawcett analysis are not in this repository (docs/accuracy.md, "Micro-slip").
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -26,124 +28,155 @@ namespace {
 using compute::RunConfig;
 using compute::Simulation;
 
-constexpr double kE = 380e9, kNu = 0.23, kRho = 4000, kR = 2.5e-3, kMu = 0.092, kRest = 0.98, kV = 3.9;
-constexpr double kDeg = std::numbers::pi / 180;
+struct Material {
+  double E, nu, rho, R, mu, e;
+};
+const Material kAlumina{380e9, 0.23, 4000, 2.5e-3, 0.092, 0.98};
+const Material kAluminium{70e9, 0.33, 2700, 0.1, 0.4, 0.5};
+
+// The incoming motion of the sphere that hits the plane (or of the lower sphere of the pair, seen from the upper):
+// normal speed vn (towards), tangential vt along x, spin w about y.
+struct Incoming {
+  double vn, vt, w;
+};
 
 struct Rebound {
   double tangentialRatio = 0;  // u' / u: the contact point's tangential velocity after over before
-  double spin = 0;             // omega' R / V (V: the sphere's speed relative to what it hits)
+  double spin = 0;             // (w' - w) R / |u|
 };
 
-// pflow: the sphere on a rigid plane (wall) or two identical spheres (pair), the relative velocity V at theta from the
-// normal; run well past the contact.
-Rebound pflowImpact(bool pair, double theta, double dtScale = 1) {
-  const double gap = 1e-7;
+// The contact point's tangential velocity of a sphere below its contact (contact at +R z from its centre) and of one
+// above the plane (contact at -R z): u = v_x + R w_y and v_x - R w_y.
+Rebound pflowImpact(const Material& m, bool pair, Incoming in) {
+  const double gap = 1e-7 * m.R / 2.5e-3;
   RunConfig c;
-  c.materials = {material("alumina", kE, kNu, kRho, kRest, kMu), rigid(kRest, kMu)};
+  c.materials = {material("sphere", m.E, m.nu, m.rho, m.e, m.mu), rigid(m.e, m.mu)};
   compute::MaterialPairConfig wall;
-  wall.a = 0, wall.b = 1, wall.restitution = kRest, wall.friction = kMu;
+  wall.a = 0, wall.b = 1, wall.restitution = m.e, wall.friction = m.mu;
   c.pairs = {wall};
-  const double vt = kV * std::sin(theta), vn = kV * std::cos(theta);
+  const double u0 = in.vt - m.R * in.w;  // at the contact point of the sphere on the plane
   if (pair) {
-    addParticle(c, {0, 0, -kR - gap / 2}, kR, 0, {0.5 * vt, 0, 0.5 * vn});
-    addParticle(c, {0, 0, kR + gap / 2}, kR, 0, {-0.5 * vt, 0, -0.5 * vn});
+    // The lower sphere carries half the relative motion, the upper its image under a half turn about the y axis through
+    // the contact point (velocities reversed, the y-spin kept); the lower sphere's contact point is at its top, so a
+    // spin -w/2 on each gives the relative contact-point velocity vt - R w of the sphere on the plane.
+    addParticle(c, {0, 0, -m.R - gap / 2}, m.R, 0, {0.5 * in.vt, 0, 0.5 * in.vn}, {0, -0.5 * in.w, 0});
+    addParticle(c, {0, 0, m.R + gap / 2}, m.R, 0, {-0.5 * in.vt, 0, -0.5 * in.vn}, {0, -0.5 * in.w, 0});
   } else {
     c.planes = {plane({0, 0, 0}, {0, 0, 1}, 1, "floor")};
-    addParticle(c, {0, 0, kR + gap}, kR, 0, {vt, 0, -vn});
+    addParticle(c, {0, 0, m.R + gap}, m.R, 0, {in.vt, 0, -in.vn}, {0, in.w, 0});
   }
   c.sim.gravity = {0, 0, 0};
-  c.sim.duration = 1;
-  if (dtScale != 1) c.sim.dt = dtScale * 0.2 * compute::rayleighTime(kR, kRho, kE, kNu);
+  c.sim.duration = 1e3;
   auto sim = Simulation::create(c);
   EXPECT_TRUE(sim.isOk()) << sim.status().toString();
   if (!sim.isOk()) return {};
-  const double tc = hertzImpact(kE / (1 - kNu * kNu), kR, sphereMass(kR, kRho), kV).contactTime;
-  EXPECT_TRUE(sim.value()->runUntil(3 * tc + gap / vn).isOk());
+  const double tc = hertzImpact(m.E / (1 - m.nu * m.nu), m.R, sphereMass(m.R, m.rho), in.vn).contactTime;
+  EXPECT_TRUE(sim.value()->runUntil(3 * tc + gap / in.vn).isOk());
   const auto snap = sim.value()->snapshot({"velocity", "angular_velocity", "id"});
   const Vec3d* v = snap.find("velocity")->as<Vec3d>();
   const Vec3d* w = snap.find("angular_velocity")->as<Vec3d>();
   const Gid* id = snap.find("id")->as<Gid>();
-  const std::size_t lower = pair && id[0] != 0 ? 1 : 0;  // the sphere that moved +x (pair) or the sphere (wall)
-  Rebound r;
   if (pair) {
-    // The lower sphere's contact point is at +R z: u = v_x + (w x R z)_x = v_x + R w_y; relative to the upper one's
-    // (by symmetry its negative): 2 u. The incoming relative tangential velocity is vt.
-    r.tangentialRatio = 2 * (v[lower].x + kR * w[lower].y) / vt;
-    r.spin = -w[lower].y * kR / (0.5 * kV);
-  } else {
-    // The contact point at -R z: u = v_x - R w_y.
-    r.tangentialRatio = (v[0].x - kR * w[0].y) / vt;
-    r.spin = w[0].y * kR / kV;
+    const std::size_t lower = id[0] == 0 ? 0 : 1;
+    // Relative to the upper sphere (its mirror image): twice the lower sphere's contact-point velocity.
+    const double u = 2 * (v[lower].x + m.R * w[lower].y);
+    return {u / u0, (-2 * w[lower].y - in.w) * m.R / std::fabs(u0)};
   }
-  return r;
+  return {(v[0].x - m.R * w[0].y) / u0, (w[0].y - in.w) * m.R / std::fabs(u0)};
 }
 
 // The same contact law for the sphere on the plane, integrated independently (velocity Verlet, 1/50 of pflow's step).
-Rebound referenceImpact(double theta, double divide = 50) {
-  const double Es = kE / (1 - kNu * kNu), G = kE / (2 * (1 + kNu)), Gs = G / (2 - kNu);
-  const double m = sphereMass(kR, kRho), I = 0.4 * m * kR * kR;
-  const double c = compute::dampingCoeffForRestitution(kRest), ratio = std::sqrt(4 * Gs / Es);
-  const double dt = 0.2 * compute::rayleighTime(kR, kRho, kE, kNu) / divide;
-  double z = kR, vz = -kV * std::cos(theta), vx = kV * std::sin(theta), wy = 0, xi = 0;
-  auto forces = [&](double zz, double vzz, double vxx, double wyy, double& fz, double& fx, double& ty, double& xiNew, double h) {
+Rebound referenceImpact(const Material& m, Incoming in) {
+  const double Es = m.E / (1 - m.nu * m.nu), G = m.E / (2 * (1 + m.nu)), Gs = G / (2 - m.nu);
+  const double mass = sphereMass(m.R, m.rho), I = 0.4 * mass * m.R * m.R;
+  const double c = compute::dampingCoeffForRestitution(m.e), ratio = std::sqrt(4 * Gs / Es);
+  const double dt = 0.2 * compute::rayleighTime(m.R, m.rho, m.E, m.nu) / 50;
+  double z = m.R, vz = -in.vn, vx = in.vt, wy = in.w, xi = 0, fz = 0, fx = 0, ty = 0;
+  auto forces = [&](double h) {
     fz = fx = ty = 0;
-    const double d = kR - zz;
+    const double d = m.R - z;
     if (d <= 0) {
-      xiNew = 0;
+      xi = 0;
       return;
     }
-    const double a = std::sqrt(kR * d), vn = -vzz;  // approaching > 0
-    const double damp = c * std::sqrt(2 * Es * a * m);
-    double fn = 4.0 / 3.0 * Es * a * d + damp * vn;
-    if (fn < 0) fn = 0;
-    const double l = kR - 0.5 * d;
-    const double u = vxx - l * wyy;
-    double x = xi + h * u;
-    const double kt = 8 * Gs * a;
-    double ft = -kt * x - damp * ratio * u;
-    if (std::fabs(ft) > kMu * fn) {
-      ft = ft > 0 ? kMu * fn : -kMu * fn;
-      x = -ft / kt;
+    const double a = std::sqrt(m.R * d), damp = c * std::sqrt(2 * Es * a * mass);
+    const double fn = std::max(0.0, 4.0 / 3.0 * Es * a * d - damp * vz);
+    const double l = m.R - 0.5 * d, u = vx - l * wy, kt = 8 * Gs * a;
+    xi += h * u;
+    double ft = -kt * xi - damp * ratio * u;
+    if (std::fabs(ft) > m.mu * fn) {
+      ft = ft > 0 ? m.mu * fn : -m.mu * fn;
+      xi = -ft / kt;
     }
-    xiNew = x;
-    fz = fn, fx = ft, ty = -l * ft;  // torque about y of F_t at -l z: (r x F)_y = z F_x - x F_z = -l F_t
+    fz = fn, fx = ft, ty = -l * ft;  // the torque about y of F_t applied at -l z
   };
-  double fz, fx, ty, xiNew;
-  forces(z, vz, vx, wy, fz, fx, ty, xiNew, 0.0);
   bool touched = false;
   for (long k = 0; k < 100000000; ++k) {
-    vz += 0.5 * dt * fz / m, vx += 0.5 * dt * fx / m, wy += 0.5 * dt * ty / I;
+    vz += 0.5 * dt * fz / mass, vx += 0.5 * dt * fx / mass, wy += 0.5 * dt * ty / I;
     z += dt * vz;
-    forces(z, vz, vx, wy, fz, fx, ty, xiNew, dt);
-    xi = xiNew;
-    vz += 0.5 * dt * fz / m, vx += 0.5 * dt * fx / m, wy += 0.5 * dt * ty / I;
-    if (z < kR) touched = true;
-    if (touched && z > kR) break;
+    forces(dt);
+    vz += 0.5 * dt * fz / mass, vx += 0.5 * dt * fx / mass, wy += 0.5 * dt * ty / I;
+    touched |= z < m.R;
+    if (touched && z > m.R) break;
   }
-  return {(vx - kR * wy) / (kV * std::sin(theta)), wy * kR / kV};
+  const double u0 = in.vt - m.R * in.w;
+  return {(vx - m.R * wy) / u0, (wy - in.w) * m.R / std::fabs(u0)};
 }
 
-TEST(MicroSlip, ChungOoiTest4WallPairAndIndependentIntegrationAgree) {
-  std::printf("theta  u'/u: wall    pair    reference | spin w'R/V: wall    pair    reference  gross-sliding\n");
-  for (double deg : {2.0, 5.0, 10.0, 15.0, 20.0, 30.0, 45.0, 60.0, 80.0}) {
-    const double th = deg * kDeg;
-    const Rebound w = pflowImpact(false, th), p = pflowImpact(true, th), r = referenceImpact(th);
-    const double sliding = 2.5 * kMu * (1 + kRest) * std::cos(th);
-    std::printf("%5.1f  %+9.4f %+9.4f %+9.4f | %9.5f %9.5f %9.5f  %9.5f\n", deg, w.tangentialRatio, p.tangentialRatio,
-                r.tangentialRatio, w.spin, p.spin, r.spin, sliding);
-    // The spin to 1 % of the gross-sliding value (its largest); the tangential ratio (from about -0.4 to 1) to 0.01
-    // between the two kernels everywhere, and against the converged model to 0.005 from 15 degrees and 0.035 below.
-    // Below 15 degrees the rebound depends on where in a step the contact began (at 2 degrees u'/u runs from 0.97 to
-    // 1.02 over that phase, against 0.949 converged): the step that begins a contact adds a whole step of tangential
-    // displacement. Counting it from the first touch removes most of it (0.95-0.97) but cost 14 % of the double force
-    // kernel on an H100 (an fp64 division) and was left out; docs/accuracy.md, "Micro-slip".
-    const double spinScale = 0.01 * 2.5 * kMu * (1 + kRest);
-    EXPECT_NEAR(w.spin, r.spin, spinScale) << deg << " deg: wall vs reference";
-    EXPECT_NEAR(p.spin, w.spin, spinScale) << deg << " deg: pair vs wall";
-    EXPECT_NEAR(w.tangentialRatio, r.tangentialRatio, deg < 15 ? 0.035 : 0.005) << deg << " deg: wall vs reference";
-    EXPECT_NEAR(p.tangentialRatio, w.tangentialRatio, 0.01) << deg << " deg: pair vs wall";
-    if (std::tan(th) > 3.5 * kMu * (1 + kRest) * 1.2) EXPECT_NEAR(w.spin, sliding, 0.01 * sliding) << deg << " deg: gross sliding";
+// Every case of a test: the three computations, printed, and held together where they are known to agree.
+//   - The wall kernel against the converged model (`withReference`: test 4, e = 0.98): u'/u to 0.005 where the contact
+//     point's incidence |u| / v_n is at least 0.25 and to 0.035 below it, the spin change to 1 % of its gross-sliding
+//     value. Below 0.25 the rebound depends on where in a step the contact began (at 2 degrees u'/u runs from 0.97 to
+//     1.02 over that phase, against 0.949 converged): the step that begins a contact adds a whole step of tangential
+//     displacement. Counting it from the first touch removes most of it, but cost 14 % of the double force kernel on
+//     an H100 (an fp64 division) and was left out. With e = 0.5 (tests 5 and 6) the reference, which integrates the
+//     continuous dashpot, and pflow's step dashpot give different normal-force histories, and the micro-slip rebound
+//     differs by up to 0.08 in u'/u: not held here (docs/accuracy.md, "Micro-slip").
+//   - The wall kernel against the rigid-body closed form in gross sliding (|u| / v_n >= 4): the spin change to 0.5 %.
+//   - The pair kernel against the wall kernel: u'/u to 0.01 and the spin change to 1 % up to |u| / v_n = 2; in gross
+//     sliding the pair's spin change comes out up to 2.8 % below the wall's and the closed form (an open finding: the
+//     pair's sliding impulse is smaller), held to 3.5 % so that it does not grow unseen.
+void check(const char* test, const Material& m, const std::vector<Incoming>& cases, bool withReference) {
+  std::printf("%s\n  |u|/vn  u'/u: wall    pair    reference | spin change: wall   pair    reference  gross-sliding\n", test);
+  for (const Incoming& in : cases) {
+    const Rebound w = pflowImpact(m, false, in), p = pflowImpact(m, true, in), r = referenceImpact(m, in);
+    const double u0 = std::fabs(in.vt - m.R * in.w), slide = 2.5 * m.mu * (1 + m.e) * in.vn / u0, inc = u0 / in.vn;
+    std::printf("  %6.3f  %+9.4f %+9.4f %+9.4f | %+9.5f %+9.5f %+9.5f  %9.5f\n", inc, w.tangentialRatio, p.tangentialRatio,
+                r.tangentialRatio, w.spin, p.spin, r.spin, slide);
+    const double spinScale = 0.01 * std::min(slide, 3.5);  // the gross-sliding change, at most (7/2) |u| (rolling)
+    if (withReference) {
+      EXPECT_NEAR(w.spin, r.spin, spinScale) << test << " |u|/vn " << inc << ": wall vs reference";
+      EXPECT_NEAR(w.tangentialRatio, r.tangentialRatio, inc < 0.25 ? 0.035 : 0.005) << test << " |u|/vn " << inc << ": wall vs reference";
+    }
+    if (inc >= 4) EXPECT_NEAR(w.spin, slide, 0.005 * slide) << test << " |u|/vn " << inc << ": wall vs gross sliding";
+    if (inc <= 2) {
+      EXPECT_NEAR(p.spin, w.spin, spinScale) << test << " |u|/vn " << inc << ": pair vs wall";
+      EXPECT_NEAR(p.tangentialRatio, w.tangentialRatio, 0.01) << test << " |u|/vn " << inc << ": pair vs wall";
+    } else {
+      EXPECT_NEAR(p.spin, w.spin, 0.035 * w.spin) << test << " |u|/vn " << inc << ": pair vs wall (gross sliding)";
+    }
   }
+}
+
+TEST(MicroSlip, ChungOoiTest4ConstantSpeedAcrossIncidence) {
+  std::vector<Incoming> cases;
+  for (double deg : {2.0, 5.0, 10.0, 15.0, 20.0, 30.0, 45.0, 60.0, 80.0}) {
+    const double th = deg * std::numbers::pi / 180;
+    cases.push_back({3.9 * std::cos(th), 3.9 * std::sin(th), 0});
+  }
+  check("Chung & Ooi test 4 (alumina, 3.9 m/s)", kAlumina, cases, true);
+}
+
+TEST(MicroSlip, ChungOoiTest5ConstantNormalSpeedTangentialVelocities) {
+  std::vector<Incoming> cases;
+  for (double vt : {0.02, 0.05, 0.1, 0.2, 0.4, 0.8, 1.6}) cases.push_back({0.2, vt, 0});
+  check("Chung & Ooi test 5 (aluminium alloy, v_n = 0.2 m/s)", kAluminium, cases, false);
+}
+
+TEST(MicroSlip, ChungOoiTest6ConstantNormalSpeedSpins) {
+  std::vector<Incoming> cases;
+  for (double u : {0.02, 0.05, 0.1, 0.2, 0.4, 0.8, 1.6}) cases.push_back({0.2, 0, -u / kAluminium.R});  // backspin: u = +R |w|
+  check("Chung & Ooi test 6 (aluminium alloy, v_n = 0.2 m/s, spinning)", kAluminium, cases, false);
 }
 
 }  // namespace
