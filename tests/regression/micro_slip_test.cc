@@ -129,9 +129,9 @@ Rebound referenceImpact(const Material& m, Incoming in) {
 //     value. Below 0.25 the rebound depends on where in a step the contact began (at 2 degrees u'/u runs from 0.97 to
 //     1.02 over that phase, against 0.949 converged): the step that begins a contact adds a whole step of tangential
 //     displacement. Counting it from the first touch removes most of it, but cost 14 % of the double force kernel on
-//     an H100 (an fp64 division) and was left out. With e = 0.5 (tests 5 and 6) the same effect reaches 0.08 in u'/u at
-//     the default step (pflow at 1/64 of it gives the reference's value): not held here (docs/accuracy.md,
-//     "Micro-slip").
+//     an H100 (an fp64 division) and was left out. With e = 0.5 (tests 5 and 6) pflow differs from the reference by up
+//     to 0.08 in u'/u at |u|/v_n = 0.1 at the default step (at 1/64 of it they agree; the first-touch correction does
+//     not change it): not held here (docs/accuracy.md, "Micro-slip").
 //   - The wall kernel against the rigid-body closed form in gross sliding (|u| / v_n >= 4): the spin change to 0.5 %.
 //   - The pair kernel against the wall kernel: u'/u to 0.01 and the spin change to 1 % up to |u| / v_n = 2; in gross
 //     sliding the pair's spin change comes out up to 2.8 % below the wall's and the closed form (an open finding: the
