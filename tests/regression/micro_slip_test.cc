@@ -1,4 +1,4 @@
-// Oblique impacts across the micro-slip regime, Chung & Ooi (2011) tests 4-6: an alumina sphere (R = 2.5 mm,
+// Oblique impacts across the micro-slip regime, Chung & Ooi (2011) tests 4-8 (7 and 8, two spheres, at the end): an alumina sphere (R = 2.5 mm,
 // E = 380 GPa, nu = 0.23, rho = 4000, mu = 0.092, e = 0.98) at 3.9 m/s from 2 to 80 degrees off the normal (test 4);
 // an aluminium-alloy sphere (R = 0.1 m, E = 70 GPa, nu = 0.33, rho = 2700, mu = 0.4, e = 0.5) at a normal 0.2 m/s
 // with tangential velocities from 0.02 to 1.6 m/s (test 5) and with spins (no tangential velocity) giving its contact
@@ -177,6 +177,125 @@ TEST(MicroSlip, ChungOoiTest6ConstantNormalSpeedSpins) {
   std::vector<Incoming> cases;
   for (double u : {0.02, 0.05, 0.1, 0.2, 0.4, 0.8, 1.6}) cases.push_back({0.2, 0, -u / kAluminium.R});  // backspin: u = +R |w|
   check("Chung & Ooi test 6 (aluminium alloy, v_n = 0.2 m/s, spinning)", kAluminium, cases, false);
+}
+
+// Two spheres (radii Ri below, Rj above, the same material) meeting along z: the lower one moving up at vn / 2 with
+// tangential velocity vt / 2 and spin wi about y, the upper one the opposite velocity and spin wj. pflow's pair kernel
+// against an independent integration of the same law for the two bodies (1/50 of pflow's step). Returned: u'/u for
+// the relative contact-point velocity u = (v_i,x + l_i w_i) - (v_j,x - l_j w_j), and each sphere's spin change
+// (w' - w) R / |u|.
+struct PairRebound {
+  double tangentialRatio = 0, spinI = 0, spinJ = 0;
+};
+struct PairIncoming {
+  double vn, vt, wi, wj;
+};
+
+PairRebound pflowPair(const Material& m, double Ri, double Rj, PairIncoming in) {
+  const double gap = 4e-6;
+  RunConfig c;
+  c.materials = {material("sphere", m.E, m.nu, m.rho, m.e, m.mu)};
+  addParticle(c, {0, 0, -Ri - gap / 2}, Ri, 0, {0.5 * in.vt, 0, 0.5 * in.vn}, {0, in.wi, 0});
+  addParticle(c, {0, 0, Rj + gap / 2}, Rj, 0, {-0.5 * in.vt, 0, -0.5 * in.vn}, {0, in.wj, 0});
+  c.sim.gravity = {0, 0, 0};
+  c.sim.duration = 1e3;
+  auto sim = Simulation::create(c);
+  EXPECT_TRUE(sim.isOk()) << sim.status().toString();
+  if (!sim.isOk()) return {};
+  const double mi = sphereMass(Ri, m.rho), mj = sphereMass(Rj, m.rho);
+  const double tc = hertzImpact(m.E / (2 * (1 - m.nu * m.nu)), Ri * Rj / (Ri + Rj), mi * mj / (mi + mj), in.vn).contactTime;
+  EXPECT_TRUE(sim.value()->runUntil(3 * tc + gap / in.vn).isOk());
+  const auto snap = sim.value()->snapshot({"velocity", "angular_velocity", "id"});
+  const Vec3d* v = snap.find("velocity")->as<Vec3d>();
+  const Vec3d* w = snap.find("angular_velocity")->as<Vec3d>();
+  const Gid* id = snap.find("id")->as<Gid>();
+  const std::size_t i = id[0] == 0 ? 0 : 1, j = 1 - i;
+  const double u0 = in.vt + Ri * in.wi + Rj * in.wj;
+  const double u = (v[i].x + Ri * w[i].y) - (v[j].x - Rj * w[j].y);
+  return {u / u0, (w[i].y - in.wi) * Ri / std::fabs(u0), (w[j].y - in.wj) * Rj / std::fabs(u0)};
+}
+
+PairRebound referencePair(const Material& m, double Ri, double Rj, PairIncoming in) {
+  const double Es = m.E / (2 * (1 - m.nu * m.nu)), Gs = m.E / (2 * (1 + m.nu)) / (2 * (2 - m.nu)), Rs = Ri * Rj / (Ri + Rj);
+  const double mi = sphereMass(Ri, m.rho), mj = sphereMass(Rj, m.rho), ms = mi * mj / (mi + mj);
+  const double Ii = 0.4 * mi * Ri * Ri, Ij = 0.4 * mj * Rj * Rj;
+  const double c = compute::dampingCoeffForRestitution(m.e), ratio = std::sqrt(4 * Gs / Es);
+  const double dt = 0.2 * compute::rayleighTime(std::min(Ri, Rj), m.rho, m.E, m.nu) / 50;
+  double gapZ = 0, vzi = 0.5 * in.vn, vzj = -0.5 * in.vn, vxi = 0.5 * in.vt, vxj = -0.5 * in.vt, wi = in.wi, wj = in.wj, xi = 0;
+  double fn = 0, ft = 0, li = Ri, lj = Rj;  // fn pushes them apart; ft acts on i along x (j gets -ft)
+  auto forces = [&](double h) {
+    fn = ft = 0;
+    const double d = -gapZ;  // overlap: the gap between the surfaces, negative
+    if (d <= 0) {
+      xi = 0;
+      return;
+    }
+    const double a = std::sqrt(Rs * d), damp = c * std::sqrt(2 * Es * a * ms), vn = vzi - vzj;
+    fn = std::max(0.0, 4.0 / 3.0 * Es * a * d + damp * vn);
+    li = Ri - 0.5 * d, lj = Rj - 0.5 * d;
+    const double u = (vxi + li * wi) - (vxj - lj * wj), kt = 8 * Gs * a;
+    xi += h * u;
+    ft = -kt * xi - damp * ratio * u;
+    if (std::fabs(ft) > m.mu * fn) {
+      ft = ft > 0 ? m.mu * fn : -m.mu * fn;
+      xi = -ft / kt;
+    }
+  };
+  auto kick = [&](double h) {
+    vzi -= h * fn / mi, vzj += h * fn / mj;
+    vxi += h * ft / mi, vxj -= h * ft / mj;
+    wi += h * li * ft / Ii, wj += h * lj * ft / Ij;  // both spins: (l z) x (F_t x) and (-l z) x (-F_t x)
+  };
+  bool touched = false;
+  for (long k = 0; k < 100000000; ++k) {
+    kick(0.5 * dt);
+    gapZ -= dt * (vzi - vzj);
+    forces(dt);
+    kick(0.5 * dt);
+    touched |= gapZ < 0;
+    if (touched && gapZ > 0) break;
+  }
+  const double u0 = in.vt + Ri * in.wi + Rj * in.wj;
+  const double u = (vxi + Ri * wi) - (vxj - Rj * wj);
+  return {u / u0, (wi - in.wi) * Ri / std::fabs(u0), (wj - in.wj) * Rj / std::fabs(u0)};
+}
+
+// pflow's pair kernel against the two-body reference, from the incidence |u| / v_n = 0.5 on (below it the step effect
+// of tests 5 and 6): u'/u to 0.01, the spin changes to 1 % of their largest.
+void checkPairs(const char* test, const Material& m, double Ri, double Rj, const std::vector<PairIncoming>& cases) {
+  std::printf("%s\n  |u|/vn  u'/u: pflow  reference | spin change i: pflow  reference | j: pflow  reference\n", test);
+  double scale = 0;
+  std::vector<std::pair<PairRebound, PairRebound>> out;
+  for (const PairIncoming& in : cases) {
+    out.push_back({pflowPair(m, Ri, Rj, in), referencePair(m, Ri, Rj, in)});
+    scale = std::max({scale, std::fabs(out.back().second.spinI), std::fabs(out.back().second.spinJ)});
+  }
+  for (std::size_t k = 0; k < cases.size(); ++k) {
+    const PairIncoming& in = cases[k];
+    const auto& [p, r] = out[k];
+    const double inc = std::fabs(in.vt + Ri * in.wi + Rj * in.wj) / in.vn;
+    std::printf("  %6.3f  %+9.4f %+9.4f | %+9.5f %+9.5f | %+9.5f %+9.5f\n", inc, p.tangentialRatio, r.tangentialRatio, p.spinI,
+                r.spinI, p.spinJ, r.spinJ);
+    if (inc < 0.5) continue;
+    EXPECT_NEAR(p.tangentialRatio, r.tangentialRatio, 0.01) << test << " |u|/vn " << inc;
+    EXPECT_NEAR(p.spinI, r.spinI, 0.01 * scale) << test << " |u|/vn " << inc;
+    EXPECT_NEAR(p.spinJ, r.spinJ, 0.01 * scale) << test << " |u|/vn " << inc;
+  }
+}
+
+// Chung & Ooi test 7: two identical spheres at a normal 0.2 m/s, spinning (the same spin on both: their contact points
+// move apart at 2 R w).
+TEST(MicroSlip, ChungOoiTest7IdenticalSpheresSpinning) {
+  std::vector<PairIncoming> cases;
+  for (double u : {0.02, 0.1, 0.2, 0.4, 0.8, 1.6}) cases.push_back({0.2, 0, 0.5 * u / kAluminium.R, 0.5 * u / kAluminium.R});
+  checkPairs("Chung & Ooi test 7 (aluminium alloy spheres, R = 0.1 m, spinning)", kAluminium, kAluminium.R, kAluminium.R, cases);
+}
+
+// Chung & Ooi test 8: spheres of radii 0.1 and 0.05 m at a normal 0.2 m/s with tangential velocities.
+TEST(MicroSlip, ChungOoiTest8UnequalSpheresTangentialVelocities) {
+  std::vector<PairIncoming> cases;
+  for (double vt : {0.02, 0.1, 0.2, 0.4, 0.8, 1.6}) cases.push_back({0.2, vt, 0, 0});
+  checkPairs("Chung & Ooi test 8 (aluminium alloy spheres, R = 0.1 and 0.05 m)", kAluminium, kAluminium.R, 0.5 * kAluminium.R, cases);
 }
 
 }  // namespace
