@@ -51,6 +51,25 @@ TEST(Jkr, ContactRadiusSolvesItsEquationOnTheStableBranch) {
   EXPECT_NEAR(sf, cohesion::jkrRootRadius(B, R, 0.3 * dc), 2e-6 * sf);
 }
 
+// Fine powders: 10 um particles (R* = 2.5 um), E* = 5.5e8 Pa, dgamma = 0.1 J/m^2. The float path (float runs) solves
+// the contact radius and force as the double one does, to float's precision, over the whole branch.
+TEST(Jkr, FloatHoldsForFinePowders) {
+  ContactParams p;
+  p.effYoung = 5.5e8;
+  setCohesion(p, cohesion::kJkr, 0.1);
+  const double R = 2.5e-6, dc = cohesion::jkrBreakOverlap(p.jkrBreak, R);
+  const double fc = 1.5 * kPi * 0.1 * R;
+  for (double f : {0.999, 0.9, 0.5, 0.0, -1.0, -10.0, -100.0}) {
+    const double delta = f * dc;
+    const double s = cohesion::jkrRootRadius(p.jkrB, R, delta);
+    const float sf = cohesion::jkrRootRadius(float(p.jkrB), float(R), float(delta));
+    EXPECT_NEAR(sf, s, 1e-5 * s) << "delta " << delta;
+    const double F = cohesion::jkrForce(p.effYoung, p.jkrB, R, s);
+    const float Ff = cohesion::jkrForce(float(p.effYoung), float(p.jkrB), float(R), sf);
+    EXPECT_NEAR(Ff, F, 1e-4 * std::max(fc, std::fabs(F))) << "delta " << delta;
+  }
+}
+
 TEST(Jkr, ForceHasTheLandmarksOfTheTheory) {
   const double dgamma = 0.5, R = 5e-4;
   const ContactParams p = adhesive(cohesion::kJkr, dgamma);
