@@ -71,21 +71,14 @@ BeverlooRow runBeverloo(const BeverlooOptions& o, double D, compute::ExecutorKin
     r.error = s.toString();
     return r;
   }
-  // Bulk density of the settled bed's core: particle volume in a cylinder of radius R/2 between a quarter and three
-  // quarters of the bed's height, over its volume (centres inside: the volumes of the cut ones average out).
+  // Bulk density of the settled bed's core (the bed's height: the 98th percentile of the centres).
   {
     const auto snap = sim.snapshot({"position", "radius"});
     const Vec3d* x = snap.find("position")->as<Vec3d>();
-    const double* rad = snap.find("radius")->as<double>();
     std::vector<double> z;
     for (std::size_t i = 0; i < snap.n; ++i) z.push_back(x[i].z);
     std::sort(z.begin(), z.end());
-    const double top = z[std::size_t(0.98 * double(z.size()))];
-    const double lo = 0.25 * top, hi = 0.75 * top, rc = 0.5 * o.siloRadius;
-    double vol = 0;
-    for (std::size_t i = 0; i < snap.n; ++i)
-      if (x[i].z > lo && x[i].z < hi && x[i].x * x[i].x + x[i].y * x[i].y < rc * rc) vol += 4.0 / 3.0 * std::numbers::pi * std::pow(rad[i], 3);
-    r.bulkDensity = 2500 * vol / (std::numbers::pi * rc * rc * (hi - lo));
+    r.bulkDensity = coreBulkDensity(snap, 0.5 * o.siloRadius, z[std::size_t(0.98 * double(z.size()))], 2500);
   }
   // The mass below the orifice's plane, sampled every 10 ms over the window after the transient; W its slope.
   const Vec3d point{0, 0, -0.001}, normal{0, 0, -1};
@@ -108,6 +101,17 @@ BeverlooRow runBeverloo(const BeverlooOptions& o, double D, compute::ExecutorKin
   r.W = (n * stm - st * sm) / (n * stt - st * st);
   r.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;
+}
+
+double coreBulkDensity(const compute::ParticleSnapshot& s, double coreRadius, double top, double rho) {
+  const Vec3d* x = s.find("position")->as<Vec3d>();
+  const double* r = s.find("radius")->as<double>();
+  const double lo = 0.25 * top, hi = 0.75 * top;
+  double vol = 0;
+  for (std::size_t i = 0; i < s.n; ++i)
+    if (x[i].z > lo && x[i].z < hi && x[i].x * x[i].x + x[i].y * x[i].y < coreRadius * coreRadius)
+      vol += 4.0 / 3.0 * std::numbers::pi * r[i] * r[i] * r[i];
+  return rho * vol / (std::numbers::pi * coreRadius * coreRadius * (hi - lo));
 }
 
 BeverlooFit fitBeverloo(const std::vector<BeverlooRow>& rows) {

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "compute/core/ExecutorKind.h"
+#include "compute/particles/ParticleSnapshot.h"
 
 namespace pflow::bench {
 
@@ -26,6 +27,11 @@ struct BeverlooFit {
   double C = 0, k = 0, bulkDensity = 0, meanDiameter = 0, worstResidual = 0;
   bool ok = false;
 };
+
+// The bulk density of a settled bed's core, shared by the silo problems (Beverloo, Janssen): the particle volume
+// (density rho) with centres in a cylinder of radius coreRadius about the z axis between a quarter and three quarters
+// of `top`, over that cylinder's volume (the volumes of the spheres it cuts average out).
+double coreBulkDensity(const compute::ParticleSnapshot& s, double coreRadius, double top, double rho);
 
 std::string beverlooScene(const BeverlooOptions& o, double D);
 BeverlooRow runBeverloo(const BeverlooOptions& o, double D, compute::ExecutorKind kind);

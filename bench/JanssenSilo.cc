@@ -6,6 +6,7 @@
 #include <numbers>
 #include <random>
 
+#include "bench/BeverlooSilo.h"
 #include "compute/dem/Simulation.h"
 
 namespace pflow::bench {
@@ -136,13 +137,7 @@ JanssenResult runJanssen(const JanssenOptions& o, compute::ExecutorKind kind) {
   const std::size_t first = std::size_t(0.98 * double(z.size()));
   for (std::size_t k = first; k < z.size(); ++k) top += z[k] / double(z.size() - first);
   res.surface = top + 0.5 * (o.rMin + o.rMax);
-  {
-    const double lo = 0.25 * res.surface, hi = 0.75 * res.surface, rc = 0.5 * o.radius;
-    double vol = 0;
-    for (std::size_t i = 0; i < snap.n; ++i)
-      if (x[i].z > lo && x[i].z < hi && x[i].x * x[i].x + x[i].y * x[i].y < rc * rc) vol += 4.0 / 3.0 * kPi * std::pow(r[i], 3);
-    res.bulkDensity = 2500 * vol / (kPi * rc * rc * (hi - lo));
-  }
+  res.bulkDensity = coreBulkDensity(snap, 0.5 * o.radius, res.surface, 2500);
   res.weight = mass * 9.81;
   res.floorLoad = -sum[2];  // the floor's force along -z is the particles' push down
   const double R = o.radius, h = o.bandHeight, floorZ = -o.floorDrop;  // bands below the lowered floor carry nothing

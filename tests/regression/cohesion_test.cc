@@ -25,7 +25,7 @@ namespace cohesion = compute::contact::cohesion;
 constexpr double kPi = std::numbers::pi;
 
 // Soft 1 mm spheres (the restitution material) with a work of adhesion of 0.5 J/m^2 among themselves and
-// with the walls (material 0 for both). Bond number F_c / m g = 230: adhesion dominates gravity.
+// with the walls (material 0 for both). Bond number F_c / m g = 23: adhesion dominates gravity.
 constexpr double kE = 1e7, kNu = 0.3, kRho = 2500, kR = 1e-3, kGamma = 0.5;
 
 RunConfig adhesiveScene(CohesionModel model, double e, double gamma = kGamma) {
@@ -40,9 +40,8 @@ RunConfig adhesiveScene(CohesionModel model, double e, double gamma = kGamma) {
 }
 double effYoung() { return 1.0 / (2 * (1 - kNu * kNu) / kE); }
 
-// The contact's JKR constants for effective radius R.
-compute::ContactParams jkrParams(double R) {
-  (void)R;
+// The contact's JKR constants (they do not depend on the radius).
+compute::ContactParams jkrParams() {
   compute::ContactParams p;
   p.effYoung = effYoung();
   compute::setCohesion(p, int(CohesionModel::kJkr), kGamma);
@@ -51,7 +50,7 @@ compute::ContactParams jkrParams(double R) {
 // JKR's critical sticking velocity of an elastic contact: the energy its break dissipates, Phi(delta_c) =
 // (1/2) m* v_c^2.
 double stickingVelocity(double effRadius, double effMass) {
-  const compute::ContactParams p = jkrParams(effRadius);
+  const compute::ContactParams p = jkrParams();
   const double dc = cohesion::jkrBreakOverlap(p.jkrBreak, effRadius);
   const double w = cohesion::jkrEnergy(p.effYoung, p.jkrB, effRadius, cohesion::jkrRootRadius(p.jkrB, effRadius, dc));
   return std::sqrt(2 * w / effMass);
@@ -81,7 +80,7 @@ bool sticks(bool wall, double v, double dtScale) {
   const auto snap = sim.value()->snapshot({"position"});
   const Vec3d* x = snap.find("position")->as<Vec3d>();
   const double separation = wall ? x[0].z - kR : std::fabs(x[1].z - x[0].z) - 2 * kR;
-  const compute::ContactParams p = jkrParams(kR);
+  const compute::ContactParams p = jkrParams();
   return separation < -cohesion::jkrBreakOverlap(p.jkrBreak, wall ? kR : kR / 2);
 }
 
@@ -140,7 +139,7 @@ TEST(Adhesion, PullOffForceUnderDisplacementControl) {
   series.interval = sim.dt();
   backend::DemSeriesRecorder recorder(sim, single, series, c.surfaceNames);
   const double fc = 1.5 * kPi * kGamma * kR;
-  const double until = settle + 8 * -cohesion::jkrBreakOverlap(jkrParams(kR).jkrBreak, kR) / vLid;
+  const double until = settle + 8 * -cohesion::jkrBreakOverlap(jkrParams().jkrBreak, kR) / vLid;
   ASSERT_TRUE(sim.runUntil(until, [&](const Simulation& s) {
     recorder.sample(s, single);
     return Status::ok();
@@ -158,7 +157,7 @@ TEST(Adhesion, PullOffForceUnderDisplacementControl) {
   EXPECT_EQ(last, 0.0) << "a contact broke: the lid carries nothing at the end";
 }
 
-// A sphere at rest on the floor under gravity 100 g (a weight of 0.44 F_c): JKR's overlap for that load, and the
+// A sphere at rest on the floor under gravity 100 g (a weight of 4.4 F_c, pressing it down): JKR's overlap for that load, and the
 // constant model's (Hertz carrying the weight plus 2 pi dgamma R), within 1 %.
 TEST(Adhesion, RestingOverlapUnderLoad) {
   const double g = 981, m = sphereMass(kR, kRho), w = m * g;
@@ -172,7 +171,7 @@ TEST(Adhesion, RestingOverlapUnderLoad) {
     ASSERT_TRUE(sim.isOk()) << sim.status().toString();
     ASSERT_TRUE(sim.value()->runUntil(0.2).isOk());
     const double overlap = kR - sim.value()->snapshot({"position"}).find("position")->as<Vec3d>()[0].z;
-    const compute::ContactParams p = jkrParams(kR);
+    const compute::ContactParams p = jkrParams();
     double expected = 0;
     if (model == CohesionModel::kJkr) {  // F_JKR(s) = w on the stable branch: bisect on s
       double lo = std::cbrt(0.25 * p.jkrB * kR), hi = 1.0;

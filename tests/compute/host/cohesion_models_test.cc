@@ -95,8 +95,12 @@ TEST(Jkr, ForceHasTheLandmarksOfTheTheory) {
   const double w = cohesion::jkrEnergy(p.effYoung, p.jkrB, R, cohesion::jkrRootRadius(p.jkrB, R, dc));
   EXPECT_GT(w, 0.0);
   EXPECT_GT(adhesionWellDepth(p, R), 0.0);
-  EXPECT_NEAR(contactEnergy(p, R, 0.5 * -dc), cohesion::jkrEnergy(p.effYoung, p.jkrB, R, cohesion::jkrRootRadius(p.jkrB, R, 0.5 * -dc)),
-              1e-20);
+  // The well's bottom is where the force is 0 (s^3 = 3/2 B R*, delta = B s / 2): contactEnergy there (solving a from
+  // delta) is minus the well depth (from s directly), and it is the minimum of the potential.
+  const double s0 = std::cbrt(1.5 * p.jkrB * R), d0 = 0.5 * p.jkrB * s0;
+  EXPECT_NEAR(contactEnergy(p, R, d0), -adhesionWellDepth(p, R), 1e-6 * adhesionWellDepth(p, R));
+  EXPECT_GT(contactEnergy(p, R, 0.9 * d0), contactEnergy(p, R, d0));
+  EXPECT_GT(contactEnergy(p, R, 1.1 * d0), contactEnergy(p, R, d0));
 }
 
 TEST(Jkr, DashpotActsOnlyInCompressionAndNeverPullsBeyondHertz) {
