@@ -116,6 +116,7 @@ void printJob(const mv1::Job& j) {
   std::printf("  progress   step %lld / %lld (%.1f%%), t = %.4g / %.4g s, %.3g particle-steps/s, ETA %s\n", (long long)p.step(),
               (long long)p.total_steps(), percent(j), p.time(), p.duration(), p.particle_steps_per_second(), duration(p.eta_seconds()).c_str());
   std::printf("  model      %s\n", j.model_uri().c_str());
+  if (!j.slurm_job_id().empty()) std::printf("  slurm job  %s (squeue -j %s)\n", j.slurm_job_id().c_str(), j.slurm_job_id().c_str());
   if (!j.model().empty()) std::printf("  computes (the least model the scene needs):\n%s", j.model().c_str());
 }
 
@@ -305,7 +306,11 @@ int listNodes(const Endpoints& e, bool json) {
       std::printf("%-14s %-8s %-30s %-6s %17s %5.0f%% %6s %s\n", n.name().c_str(), dev.c_str(), d.name().substr(0, 30).c_str(),
                   n.lost() ? "lost" : stateOf(d.state()), mem, 100 * d.utilization(), temp, d.job_id().empty() ? "-" : d.job_id().c_str());
     }
-  if (resp.nodes().empty()) std::printf("(no nodes: start a pflow-agent)\n");
+  for (const auto& n : resp.nodes())  // placement through Slurm: the node's own state, as Slurm says it
+    if (!n.slurm_state().empty())
+      std::printf("%s: Slurm state %s%s, CPU load %.2f\n", n.name().c_str(), n.slurm_state().c_str(),
+                  n.slurm_reason().empty() ? "" : (" (" + n.slurm_reason() + ")").c_str(), n.cpu_load());
+  if (resp.nodes().empty()) std::printf("(no nodes: start a pflow-agent, or check the manager's Slurm partition)\n");
   return kExitOk;
 }
 

@@ -20,6 +20,7 @@ packages=(
   libssl-dev openssl                # token hashes; the pflow CA and service certificates (deploy/local/certs.sh)
   libcpp-httplib-dev                # pflow-web (the web viewer's HTTP side)
   chromium fonts-dejavu-core        # pflow render and the browser tests (headless, software WebGL)
+  slurm-wlm munge                   # --placement slurm and its tests (deploy/slurm/: a one-node cluster on loopback)
 )
 # Node.js and npm bundle the viewer's page (web/): the machine's own when present, else Debian's.
 command -v node >/dev/null && command -v npm >/dev/null || packages+=(nodejs npm)

@@ -33,6 +33,14 @@ struct ParticleSetInfo {
   double regionVolume = 0;        // [m^3]; 0 when the set has no region (list)
 };
 
+// The scene's `slurm:` section: what its job asks of Slurm when the manager places jobs through Slurm
+// (docs/cluster.md); empty fields take the manager's defaults. Under agents it has no effect.
+struct SlurmRequest {
+  std::string partition;
+  std::string account;
+  std::string timeLimit;  // Slurm's formats: MM, MM:SS, HH:MM:SS, D-HH, D-HH:MM, D-HH:MM:SS, UNLIMITED
+};
+
 struct LoadedScene {
   compute::RunConfig config;
   std::string sourcePath;  // the file read, or the sourceName given to loadSceneFromString
@@ -42,6 +50,7 @@ struct LoadedScene {
   std::vector<SurfaceInfo> surfaces;      // by surface number
   std::vector<ParticleSetInfo> sets;
   std::vector<std::string> files;         // files the scene refers to (meshes, CSV), as written, relative to it
+  SlurmRequest slurm;                     // slurm: (placement through Slurm)
 };
 
 // Where relative file names point, and limits that protect a process (a service, a fuzzer) from scenes that would

@@ -36,6 +36,7 @@ Result<BuiltModel> GrpcFrontendClient::buildScene(const std::string& sceneYaml, 
   m.steps = resp.summary().steps();
   m.duration = resp.summary().duration();
   m.model = resp.summary().model();
+  m.slurm = {resp.summary().slurm_partition(), resp.summary().slurm_account(), resp.summary().slurm_time_limit()};
   return m;
 }
 

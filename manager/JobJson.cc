@@ -40,6 +40,7 @@ json toJson(const mv1::Job& j) {
           {"attempts", j.attempts()},
           {"max_attempts", j.max_attempts()},
           {"model", j.model()},
+          {"slurm_job_id", j.slurm_job_id()},
           {"progress",
            {{"step", p.step()},
             {"total_steps", p.total_steps()},
@@ -58,7 +59,13 @@ json toJson(const mv1::Node& n) {
     devs.push_back({{"index", d.ref().index()}, {"kind", d.ref().kind() == common::v1::DEVICE_KIND_GPU ? "gpu" : "cpu"}, {"name", d.name()},
                     {"state", stateOf(d.state())}, {"job", d.job_id()}, {"memory_total_bytes", d.memory_total_bytes()},
                     {"memory_used_bytes", d.memory_used_bytes()}, {"utilization", d.utilization()}, {"temperature_c", d.temperature_c()}});
-  return {{"node", n.name()}, {"agent", n.agent_address()}, {"lost", n.lost()}, {"last_heartbeat", n.last_heartbeat()}, {"devices", devs}};
+  json out = {{"node", n.name()}, {"agent", n.agent_address()}, {"lost", n.lost()}, {"last_heartbeat", n.last_heartbeat()}, {"devices", devs}};
+  if (!n.slurm_state().empty()) {
+    out["slurm_state"] = n.slurm_state();
+    out["slurm_reason"] = n.slurm_reason();
+    out["cpu_load"] = n.cpu_load();
+  }
+  return out;
 }
 
 json toJson(const mv1::JobEvent& e) { return {{"job", toJson(e.job())}, {"message", e.message()}}; }

@@ -11,7 +11,8 @@
 namespace pflow::manager {
 namespace {
 
-constexpr int kSchemaVersion = 4;  // 2: jobs.model; 3: REQUEUED, jobs.attempts, jobs.max_attempts; 4: BUILDING, jobs.owner, max_seq
+constexpr int kSchemaVersion = 5;  // 2: jobs.model; 3: REQUEUED, jobs.attempts, jobs.max_attempts; 4: BUILDING, jobs.owner, max_seq;
+                                   // 5: jobs.slurm_job_id, slurm_partition, slurm_account, slurm_time_limit
 
 // The jobs table's columns and constraints (also the migration's new table).
 constexpr const char* kJobColumns = R"sql((
@@ -42,7 +43,11 @@ constexpr const char* kJobColumns = R"sql((
   message TEXT NOT NULL,
   attempts INTEGER NOT NULL DEFAULT 0,
   max_attempts INTEGER NOT NULL DEFAULT 0,
-  owner TEXT NOT NULL DEFAULT ''))sql";
+  owner TEXT NOT NULL DEFAULT '',
+  slurm_job_id TEXT NOT NULL DEFAULT '',
+  slurm_partition TEXT NOT NULL DEFAULT '',
+  slurm_account TEXT NOT NULL DEFAULT '',
+  slurm_time_limit TEXT NOT NULL DEFAULT ''))sql";
 
 constexpr const char* kOtherTables = R"sql(
 CREATE TABLE IF NOT EXISTS job_devices(
@@ -111,13 +116,25 @@ Result<std::unique_ptr<JobStore>> JobStore::open(const std::string& path) {
                               ", attempts, max_attempts) SELECT " + kOldColumns + ", " + attempts + " FROM jobs; " +
                               "DROP TABLE jobs; ALTER TABLE jobs_v4 RENAME TO jobs; " +
                               (hasMaxSeq ? "" : "ALTER TABLE schema_info ADD COLUMN max_seq INTEGER NOT NULL DEFAULT 0; ") +
-                              "UPDATE schema_info SET version = 4, max_seq = (SELECT IFNULL(MAX(seq), 0) FROM jobs); COMMIT;";
+                              "UPDATE schema_info SET version = 5, max_seq = (SELECT IFNULL(MAX(seq), 0) FROM jobs); COMMIT;";  // the new table has every column
       if (Status s = store->exec("PRAGMA foreign_keys=OFF;"); !s) return s;
       Status migrated = store->exec(sql.c_str());
       if (!migrated) store->exec("ROLLBACK;");
       if (Status s = store->exec("PRAGMA foreign_keys=ON;"); !s) return s;
       if (!migrated) return migrated;
-      v = 4;
+      v = 5;
+    }
+    if (v == 4) {  // 5: the Slurm job of a job's current attempt (placement through Slurm)
+      if (Status s = store->exec("BEGIN IMMEDIATE; ALTER TABLE jobs ADD COLUMN slurm_job_id TEXT NOT NULL DEFAULT ''; "
+                                 "ALTER TABLE jobs ADD COLUMN slurm_partition TEXT NOT NULL DEFAULT ''; "
+                                 "ALTER TABLE jobs ADD COLUMN slurm_account TEXT NOT NULL DEFAULT ''; "
+                                 "ALTER TABLE jobs ADD COLUMN slurm_time_limit TEXT NOT NULL DEFAULT ''; "
+                                 "UPDATE schema_info SET version = 5; COMMIT;");
+          !s) {
+        store->exec("ROLLBACK;");
+        return s;
+      }
+      v = 5;
     }
     if (v != kSchemaVersion)
       return failedPrecondition("job database " + path + " has schema version " + std::to_string(v) + "; this manager knows " +
@@ -157,8 +174,10 @@ Status JobStore::save(const Job& job) {
     Stmt st(m_db, R"sql(
 INSERT INTO jobs(seq, id, name, state, reason, scene_name, model_id, model_uri, particles, memory_bytes, max_devices, wait,
                  submitted_at, started_at, finished_at, exit_code, step, total_steps, sim_time, sim_duration,
-                 particle_steps_per_second, eta_seconds, progress_at, message, model, attempts, max_attempts, owner)
-VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18, ?19, ?20, ?21, ?22, ?23, ?24, ?25, ?26, ?27, ?28)
+                 particle_steps_per_second, eta_seconds, progress_at, message, model, attempts, max_attempts, owner, slurm_job_id,
+                 slurm_partition, slurm_account, slurm_time_limit)
+VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18, ?19, ?20, ?21, ?22, ?23, ?24, ?25, ?26, ?27, ?28, ?29,
+       ?30, ?31, ?32)
 ON CONFLICT(id) DO UPDATE SET
   name=excluded.name, state=excluded.state, reason=excluded.reason, scene_name=excluded.scene_name,
   model_id=excluded.model_id, model_uri=excluded.model_uri, particles=excluded.particles,
@@ -167,7 +186,8 @@ ON CONFLICT(id) DO UPDATE SET
   exit_code=excluded.exit_code, step=excluded.step, total_steps=excluded.total_steps, sim_time=excluded.sim_time,
   sim_duration=excluded.sim_duration, particle_steps_per_second=excluded.particle_steps_per_second,
   eta_seconds=excluded.eta_seconds, progress_at=excluded.progress_at, message=excluded.message, model=excluded.model,
-  attempts=excluded.attempts, max_attempts=excluded.max_attempts, owner=excluded.owner
+  attempts=excluded.attempts, max_attempts=excluded.max_attempts, owner=excluded.owner, slurm_job_id=excluded.slurm_job_id,
+  slurm_partition=excluded.slurm_partition, slurm_account=excluded.slurm_account, slurm_time_limit=excluded.slurm_time_limit
 )sql");
     if (!st.ok()) return fail("preparing the job update");
     st.i64(1, job.seq);
@@ -198,6 +218,10 @@ ON CONFLICT(id) DO UPDATE SET
     st.i64(26, job.attempts);
     st.i64(27, job.maxAttempts);
     st.text(28, job.owner);
+    st.text(29, job.slurmJobId);
+    st.text(30, job.slurm.partition);
+    st.text(31, job.slurm.account);
+    st.text(32, job.slurm.timeLimit);
     if (st.step() != SQLITE_DONE) return fail("saving job " + job.id);
   }
   {
@@ -238,7 +262,8 @@ Result<std::vector<Job>> JobStore::loadAll() const {
     Stmt st(m_db, R"sql(
 SELECT seq, id, name, state, reason, scene_name, model_id, model_uri, particles, memory_bytes, max_devices, wait,
        submitted_at, started_at, finished_at, exit_code, step, total_steps, sim_time, sim_duration,
-       particle_steps_per_second, eta_seconds, progress_at, message, model, attempts, max_attempts, owner
+       particle_steps_per_second, eta_seconds, progress_at, message, model, attempts, max_attempts, owner, slurm_job_id,
+       slurm_partition, slurm_account, slurm_time_limit
 FROM jobs ORDER BY seq)sql");
     if (!st.ok()) return error("preparing the job query");
     int rc;
@@ -274,6 +299,8 @@ FROM jobs ORDER BY seq)sql");
       j.attempts = static_cast<int>(st.colI64(25));
       j.maxAttempts = static_cast<int>(st.colI64(26));
       j.owner = st.colText(27);
+      j.slurmJobId = st.colText(28);
+      j.slurm = {st.colText(29), st.colText(30), st.colText(31)};
       index[j.id] = jobs.size();
       jobs.push_back(std::move(j));
     }

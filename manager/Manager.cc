@@ -23,13 +23,17 @@ Manager::Manager(ManagerOptions options, const Clock& clock, JobStore& store, Ag
       m_inventory(clock, m_options.heartbeatTimeoutSeconds, m_options.forgetLostNodeSeconds) {}
 
 Result<std::unique_ptr<Manager>> Manager::create(ManagerOptions options, const Clock& clock, JobStore& store,
-                                                 AgentClient& agents, FrontendClient& frontend) {
+                                                 AgentClient& agents, FrontendClient& frontend, slurm::SlurmClient* slurm) {
   if (!(options.heartbeatTimeoutSeconds > 0) || !(options.heartbeatIntervalSeconds > 0) || !(options.missingJobGraceSeconds > 0))
     return invalidArgument("manager: heartbeat timeout, interval and missing-job grace must be positive");
   if (options.maxAttempts < 1) return invalidArgument("manager: --max-attempts must be at least 1 (" + std::to_string(options.maxAttempts) + ")");
   if (options.thresholds.particlesPerGpu == 0 || options.thresholds.particlesPerCpuSlot == 0)
     return invalidArgument("manager: particles per GPU and per CPU slot must be positive");
+  if (options.slurm && !slurm) return invalidArgument("manager: placement through Slurm needs a Slurm client");
+  if (options.slurm && options.slurm->workdir.empty())
+    return invalidArgument("manager: placement through Slurm needs a work folder every node sees (--slurm-workdir)");
   std::unique_ptr<Manager> m(new Manager(std::move(options), clock, store, agents, frontend));
+  if (m->m_options.slurm) m->m_slurm = slurm;
   auto jobs = store.loadAll();
   if (!jobs) return jobs.status();
   int active = 0, queued = 0;
@@ -127,12 +131,17 @@ Lease Manager::leaseFor(const Job& job) const {
 }
 
 void Manager::stopAction(const Job& job, Actions& actions) const {
+  if (usesSlurm()) {
+    if (!job.slurmJobId.empty()) actions.push_back({Action::Kind::kStop, job.id, job.slurmJobId, {}, {}, {}});
+    return;
+  }
   const std::string lead = leadNode(job);
   if (lead.empty() || !m_inventory.isKnown(lead) || m_inventory.isLost(lead)) return;
-  actions.push_back({Action::Kind::kStop, job.id, m_inventory.agentAddress(lead), {}});
+  actions.push_back({Action::Kind::kStop, job.id, m_inventory.agentAddress(lead), {}, {}, {}});
 }
 
 void Manager::scheduleLocked(Actions& actions) {
+  if (usesSlurm()) return scheduleSlurmLocked(actions);
   std::vector<std::string> queue;
   for (const Job* j : m_jobs.queued()) queue.push_back(j->id);
   for (const std::string& id : queue) {
@@ -146,7 +155,7 @@ void Manager::scheduleLocked(Actions& actions) {
     if (!commitLocked(next, "starting on " + describeDevices(p.devices))) break;
     m_runtime[id] = Runtime{};
     const Job& started = *m_jobs.find(id);
-    actions.push_back({Action::Kind::kStart, id, m_inventory.agentAddress(leadNode(started)), leaseFor(started)});
+    actions.push_back({Action::Kind::kStart, id, m_inventory.agentAddress(leadNode(started)), leaseFor(started), {}, {}});
   }
 }
 
@@ -155,12 +164,16 @@ void Manager::runActions(Actions actions) {
     Action a = std::move(actions.front());
     actions.erase(actions.begin());
     Actions more;
-    if (a.kind == Action::Kind::kStart) {
+    if (a.kind == Action::Kind::kSubmit) {
+      const auto r = submitToSlurm(a);
+      std::lock_guard lock(m_mu);
+      applySubmit(a, r, more);
+    } else if (a.kind == Action::Kind::kStart) {
       const auto r = m_agents.startJob(a.address, a.lease);
       std::lock_guard lock(m_mu);
       applyStart(a, r, more);
     } else {
-      const Status s = m_agents.stopJob(a.address, a.jobId);
+      const Status s = usesSlurm() ? m_slurm->cancel(a.address) : m_agents.stopJob(a.address, a.jobId);
       std::lock_guard lock(m_mu);
       applyStop(a, s, more);
     }
@@ -196,7 +209,11 @@ void Manager::applyStart(const Action& a, const Result<std::int64_t>& r, Actions
 }
 
 void Manager::applyStop(const Action& a, const Status& s, Actions& more) {
-  if (s) return;  // the exit report finishes the job
+  if (s) return;  // the exit report (agents) or Slurm's final state (Slurm) finishes the job
+  if (usesSlurm()) {
+    spdlog::warn("manager: scancel {} for {}: {} (asked again at the next cancel)", a.address, a.jobId, s.toString());
+    return;
+  }
   const Job* job = m_jobs.find(a.jobId);
   if (!job) return;
   if (s.code() == StatusCode::kNotFound && job->state == JobState::kCancelling) {
@@ -214,6 +231,9 @@ void Manager::applyStop(const Action& a, const Status& s, Actions& more) {
 
 Result<HeartbeatReply> Manager::heartbeat(const HeartbeatInfo& hb) {
   if (Status s = Inventory::validateHeartbeat(hb); !s) return s;
+  if (usesSlurm())
+    return failedPrecondition("this manager places jobs through Slurm (--placement slurm): node agents have no part; stop the agent on " +
+                              hb.node);
   HeartbeatReply reply;
   reply.heartbeatIntervalSeconds = m_options.heartbeatIntervalSeconds;
   Actions actions;
@@ -347,6 +367,7 @@ Status Manager::reportExit(const std::string& jobId, const std::string& node, in
 }
 
 void Manager::checkNodesLocked(Actions& actions) {
+  if (usesSlurm()) return;  // Slurm watches its nodes: a lost node ends the job NODE_FAIL (pollSlurm)
   const double now = m_clock.now();
   std::vector<std::string> forgotten;
   for (const std::string& node : m_inventory.expireLost(&forgotten))
@@ -389,6 +410,7 @@ void Manager::checkNodesLocked(Actions& actions) {
 }
 
 void Manager::tick() {
+  if (usesSlurm()) pollSlurm();
   Actions actions;
   {
     std::lock_guard lock(m_mu);
@@ -405,6 +427,7 @@ void Manager::setManagerAddress(const std::string& address) {
 
 std::vector<NodeView> Manager::nodes() const {
   std::lock_guard lock(m_mu);
+  if (usesSlurm()) return m_slurmNodes;
   return m_inventory.snapshot();
 }
 

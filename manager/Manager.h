@@ -17,6 +17,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,8 @@
 #include "manager/JobTable.h"
 #include "manager/Placement.h"
 #include "manager/Types.h"
+#include "manager/slurm/SlurmClient.h"
+#include "manager/slurm/SlurmPlacement.h"
 
 namespace pflow::manager {
 
@@ -44,6 +47,10 @@ struct ManagerOptions {
   int maxAttempts = 3;
   std::string managerAddress;            // put in leases: where workers report progress
   std::string backendAddress;            // put in leases: where workers send snapshots
+  // Placement through Slurm (pflow-manager --placement slurm): Slurm owns the nodes and the queue; the manager
+  // submits each attempt with sbatch, follows it through scontrol and cancels it with scancel (ManagerSlurm.cc).
+  // Unset: the agents place jobs.
+  std::optional<slurm::SlurmSettings> slurm;
 };
 
 class Manager {
@@ -52,8 +59,10 @@ class Manager {
 
   // Loads every job and lease from `store`. Jobs that were starting, running or cancelling stay so and re-attach
   // when their agents heartbeat (see heartbeat() and tick()).
+  // With options.slurm, `slurm` is the client to Slurm (required) and `agents` is never called.
   static Result<std::unique_ptr<Manager>> create(ManagerOptions options, const Clock& clock, JobStore& store,
-                                                 AgentClient& agents, FrontendClient& frontend);
+                                                 AgentClient& agents, FrontendClient& frontend,
+                                                 slurm::SlurmClient* slurm = nullptr);
 
   // Builds the scene through the frontend, stores the job QUEUED and schedules it (it may come back STARTING or
   // RUNNING). Refused (nothing stored): RESOURCE_EXHAUSTED when too few devices are free and !wait (or other jobs
@@ -113,10 +122,12 @@ class Manager {
 
  private:
   struct Action {
-    enum class Kind { kStart, kStop } kind;
+    enum class Kind { kStart, kStop, kSubmit } kind;
     std::string jobId;
-    std::string address;
+    std::string address;       // agents: the agent's; Slurm: the Slurm job id to cancel
     Lease lease;
+    slurm::Submission submission;  // kSubmit: sbatch's request and the script it runs
+    std::string script;
   };
   static constexpr double kProgressSaveSeconds = 10;
   struct Runtime {
@@ -145,6 +156,8 @@ class Manager {
   Lease leaseFor(const Job& job) const;
   void stopAction(const Job& job, Actions& actions) const;
   Status checkAccess(const Principal& who, const std::string& id) const;
+  // Placement of `request` now: agents over the inventory; Slurm whether it could ever fit on Slurm's nodes.
+  Placement placeLocked(const PlacementRequest& request) const;
   // Fields of a submission and a cheap never-fits check (before an expensive build).
   Status checkSubmit(const SubmitRequest& req) const;
   // A job from a submission (no seq, id or state yet).
@@ -155,6 +168,16 @@ class Manager {
   void runActions(Actions actions);
   void applyStart(const Action& a, const Result<std::int64_t>& result, Actions& more);
   void applyStop(const Action& a, const Status& result, Actions& more);
+  // Placement through Slurm (ManagerSlurm.cc).
+  bool usesSlurm() const { return m_slurm != nullptr; }
+  void scheduleSlurmLocked(Actions& actions);
+  void applySubmit(const Action& a, const Result<std::string>& result, Actions& more);
+  Result<std::string> submitToSlurm(const Action& a);
+  void pollSlurm();  // jobs and nodes from slurmctld (outside the lock), then applySlurmLocked
+  void applySlurmLocked(const std::vector<slurm::JobInfo>& jobs, const std::vector<slurm::NodeInfo>& nodes, Actions& actions);
+  void applySlurmJobLocked(const Job& job, const slurm::JobInfo* info);
+  // A waiting job whose Slurm job ran: STARTING on the devices Slurm gave it (so it may end as a started job does).
+  Job startedFromSlurmLocked(const Job& job, const slurm::JobInfo& info);
 
   ManagerOptions m_options;
   const Clock& m_clock;
@@ -170,6 +193,14 @@ class Manager {
   std::map<std::uint64_t, Watcher> m_watchers;
   std::uint64_t m_nextWatcher = 1;
   double m_loadedAt = 0;
+
+  slurm::SlurmClient* m_slurm = nullptr;
+  std::vector<NodeView> m_slurmNodes;    // Slurm's nodes as last read (nodes(), placement)
+  bool m_slurmNodesKnown = false;
+  bool m_slurmAdopted = false;           // the first poll after a start adopted attempts submitted but not recorded
+  double m_slurmPolledAt = -1e300;
+  std::set<std::string> m_submitting;    // jobs whose sbatch is in flight
+  std::mutex m_pollMu;                   // one poll at a time
 };
 
 }  // namespace pflow::manager

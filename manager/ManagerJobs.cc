@@ -32,10 +32,27 @@ Status Manager::checkSubmit(const SubmitRequest& req) const {
 
   {  // cheap refusal before an expensive build
     std::lock_guard lock(m_mu);
-    const Placement p = place({1, 0, 0}, m_inventory.snapshot(), m_options.thresholds);
+    const Placement p = placeLocked({1, 0, 0});
     if (p.outcome == PlacementOutcome::kNeverFits) return failedPrecondition("job refused: " + p.reason);
   }
   return Status::ok();
+}
+
+Placement Manager::placeLocked(const PlacementRequest& request) const {
+  if (!usesSlurm()) return place(request, m_inventory.snapshot(), m_options.thresholds);
+  // Slurm queues a job until its devices are free: only whether it could ever fit counts here, and before the first
+  // read of Slurm's nodes not even that (scheduleSlurmLocked checks it again).
+  Placement p;
+  p.outcome = PlacementOutcome::kPlaced;
+  if (!m_slurmNodesKnown) return p;
+  std::vector<NodeView> all = m_slurmNodes;
+  for (NodeView& n : all)
+    for (DeviceView& d : n.devices)
+      if (d.state == DeviceState::kBusy) d.state = DeviceState::kFree;
+  p = place(request, all, m_options.thresholds);
+  if (p.outcome == PlacementOutcome::kWait) p.outcome = PlacementOutcome::kPlaced;
+  if (p.outcome == PlacementOutcome::kPlaced) p.reason.clear();
+  return p;
 }
 
 Job Manager::jobFor(const SubmitRequest& req) const {
@@ -53,7 +70,7 @@ Job Manager::jobFor(const SubmitRequest& req) const {
 Status Manager::admitLocked(Job& j, const Result<BuiltModel>& model, std::string& event) const {
   if (!model) return model.status();
   if (model->particles == 0) return invalidArgument("scene '" + j.sceneName + "' has no particles: nothing to simulate");
-  const Placement p = place({model->particles, model->memoryBytes, j.maxDevices}, m_inventory.snapshot(), m_options.thresholds);
+  const Placement p = placeLocked({model->particles, model->memoryBytes, j.maxDevices});
   if (p.outcome == PlacementOutcome::kNeverFits) return failedPrecondition("job refused: " + p.reason);
   std::size_t ahead = 0;
   for (const Job* q : m_jobs.queued()) ahead += q->id != j.id;
@@ -66,6 +83,7 @@ Status Manager::admitLocked(Job& j, const Result<BuiltModel>& model, std::string
   j.particles = model->particles;
   j.memoryBytes = model->memoryBytes;
   j.model = model->model;
+  j.slurm = model->slurm;
   j.progress.totalSteps = model->steps;
   j.progress.duration = model->duration;
   event = p.outcome == PlacementOutcome::kWait ? "queued: the job " + p.reason : "queued";
@@ -217,10 +235,13 @@ Result<Job> Manager::cancel(const std::string& id) {
         endLocked(*j, JobState::kCancelled, "cancelled while its scene was built", std::nullopt, "cancelled while building");
         break;
       case JobState::kQueued:
-      case JobState::kRequeued:
-        endLocked(*j, JobState::kCancelled, "cancelled while queued", std::nullopt, "cancelled while queued");
-        scheduleLocked(actions);  // the jobs behind it may fit now
+      case JobState::kRequeued: {
+        const Job queued = *j;
+        endLocked(queued, JobState::kCancelled, "cancelled while queued", std::nullopt, "cancelled while queued");
+        if (usesSlurm()) stopAction(queued, actions);  // scancel the pending Slurm job
+        scheduleLocked(actions);      // the jobs behind it may fit now
         break;
+      }
       case JobState::kStarting:
       case JobState::kRunning: {
         Job next = *j;

@@ -52,6 +52,7 @@ mv1::Job toProto(const Job& j) {
   p.set_attempts(j.attempts);
   p.set_max_attempts(j.maxAttempts);
   p.set_owner(j.owner);
+  p.set_slurm_job_id(j.slurmJobId);
   return p;
 }
 
@@ -61,6 +62,9 @@ mv1::Node toProto(const NodeView& n) {
   p.set_agent_address(n.agentAddress);
   p.set_lost(n.lost);
   p.set_last_heartbeat(n.lastHeartbeat);
+  p.set_slurm_state(n.slurmState);
+  p.set_slurm_reason(n.slurmReason);
+  p.set_cpu_load(n.cpuLoad);
   for (const DeviceView& d : n.devices) {
     auto* pd = p.add_devices();
     *pd->mutable_ref() = toProto(d.info.key);

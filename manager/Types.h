@@ -49,6 +49,10 @@ struct NodeView {
   bool lost = false;
   double lastHeartbeat = 0;
   std::vector<DeviceView> devices;
+  // Placement through Slurm (agentAddress "slurm"): the node's state and reason as Slurm reports them, its load.
+  std::string slurmState;
+  std::string slurmReason;
+  double cpuLoad = -1;  // -1 = unknown
 };
 
 // ---- jobs --------------------------------------------------------------------------------------------------------
@@ -62,6 +66,13 @@ std::optional<JobState> jobStateFromName(const std::string& name);
 bool isFinal(JobState state);         // succeeded, failed, cancelled
 bool isWaiting(JobState state);       // queued, requeued: in the queue
 bool holdsDevices(JobState state);    // starting, running, cancelling: the job has a lease
+
+// What a scene asks of Slurm (its slurm: section; frontend/SceneLoader.h), carried to the job.
+struct SlurmRequest {
+  std::string partition;
+  std::string account;
+  std::string timeLimit;
+};
 
 struct Progress {
   std::int64_t step = 0;
@@ -97,6 +108,8 @@ struct Job {
   int attempts = 0;                   // how many times it was started (the current attempt's number once started)
   int maxAttempts = 0;                // the manager's --max-attempts when it was submitted (0: the manager's now)
   std::string owner;                  // the user who submitted it ("" for jobs from before users existed: admins only)
+  std::string slurmJobId;             // placement through Slurm: the Slurm job of its current attempt ("" = none yet)
+  SlurmRequest slurm;                 // the scene's partition, account and time limit ("": the manager's defaults)
 };
 
 // The user a ManagerService call comes from (by its bearer token; docs/security.md): the adapter establishes it,
@@ -146,6 +159,7 @@ struct BuiltModel {
   std::int64_t steps = 0;
   double duration = 0;  // simulated, s
   std::string model;    // the least model's decisions, one per line (pflow validate's "Model" section)
+  SlurmRequest slurm;   // the scene's slurm: section
 };
 
 struct HeartbeatInfo {

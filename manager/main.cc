@@ -11,6 +11,7 @@
 
 #include <atomic>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <chrono>
 #include <condition_variable>
@@ -22,6 +23,7 @@
 #include "common/Log.h"
 #include "common/rpc/Rpc.h"
 #include "manager/GrpcAgentClient.h"
+#include "manager/slurm/SlurmCommands.h"
 #include "manager/GrpcFrontendClient.h"
 #include "manager/JobStore.h"
 #include "manager/Manager.h"
@@ -100,6 +102,33 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(1, 4096));
   app.add_option("--log-level", logLevel, "trace, debug, info, warn, error")->capture_default_str();
+  // Placement (docs/cluster.md): the agents, or Slurm.
+  std::string placement = "agents", slurmBin, slurmWorkerTlsDir;
+  slurm::SlurmSettings slurmSettings;
+  double slurmGpuMemoryGiB = 0, slurmTimeout = 30;
+  app.add_option("--placement", placement, "who places jobs: agents (pflow-agent on each node) or slurm (sbatch/scontrol/scancel)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"agents", "slurm"}));
+  app.add_option("--slurm-workdir", slurmSettings.workdir,
+                 "with --placement slurm: folder for batch scripts and workers' logs, at the same path on every node");
+  app.add_option("--slurm-worker", slurmSettings.workerPath, "the worker program as the nodes find it")->capture_default_str();
+  app.add_option("--slurm-partition", slurmSettings.partition, "partition for every job (and the only one whose nodes count)");
+  app.add_option("--slurm-account", slurmSettings.account, "account for every job");
+  app.add_option("--slurm-time-limit", slurmSettings.timeLimit, "time limit for every job, in Slurm's formats (e.g. 1-00:00:00)");
+  app.add_option("--slurm-mpi", slurmSettings.mpi, "srun --mpi plugin for the workers")->capture_default_str();
+  app.add_option("--slurm-cpus-per-task", slurmSettings.cpusPerTask, "CPUs (OpenMP threads) of each rank of a CPU job")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1024));
+  app.add_option("--slurm-gpu-memory", slurmGpuMemoryGiB, "memory of one GPU in GiB (GRES does not say; 0: unknown, no memory minimum)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--slurm-poll", slurmSettings.pollSeconds, "seconds between reads of Slurm's jobs and nodes")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--slurm-bin", slurmBin, "folder of sbatch, scontrol and scancel (default: PATH)");
+  app.add_option("--slurm-timeout", slurmTimeout, "seconds a Slurm command may take")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--slurm-worker-tls-dir", slurmWorkerTlsDir,
+                 "TLS folder on the nodes with each node's certificate (node-NAME.crt/.key) for workers (default: --tls-dir)");
   rpc::TransportFlags transportFlags;
   transportFlags.add(app);
   std::string adminTokenFile, addUser, rotateUser;
@@ -185,7 +214,24 @@ int main(int argc, char** argv) {
   if (!backendAddress.empty()) jobData = makeGrpcJobDataClient(backendAddress);
 
   options.managerAddress = advertise;
-  auto manager = Manager::create(options, clock, *store.value(), agents, frontend);
+  std::unique_ptr<slurm::SlurmCommands> slurmClient;
+  if (placement == "slurm") {
+    if (slurmSettings.workdir.empty()) {
+      spdlog::error("--placement slurm needs --slurm-workdir: a folder every node sees at the same path (scripts and logs)");
+      return 1;
+    }
+    slurmSettings.workdir = std::filesystem::absolute(slurmSettings.workdir).lexically_normal().string();
+    slurmSettings.gpuMemoryBytes = std::uint64_t(slurmGpuMemoryGiB * double(1ull << 30));
+    if (slurmSettings.workerPath.find('/') != std::string::npos)  // a path, not a name for PATH: the same on every node
+      slurmSettings.workerPath = std::filesystem::absolute(slurmSettings.workerPath).lexically_normal().string();
+    slurmSettings.transportArgs = transportFlags.insecure ? std::vector<std::string>{"--insecure"}
+                                                          : std::vector<std::string>{"--tls-dir", slurmWorkerTlsDir.empty() ? transportFlags.tlsDir : slurmWorkerTlsDir};
+    options.slurm = slurmSettings;
+    slurmClient = std::make_unique<slurm::SlurmCommands>(slurm::CommandsConfig{slurmBin, slurmTimeout});
+    spdlog::info("manager: placement through Slurm (work folder {}, partition {}, worker {})", slurmSettings.workdir,
+                 slurmSettings.partition.empty() ? "the cluster's default" : slurmSettings.partition, slurmSettings.workerPath);
+  }
+  auto manager = Manager::create(options, clock, *store.value(), agents, frontend, slurmClient.get());
   if (!manager) {
     spdlog::error("{}", manager.status().toString());
     return 1;

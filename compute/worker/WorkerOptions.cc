@@ -27,4 +27,22 @@ Result<std::vector<LeasedDevice>> parseDevices(const std::string& list) {
   return out;
 }
 
+Result<LeasedDevice> slurmDevice(const std::string& kind, const char* (*env)(const char*)) {
+  if (kind != "gpu" && kind != "cpu") return invalidArgument("--devices slurm:" + kind + ": kind must be gpu or cpu");
+  const char* node = env("SLURMD_NODENAME");
+  const char* local = env("SLURM_LOCALID");
+  if (!node || !*node || !local)
+    return invalidArgument("--devices slurm:" + kind + ": SLURMD_NODENAME and SLURM_LOCALID are not set (start the worker with srun)");
+  LeasedDevice d{node, kind, 0};
+  const std::string localId = local;
+  const auto [p, ec] = std::from_chars(localId.data(), localId.data() + localId.size(), d.index);
+  if (ec != std::errc() || p != localId.data() + localId.size() || d.index < 0)
+    return invalidArgument("--devices slurm:" + kind + ": SLURM_LOCALID '" + localId + "' is not an integer >= 0");
+  if (kind == "gpu") {
+    const char* visible = env("CUDA_VISIBLE_DEVICES");
+    if (visible && *visible && std::string(visible).find(',') == std::string::npos) d.index = 0;  // its own GPU only
+  }
+  return d;
+}
+
 }  // namespace pflow::worker

@@ -39,4 +39,10 @@ struct WorkerOptions {
 // "node:gpu:0,node:cpu:1" -> devices; errors name the entry.
 Result<std::vector<LeasedDevice>> parseDevices(const std::string& list);
 
+// Under Slurm (--devices slurm:gpu or slurm:cpu; the manager's --placement slurm): this rank's device from the
+// environment srun gives each task: the node SLURMD_NODENAME; a GPU task's device is the one GPU Slurm made visible
+// to it (index 0 when CUDA_VISIBLE_DEVICES names exactly one), else its SLURM_LOCALID-th; a CPU task's slot its
+// SLURM_LOCALID. `env` looks a variable up (nullptr when unset). INVALID_ARGUMENT outside srun.
+Result<LeasedDevice> slurmDevice(const std::string& kind, const char* (*env)(const char*));
+
 }  // namespace pflow::worker

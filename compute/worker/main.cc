@@ -46,6 +46,32 @@ using worker::ProgressReporter;
 
 void onStopSignal(int) { worker::g_stopSignal = 1; }
 
+const char* environment(const char* name) { return std::getenv(name); }
+
+// --devices slurm:KIND: each rank's device from srun's environment, shared with every rank (collective).
+Result<std::vector<worker::LeasedDevice>> slurmDevices(const std::string& kind, int rank, int size) {
+  auto mine = worker::slurmDevice(kind, environment);
+  constexpr int kName = 256;
+  std::vector<char> names(std::size_t(kName) * std::size_t(size), '\0');
+  std::vector<int> indices(std::size_t(size), -1);
+  char own[kName] = {};
+  int index = -1;
+  if (mine) {
+    std::snprintf(own, sizeof own, "%s", mine.value().node.c_str());
+    index = mine.value().index;
+  }
+  MPI_Allgather(own, kName, MPI_CHAR, names.data(), kName, MPI_CHAR, MPI_COMM_WORLD);
+  MPI_Allgather(&index, 1, MPI_INT, indices.data(), 1, MPI_INT, MPI_COMM_WORLD);
+  if (!mine) return mine.status();
+  std::vector<worker::LeasedDevice> all;
+  for (int r = 0; r < size; ++r) {
+    if (indices[std::size_t(r)] < 0) return invalidArgument("--devices slurm:" + kind + ": rank " + std::to_string(r) + " found no device");
+    all.push_back({std::string(&names[std::size_t(r) * kName]), kind, indices[std::size_t(r)]});
+  }
+  (void)rank;
+  return all;
+}
+
 // `particles`: over all ranks.
 manager::v1::Progress progressOf(const compute::Simulation& sim, std::int64_t totalSteps, double duration, double rate,
                                  double particles) {
@@ -192,7 +218,7 @@ int main(int argc, char** argv) {
   app.add_option("--manager", o.managerAddress, "manager host:port for progress reports and cancel");
   app.add_option("--backend", o.backendAddress, "back-end host:port for snapshots");
   app.add_option("--output", o.output, "local HDF5 file for snapshots when no back-end is given");
-  app.add_option("--devices", devices, "leased devices in rank order: node:gpu|cpu:index,...")->required();
+  app.add_option("--devices", devices, "leased devices in rank order: node:gpu|cpu:index,... (or slurm:gpu|slurm:cpu under srun)")->required();
   app.add_option("--progress-interval", o.progressInterval, "seconds between progress reports")->capture_default_str();
   app.add_option("--threads", o.threads, "OpenMP threads per rank (0: all)");
   app.add_option("--spool-bytes", o.spoolBytes, "output kept while the back-end is away before output pauses [bytes]")
@@ -224,7 +250,8 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, onStopSignal);
 
   int code = 0;
-  auto parsed = worker::parseDevices(devices);
+  Result<std::vector<worker::LeasedDevice>> parsed = devices.rfind("slurm:", 0) == 0 ? slurmDevices(devices.substr(6), rank, size)
+                                                                                     : worker::parseDevices(devices);
   if (!parsed) code = fail(1, parsed.status().message());
   else if (int(parsed.value().size()) != size)
     code = fail(1, "--devices lists " + std::to_string(parsed.value().size()) + " device(s) for " + std::to_string(size) + " rank(s)");

@@ -679,6 +679,7 @@ Result<LoadedScene> Loader::run(const std::string& yaml, const std::string& sour
       parseSimulation(*top);
       parseSphScene(*top);
       parseOutput(*top);
+      parseSlurm(*top);
       appendValidation(m_config.validate());
       if (!m_errors.empty()) return m_errors.toStatus(sourceName);
       LoadedScene scene;
@@ -687,6 +688,7 @@ Result<LoadedScene> Loader::run(const std::string& yaml, const std::string& sour
       scene.outputFile = std::move(m_outputFile);
       scene.checkpointInterval = m_checkpointInterval;
       scene.outputFields = std::move(m_outputFields);
+      scene.slurm = std::move(m_slurm);
       return scene;
     }
     parseMaterials(*top);
@@ -695,6 +697,7 @@ Result<LoadedScene> Loader::run(const std::string& yaml, const std::string& sour
     parseGeometry(*top);    // before particles: they keep clear of walls and may fill a closed wall
     parseParticles(*top);
     parseOutput(*top);
+    parseSlurm(*top);
     for (auto& m : m_config.materials) {
       if (!m_friction) m.friction = 0;
       if (!m_rollingResistance) m.rollingFriction = 0;
@@ -724,6 +727,7 @@ Result<LoadedScene> Loader::run(const std::string& yaml, const std::string& sour
   scene.surfaces = std::move(m_surfaces);
   scene.sets = std::move(m_setInfo);
   scene.files = std::move(m_files);
+  scene.slurm = std::move(m_slurm);
   return scene;
 }
 

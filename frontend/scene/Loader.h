@@ -35,10 +35,12 @@ using compute::RunConfig;
 using Keys = std::span<const std::string_view>;
 
 
-constexpr std::string_view kTopKeys[] = {"materials", "pairs", "particles", "geometry", "simulation", "output", "solver"};
+constexpr std::string_view kTopKeys[] = {"materials", "pairs", "particles", "geometry", "simulation", "output", "solver", "slurm"};
 constexpr std::string_view kSolvers[] = {"dem", "sph"};
 // solver: sph (frontend/scene/Fluid.cc; docs/scene-format.md, "Fluids").
-constexpr std::string_view kSphTopKeys[] = {"solver", "fluid", "tank", "obstacles", "sph", "probes", "simulation", "output"};
+constexpr std::string_view kSphTopKeys[] = {"solver", "fluid", "tank", "obstacles", "sph", "probes", "simulation", "output", "slurm"};
+// slurm: what the job asks of Slurm when the manager places jobs through it (frontend/scene/Cluster.cc; docs/cluster.md).
+constexpr std::string_view kSlurmKeys[] = {"partition", "account", "time_limit"};
 constexpr std::string_view kFluidKeys[] = {"density", "sound_speed", "gamma", "kinematic_viscosity", "blocks"};
 constexpr std::string_view kFluidBlockKeys[] = {"name", "min", "max", "velocity"};
 constexpr std::string_view kTankKeys[] = {"name", "min", "max", "open_top"};
@@ -210,6 +212,7 @@ class Loader {
   bool parseRegion(const Fields& f, std::string_view key, Vec3d& lo, Vec3d& hi, bool required);
   void parseMotion(const Fields& g, MeshMotion& motion);
   void parseOutput(const Fields& top);
+  void parseSlurm(const Fields& top);  // Cluster.cc
   void parseSeries(const Fields& output);
   // solver: sph (Fluid.cc): fluid, tank, obstacles, sph and probes; the particles generated on the lattice.
   void parseSphScene(const Fields& top);
@@ -232,6 +235,7 @@ class Loader {
   ErrorList m_errors;
   RunConfig m_config;
   std::string m_outputFile;
+  SlurmRequest m_slurm;
   double m_checkpointInterval = 0;
   std::vector<std::string> m_outputFields;
   std::vector<SurfaceInfo> m_surfaces;

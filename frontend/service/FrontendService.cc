@@ -12,6 +12,13 @@ namespace {
 
 constexpr std::size_t kMaxSceneBytes = 64u << 20;
 
+// The scene's slurm: section, for the manager's --placement slurm.
+void slurmToProto(const SlurmRequest& r, v1::SceneSummary* out) {
+  out->set_slurm_partition(r.partition);
+  out->set_slurm_account(r.account);
+  out->set_slurm_time_limit(r.timeLimit);
+}
+
 void toProto(const SceneSummary& s, double duration, v1::SceneSummary* out) {
   out->set_particles(s.particles);
   out->set_min_radius(s.minRadius);
@@ -128,6 +135,7 @@ Status FrontendServiceImpl::validate(const v1::ValidateSceneRequest& req, v1::Va
     } else {
       resp->set_valid(true);
       toProto(summary.value(), l.scene.value().config.sim.duration, resp->mutable_summary());
+      slurmToProto(l.scene.value().slurm, resp->mutable_summary());
     }
   }
   removeStaging(l);
@@ -151,6 +159,7 @@ Status FrontendServiceImpl::build(const v1::BuildSceneRequest& req, v1::BuildSce
       resp->set_model_id(stored.value().id);
       resp->set_model_uri(stored.value().dir);
       toProto(summary.value(), l.scene.value().config.sim.duration, resp->mutable_summary());
+      slurmToProto(l.scene.value().slurm, resp->mutable_summary());
       spdlog::info("built model {} ({} particles) from {}", stored.value().id, summary.value().particles, log::escaped(req.scene_name()));
     }
   }

@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/LogTail.h"
 #include "common/Status.h"
 #include "manager/agent/Devices.h"
 
@@ -71,11 +72,7 @@ std::vector<std::string> workerCommand(const Lease& lease, const std::vector<Dev
 // device of --devices.
 LaunchPlan planLaunch(const Lease& lease, const LaunchConfig& config, const std::string& localNode);
 
-// The line of a worker's log that best explains a failure: the last line mentioning an error (error, fatal, abort,
-// exception, failed, what()) outside Open MPI's notices (framed by rulers of dashes); else mpirun's "mpirun noticed
-// that process rank R ... exited on signal N" line; else the last line with any text, outside notices first.
-// "" for an empty log. Reads at most the last 64 KiB after byte `fromOffset`.
-std::string lastErrorLine(const std::string& logPath, long long fromOffset = 0);
+using pflow::lastErrorLine;  // common/LogTail.h
 
 // How a worker ended.
 struct WorkerExit {

@@ -87,5 +87,25 @@ TEST(SceneModelKeys, SummaryListsTheModel) {
   EXPECT_NE(toJson(summary.value()).find("\"model\":[{"), std::string::npos);
 }
 
+// slurm: what the job asks of Slurm under the manager's --placement slurm (docs/cluster.md).
+TEST(SceneSlurmKeys, ValuesAndErrors) {
+  auto plain = loadSceneFromString(scene(""));
+  ASSERT_TRUE(plain) << plain.status().toString();
+  EXPECT_TRUE(plain.value().slurm.partition.empty());
+  auto set = loadSceneFromString(scene("slurm: {partition: gpu-h100, account: proj.42, time_limit: 1-12:00:00}\n"));
+  ASSERT_TRUE(set) << set.status().toString();
+  EXPECT_EQ(set.value().slurm.partition, "gpu-h100");
+  EXPECT_EQ(set.value().slurm.account, "proj.42");
+  EXPECT_EQ(set.value().slurm.timeLimit, "1-12:00:00");
+  for (const char* ok : {"90", "30:00", "2:00:00", "3-12", "UNLIMITED"})
+    EXPECT_TRUE(loadSceneFromString(scene(std::string("slurm: {time_limit: \"") + ok + "\"}\n"))) << ok;
+  auto bad = loadSceneFromString(scene("slurm: {partition: 'gpu; rm -rf', time_limit: 1:2:3:4, qos: high}\n"));
+  ASSERT_FALSE(bad);
+  const std::string msg = bad.status().message();
+  EXPECT_NE(msg.find("slurm.partition"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("slurm.time_limit"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("qos"), std::string::npos) << msg;
+}
+
 }  // namespace
 }  // namespace pflow::frontend

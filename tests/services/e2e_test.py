@@ -65,7 +65,7 @@ class Stack:
     """The four services as child processes in a temporary folder, over mutual TLS as deploy/local/start.sh runs them;
     the CLI calls as the first admin (config.yaml: the CA and the admin's token)."""
 
-    def __init__(self, agents=(("node-a", "127.0.0.1"),), manager_args=(), cpu_slots=1):
+    def __init__(self, agents=(("node-a", "127.0.0.1"),), manager_args=(), cpu_slots=1, start_agents=True):
         self.dir = tempfile.mkdtemp(prefix="pflow-e2e-")
         self.ports = {k: free_port() for k in ("manager", "frontend", "backend")}
         self.procs = {}
@@ -82,9 +82,10 @@ class Stack:
         self.start_backend()
         self.start_manager()
         self.write_config()
-        for node, host in agents:
-            self.start_agent(node, host)
-        self.wait_nodes(len(agents))
+        if start_agents:  # else `agents` only names the nodes that get certificates (Slurm's, tests/services/slurm_test.py)
+            for node, host in agents:
+                self.start_agent(node, host)
+            self.wait_nodes(len(agents))
 
     def addr(self, name):
         return "127.0.0.1:%d" % self.ports[name]
