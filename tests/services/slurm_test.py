@@ -9,6 +9,8 @@ by the `pflow` CLI. Each scenario is one function; run all (default) or some: sl
                pending it leaves Slurm; the running one cancelled ends within seconds
   killstep     the worker's step killed: the Slurm job FAILED, the pflow job requeued with the reason, a second Slurm
                job goes on from the last checkpoint and the job ends bit for bit as an uninterrupted `pflow run`
+  nodefail     the node set DOWN while the job runs (scontrol update): Slurm ends it NODE_FAIL, the job is requeued
+               with that reason and, the node back, finishes from its checkpoint bit for bit
   restart      the manager killed while a Slurm job runs and started again: it finds the job in Slurm and follows it
                to the end
 Exit code 77 (skipped) where slurm-wlm is not installed.
@@ -182,6 +184,37 @@ def killstep(c):
         s.close()
 
 
+def nodefail(c):
+    s = SlurmStack()
+    try:
+        wait_slurm_nodes(s)
+        scene = e2e.write_resume_scene(s)
+        job = s.submit(scene, "--max-devices", "1")
+        s.wait_state(job, {"running"}, timeout=60)
+        first = s.json("job", job)["slurm_job_id"]
+        e2e.wait_for_log(s.worker_log(job, 1), "on the back-end")  # its first checkpoint
+        subprocess.run(["scontrol", "update", "NodeName=" + NODE, "State=DOWN", "Reason=pflow test: node lost"], check=True,
+                       env=e2e.ENV)
+        try:
+            end, last = time.time() + 60, None
+            while time.time() < end:
+                last = s.json("job", job)
+                if last["state"] == "requeued":
+                    break
+                time.sleep(0.3)
+            assert last["state"] == "requeued" and "NODE_FAIL" in last["reason"], last
+            assert c.scontrol_job(first)["JobState"] == "NODE_FAIL"
+        finally:
+            # The test cluster's ReturnToService=2 brings the node back at slurmd's next registration; resume it in case.
+            subprocess.run(["scontrol", "update", "NodeName=" + NODE, "State=RESUME"], capture_output=True, env=e2e.ENV)
+        final = s.wait_state(job, {"succeeded", "failed", "cancelled"}, timeout=180)
+        assert final["state"] == "succeeded" and final["attempts"] == 2, final
+        assert "resumed from its checkpoint at step" in open(s.worker_log(job, 2)).read()
+        e2e.assert_same_as_run(s, job, scene)
+    finally:
+        s.close()
+
+
 def restart(c):
     s = SlurmStack()
     try:
@@ -202,7 +235,7 @@ def restart(c):
         s.close()
 
 
-SCENARIOS = [equivalence, pending, killstep, restart]
+SCENARIOS = [equivalence, pending, killstep, nodefail, restart]
 
 if __name__ == "__main__":
     if not shutil.which("slurmctld") or not shutil.which("munged"):
