@@ -10,6 +10,7 @@
 #include "backend/SnapshotService.h"
 #include "backend/SnapshotStore.h"
 #include "common/Log.h"
+#include "common/rpc/Health.h"
 #include "common/rpc/Rpc.h"
 
 namespace {
@@ -67,6 +68,10 @@ int main(int argc, char** argv) {
   }
   spdlog::info("serving SnapshotService on {} (data {}, grid cell size {})", server.value()->address(), dataDir,
                cellSize > 0 ? std::to_string(cellSize) + " m" : std::string("4 x largest radius"));
+  // Health (common/rpc/Health.h): reads are checked with the manager, so the service serves while it is up.
+  std::vector<pflow::rpc::HealthMonitor::Dependency> healthDeps;
+  if (!manager.empty()) healthDeps.push_back({"manager", manager});
+  pflow::rpc::HealthMonitor health(*server.value(), {pflow::backend::v1::SnapshotService::service_full_name()}, healthDeps);
   if (!portFile.empty()) {
     std::ofstream(portFile + ".tmp") << server.value()->port() << "\n";
     std::rename((portFile + ".tmp").c_str(), portFile.c_str());

@@ -13,6 +13,7 @@ packages=(
   libcli11-dev                      # command line
   nlohmann-json3-dev                # JSON output
   python3 python3-h5py python3-numpy python3-matplotlib   # pictures and file checks
+  python3-grpcio python3-protobuf   # Python clients of the services (health, reflection; the Python package)
   lammps                            # the reference code the benchmark compares with
   clang                             # libFuzzer for the scene-loader fuzz target (deploy/fuzz.sh)
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler   # services

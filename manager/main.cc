@@ -21,6 +21,7 @@
 
 #include "common/Clock.h"
 #include "common/Log.h"
+#include "common/rpc/Health.h"
 #include "common/rpc/Rpc.h"
 #include "manager/GrpcAgentClient.h"
 #include "manager/slurm/SlurmCommands.h"
@@ -256,6 +257,13 @@ int main(int argc, char** argv) {
                server.value()->address(), advertise, dbPath, frontendAddress.empty() ? "(none)" : frontendAddress,
                backendAddress.empty() ? "(none)" : backendAddress, options.thresholds.particlesPerGpu,
                options.thresholds.particlesPerCpuSlot, options.heartbeatTimeoutSeconds);
+
+  // Health (common/rpc/Health.h): both services serve while the frontend and the back-end it hands work to are up.
+  std::vector<rpc::HealthMonitor::Dependency> healthDeps;
+  if (!frontendAddress.empty()) healthDeps.push_back({"frontend", frontendAddress});
+  if (!backendAddress.empty()) healthDeps.push_back({"back-end", backendAddress});
+  rpc::HealthMonitor health(*server.value(), {v1::ManagerService::service_full_name(), v1::NodeRegistry::service_full_name()},
+                            healthDeps);
 
   std::mutex tickMu;
   std::condition_variable tickCv;

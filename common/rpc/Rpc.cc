@@ -1,5 +1,8 @@
 #include "common/rpc/Rpc.h"
 
+#include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpcpp/health_check_service_interface.h>
+
 #include <atomic>
 #include <mutex>
 
@@ -116,6 +119,12 @@ Result<std::unique_ptr<ServerRunner>> ServerRunner::start(const std::string& add
     return invalidArgument("--listen " + address + ": a plaintext (--insecure) server listens on loopback only (127.0.0.1, ::1); "
                            "use --tls-dir to serve other addresses");
   auto runner = std::unique_ptr<ServerRunner>(new ServerRunner());
+  // gRPC's conventions (Health.h): the standard health service and server reflection on every pflow server.
+  static std::once_flag conventions;
+  std::call_once(conventions, [] {
+    grpc::EnableDefaultHealthCheckService(true);
+    grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+  });
   grpc::ServerBuilder builder;
   builder.AddListeningPort(address, transport.serverCredentials(), &runner->m_port);
   builder.SetMaxReceiveMessageSize(64 << 20);
@@ -133,9 +142,14 @@ Result<std::unique_ptr<ServerRunner>> ServerRunner::start(const std::string& add
 
 ServerRunner::~ServerRunner() { shutdown(); }
 
+void ServerRunner::setServing(const std::string& service, bool serving) {
+  if (m_server && m_server->GetHealthCheckService()) m_server->GetHealthCheckService()->SetServingStatus(service, serving);
+}
+
 void ServerRunner::shutdown(double graceSeconds) {
   if (m_down || !m_server) return;
   m_down = true;
+  if (m_server->GetHealthCheckService()) m_server->GetHealthCheckService()->Shutdown();  // NOT_SERVING while draining
   m_server->Shutdown(std::chrono::system_clock::now() +
                      std::chrono::duration_cast<std::chrono::system_clock::duration>(std::chrono::duration<double>(graceSeconds)));
   m_server->Wait();

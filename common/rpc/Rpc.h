@@ -75,7 +75,12 @@ class ServerRunner {
   ~ServerRunner();
   int port() const { return m_port; }
   std::string address() const { return m_address; }  // host:port actually bound
-  // Stops accepting calls and waits for running ones up to `graceSeconds`, then cancels them.
+  // The standard health service's status of `service` (a full name such as "pflow.manager.v1.ManagerService"; ""
+  // = the server as a whole). Every server starts with "" SERVING; a program declares its services SERVING once it
+  // can take calls (Health.h keeps them true to their dependencies). Ignored once shutdown() began.
+  void setServing(const std::string& service, bool serving);
+  // Reports NOT_SERVING for every service (so health checkers stop sending calls), stops accepting calls and waits
+  // for running ones up to `graceSeconds`, then cancels them.
   void shutdown(double graceSeconds = 5);
   void wait();  // until shutdown
 

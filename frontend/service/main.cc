@@ -6,6 +6,7 @@
 #include <thread>
 #include <filesystem>
 
+#include "common/rpc/Health.h"
 #include "common/Log.h"
 #include "common/rpc/Rpc.h"
 #include "frontend/service/FrontendService.h"
@@ -46,6 +47,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   spdlog::info("serving pflow.frontend.v1 on {}, models in {}", server.value()->address(), store.root());
+  pflow::rpc::HealthMonitor health(*server.value(), {pflow::frontend::v1::FrontendService::service_full_name()}, {});  // no dependency
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);
   while (!g_stop) std::this_thread::sleep_for(std::chrono::milliseconds(100));

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "common/Log.h"
+#include "common/rpc/Health.h"
 #include "common/rpc/Rpc.h"
 #include "manager/agent/Agent.h"
 #include "manager/agent/AgentService.h"
@@ -137,6 +138,10 @@ int main(int argc, char** argv) {
                server.value()->address(), theAgent.options().advertiseAddress, manager.empty() ? "none" : manager,
                workdir, worker);
   theAgent.startHeartbeats();
+  // Health (common/rpc/Health.h): the agent serves while the manager it reports to is up.
+  std::vector<rpc::HealthMonitor::Dependency> healthDeps;
+  if (!manager.empty()) healthDeps.push_back({"manager", manager});
+  rpc::HealthMonitor health(*server.value(), {pflow::agent::v1::AgentService::service_full_name()}, healthDeps);
 
   int sig = 0;
   sigwait(&stopSignals, &sig);
