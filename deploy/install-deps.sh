@@ -13,7 +13,8 @@ packages=(
   libcli11-dev                      # command line
   nlohmann-json3-dev                # JSON output
   python3 python3-h5py python3-numpy python3-matplotlib   # pictures and file checks
-  python3-grpcio python3-protobuf   # Python clients of the services (health, reflection; the Python package)
+  python3-grpcio python3-protobuf python3-yaml   # the Python package (python/) and the services' Python clients
+  python3-venv python3-pip python3-setuptools python3-wheel python3-pytest python3-tqdm python3-xarray   # its install and tests
   lammps                            # the reference code the benchmark compares with
   clang                             # libFuzzer for the scene-loader fuzz target (deploy/fuzz.sh)
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler   # services

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The test command: installs dependencies, builds, runs the whole test suite with ctest, then fuzzes the scene
-# loader for a minute (deploy/fuzz.sh). Extra arguments go to ctest (e.g. ./deploy/test.sh -L unit) and skip the
+# The test command: installs dependencies, builds, runs the whole test suite with ctest, then the Python package's
+# pytest suite (deploy/pytest.sh) and fuzzes the scene loader for a minute (deploy/fuzz.sh). Extra arguments go to ctest (e.g. ./deploy/test.sh -L unit) and skip the
 # fuzzing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -9,5 +9,6 @@ cd "$(dirname "$0")/.."
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 ctest --test-dir build --output-on-failure --timeout 1800 "$@"
 if (($# == 0)); then
+  ./deploy/pytest.sh   # the Python package, installed with pip into a venv, against the real stack
   ./deploy/fuzz.sh
 fi
