@@ -7,6 +7,8 @@ would.
   health      every server's "" and each of its services SERVING; an unknown service NOT_FOUND; the manager's
               services NOT_SERVING within seconds of the back-end's stop (its "" stays SERVING: the server itself is
               up), SERVING again once the back-end is back; the back-end's service NOT_SERVING while the manager is down
+  drain       a health Watch on the manager sees NOT_SERVING when the manager is told to stop (SIGTERM), before its
+              stream ends
   reflection  each server lists its pflow service(s), grpc.health.v1.Health and the reflection service, and serves the
               file descriptor of its service (its methods by name)
 Usage: grpc_conventions_test.py BIN_DIR SRC_DIR BUILD_DIR; exit code 77 (skipped) without python3-grpcio.
@@ -174,7 +176,24 @@ def reflection(s):
     assert {"SubmitJob", "ListJobs", "CancelJob", "WatchJob", "ListNodes"} <= methods, methods
 
 
-SCENARIOS = [reflection, health]
+def drain(s):
+    with grpc.insecure_channel(s.addr("manager")) as ch:
+        stream = health_pb2_grpc.HealthStub(ch).Watch(health_pb2.HealthCheckRequest(service=""), timeout=30)
+        seen = [next(stream).status]
+        assert seen == [SERVING], seen
+        os.killpg(s.procs["manager"].pid, signal.SIGTERM)
+        try:
+            for resp in stream:
+                seen.append(resp.status)
+                if resp.status == NOT_SERVING:
+                    break
+        except grpc.RpcError:
+            pass  # the stream ended with the server
+        assert NOT_SERVING in seen, seen
+    s.procs.pop("manager").wait(timeout=30)
+
+
+SCENARIOS = [reflection, health, drain]
 
 if __name__ == "__main__":
     wanted = sys.argv[4:] or [f.__name__ for f in SCENARIOS]
