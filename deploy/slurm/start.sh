@@ -2,20 +2,23 @@
 # A one-node Slurm cluster on loopback, for pflow's `slurm` tests and for trying --placement slurm on one machine
 # (docs/cluster.md). Debian's slurm-wlm and munge; everything (keys, state, logs, sockets) under one directory.
 #
-#   deploy/slurm/start.sh DIR [--cpus N] [--port-base P]   # prints `export SLURM_CONF=DIR/slurm.conf`
+#   deploy/slurm/start.sh DIR [--cpus N] [--gpus G] [--port-base P]   # prints `export SLURM_CONF=DIR/slurm.conf`
 #   deploy/slurm/stop.sh DIR
 #
 # The node ("pflow-node1", address 127.0.0.1) declares N CPU slots (default 4) whatever the machine has
-# (SlurmdParameters=config_overrides), in one partition "pflow". Daemons run as the calling user (root in CI).
+# (SlurmdParameters=config_overrides), in one partition "pflow"; --gpus G declares G GPUs as GRES (gpu:G on stand-in
+# device files such as /dev/null: a machine without GPUs rehearses GPU placement). Daemons run as the calling user.
 # Finished jobs stay visible to scontrol for an hour (MinJobAge): no accounting database is set up here.
 set -euo pipefail
-dir=${1:?usage: start.sh DIR [--cpus N] [--port-base P]}
+dir=${1:?usage: start.sh DIR [--cpus N] [--gpus G] [--port-base P]}
 shift
 cpus=4
+gpus=0
 port_base=$(( 17000 + RANDOM % 2000 ))
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --cpus) cpus=$2; shift 2 ;;
+    --gpus) gpus=$2; shift 2 ;;
     --port-base) port_base=$2; shift 2 ;;
     *) echo "start.sh: unknown option $1" >&2; exit 2 ;;
   esac
@@ -73,10 +76,19 @@ KillWait=5
 InactiveLimit=0
 SlurmctldTimeout=30
 SlurmdTimeout=60
-NodeName=pflow-node1 NodeAddr=127.0.0.1 NodeHostname=localhost CPUs=$cpus RealMemory=4096 State=UNKNOWN
+$( ((gpus > 0)) && echo "GresTypes=gpu" )
+NodeName=pflow-node1 NodeAddr=127.0.0.1 NodeHostname=localhost CPUs=$cpus RealMemory=4096 $( ((gpus > 0)) && echo "Gres=gpu:$gpus" ) State=UNKNOWN
 PartitionName=pflow Nodes=pflow-node1 Default=YES MaxTime=INFINITE State=UP OverSubscribe=NO
 CONF
-echo "ClusterName=pflow" > /dev/null
+if ((gpus > 0)); then
+  # Slurm 22.05 drops GPUs without device files: each fake GPU is one of the always-present character devices.
+  fakes=(/dev/null /dev/zero /dev/full /dev/random /dev/urandom)
+  ((gpus <= ${#fakes[@]})) || { echo "start.sh: at most ${#fakes[@]} fake GPUs" >&2; exit 2; }
+  : > "$dir/gres.conf"
+  for ((i = 0; i < gpus; i++)); do echo "NodeName=pflow-node1 Name=gpu File=${fakes[$i]}" >> "$dir/gres.conf"; done
+else
+  rm -f "$dir/gres.conf"
+fi
 
 export SLURM_CONF="$dir/slurm.conf"
 slurmctld -f "$SLURM_CONF"

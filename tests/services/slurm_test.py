@@ -11,6 +11,10 @@ by the `pflow` CLI. Each scenario is one function; run all (default) or some: sl
                job goes on from the last checkpoint and the job ends bit for bit as an uninterrupted `pflow run`
   nodefail     the node set DOWN while the job runs (scontrol update): Slurm ends it NODE_FAIL, the job is requeued
                with that reason and, the node back, finishes from its checkpoint bit for bit
+  gres         a second cluster whose node declares two GPUs as GRES (on stand-in device files): `pflow nodes` shows
+               them, a job asks --gpus-per-task=1 for each of its two ranks, Slurm gives each task its own GPU, and
+               the job's devices are those GPUs; on a machine without a GPU the workers' CUDA executor fails and the
+               job is FAILED with the worker's own message
   restart      the manager killed while a Slurm job runs and started again: it finds the job in Slurm and follows it
                to the end
 Exit code 77 (skipped) where slurm-wlm is not installed.
@@ -34,9 +38,10 @@ NODE = "pflow-node1"
 class Cluster:
     """deploy/slurm/start.sh in a temporary folder; SLURM_CONF for everything started after it."""
 
-    def __init__(self, cpus=2):
+    def __init__(self, cpus=2, gpus=0):
         self.dir = tempfile.mkdtemp(prefix="pflow-slurm-")
-        r = subprocess.run([os.path.join(SRC, "deploy/slurm/start.sh"), self.dir, "--cpus", str(cpus)], capture_output=True, text=True)
+        r = subprocess.run([os.path.join(SRC, "deploy/slurm/start.sh"), self.dir, "--cpus", str(cpus), "--gpus", str(gpus)],
+                           capture_output=True, text=True)
         if r.returncode != 0:
             raise AssertionError("the Slurm cluster did not start: %s%s" % (r.stdout, r.stderr))
         self.conf = os.path.join(self.dir, "slurm.conf")
@@ -215,6 +220,44 @@ def nodefail(c):
         s.close()
 
 
+def gres(c):
+    gpu = Cluster(cpus=4, gpus=2)  # its SLURM_CONF now, for the stack started below
+    s = None
+    try:
+        s = SlurmStack(["--particles-per-gpu", "200", "--slurm-gpu-memory", "80"])
+        end, nodes = time.time() + 30, []
+        while time.time() < end:
+            r = s.cli("nodes", "--json", check=False)
+            nodes = json.loads(r.stdout) if r.returncode == 0 else []
+            if nodes and len(nodes[0]["devices"]) == 2:
+                break
+            time.sleep(0.3)
+        devs = nodes[0]["devices"]
+        assert [d["kind"] for d in devs] == ["gpu", "gpu"] and devs[0]["name"] == "GPU (Slurm GRES)", nodes
+        assert devs[0]["memory_total_bytes"] == 80 << 30, devs
+        job = s.submit(e2e.SCENE)  # 400 particles at 200 a GPU: two ranks, one GPU each
+        final = s.wait_state(job, {"succeeded", "failed", "cancelled"}, timeout=120)
+        sid = final["slurm_job_id"]
+        info = gpu.scontrol_job(sid)
+        assert info["NumTasks"] == "2", info
+        # Slurm's GRES=gpu(IDX:0-1), read while it ran (a job that failed between two polls has no record of them).
+        kinds = sorted((d["kind"], d["index"]) for d in final["devices"])
+        assert kinds in ([("gpu", 0), ("gpu", 1)], []), final
+        script = open(os.path.join(s.dir, "slurm", job + "-1.sbatch")).read()
+        assert "'--devices' 'slurm:gpu'" in script, script
+        print("gres: %s: %s" % (final["state"], final["reason"]), flush=True)
+        if final["state"] == "failed":  # no GPU here: the worker's own words, not srun's summary
+            assert "CUDA" in final["reason"] or "GPU" in final["reason"], final
+            assert final["attempts"] == 1, final  # its own error: not requeued
+        else:
+            assert final["state"] == "succeeded", final
+    finally:
+        if s:
+            s.close()
+        gpu.close()
+        e2e.ENV["SLURM_CONF"] = os.environ["SLURM_CONF"] = c.conf
+
+
 def restart(c):
     s = SlurmStack()
     try:
@@ -235,7 +278,7 @@ def restart(c):
         s.close()
 
 
-SCENARIOS = [equivalence, pending, killstep, nodefail, restart]
+SCENARIOS = [equivalence, pending, killstep, nodefail, gres, restart]
 
 if __name__ == "__main__":
     if not shutil.which("slurmctld") or not shutil.which("munged"):
