@@ -289,6 +289,15 @@ Result<bool> Manager::reportProgress(const std::string& jobId, const Progress& p
   const Job* j = m_jobs.find(jobId);
   if (!j) return notFound("no job '" + jobId + "'");
   if (isFinal(j->state)) return true;  // a stray worker of an ended job: tell it to stop
+  if (usesSlurm() && isWaiting(j->state) && !j->slurmJobId.empty() && (attempt > 0 ? attempt : 1) == j->attempts + 1) {
+    // Slurm started this attempt before the manager's poll saw it run: it starts now (its devices come with the poll).
+    Job next = *j;
+    if (next.state == JobState::kQueued) next.reason.clear();  // "waiting in Slurm ...": no longer
+    (void)JobTable::transition(next, JobState::kStarting, "", m_clock.now());
+    if (Status s = commitLocked(next, "starting: its worker reported before Slurm's state was read"); !s) return s;
+    m_runtime[jobId].attached = true;
+    j = m_jobs.find(jobId);
+  }
   if (j->state == JobState::kRequeued) return true;  // a worker of the attempt that was given up: stop
   if (j->attempts > 0 && (attempt > 0 ? attempt : 1) != j->attempts) return true;  // a worker of an earlier attempt
   if (j->state == JobState::kQueued || j->state == JobState::kBuilding)

@@ -174,7 +174,9 @@ class Manager {
   void applySubmit(const Action& a, const Result<std::string>& result, Actions& more);
   Result<std::string> submitToSlurm(const Action& a);
   void pollSlurm();  // jobs and nodes from slurmctld (outside the lock), then applySlurmLocked
-  void applySlurmLocked(const std::vector<slurm::JobInfo>& jobs, const std::vector<slurm::NodeInfo>& nodes, Actions& actions);
+  // `began`: when the read of Slurm started (a job recorded later may be missing from it).
+  void applySlurmLocked(const std::vector<slurm::JobInfo>& jobs, const std::vector<slurm::NodeInfo>& nodes, double began,
+                        Actions& actions);
   void applySlurmJobLocked(const Job& job, const slurm::JobInfo* info);
   // A waiting job whose Slurm job ran: STARTING on the devices Slurm gave it (so it may end as a started job does).
   Job startedFromSlurmLocked(const Job& job, const slurm::JobInfo& info);
@@ -197,7 +199,8 @@ class Manager {
   slurm::SlurmClient* m_slurm = nullptr;
   std::vector<NodeView> m_slurmNodes;    // Slurm's nodes as last read (nodes(), placement)
   bool m_slurmNodesKnown = false;
-  bool m_slurmAdopted = false;           // the first poll after a start adopted attempts submitted but not recorded
+  std::map<std::string, double> m_slurmRecordedAt;  // job -> when its current Slurm id was recorded (this run)
+  std::map<std::string, int> m_slurmMissing;        // job -> reads of Slurm in a row without its Slurm job
   double m_slurmPolledAt = -1e300;
   std::set<std::string> m_submitting;    // jobs whose sbatch is in flight
   std::mutex m_pollMu;                   // one poll at a time

@@ -45,11 +45,7 @@ Placement Manager::placeLocked(const PlacementRequest& request) const {
   Placement p;
   p.outcome = PlacementOutcome::kPlaced;
   if (!m_slurmNodesKnown) return p;
-  std::vector<NodeView> all = m_slurmNodes;
-  for (NodeView& n : all)
-    for (DeviceView& d : n.devices)
-      if (d.state == DeviceState::kBusy) d.state = DeviceState::kFree;
-  p = place(request, all, m_options.thresholds);
+  p = place(request, slurm::everyDevice(m_slurmNodes, m_options.slurm->partition), m_options.thresholds);
   if (p.outcome == PlacementOutcome::kWait) p.outcome = PlacementOutcome::kPlaced;
   if (p.outcome == PlacementOutcome::kPlaced) p.reason.clear();
   return p;

@@ -3,6 +3,7 @@
 // SlurmSettings::pollSeconds (scontrol), and cancel is scancel. The rules that decide (device count, script, what a
 // Slurm state means) are pure functions in slurm/SlurmPlacement.h.
 #include <spdlog/spdlog.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -69,8 +70,9 @@ void Manager::applySubmit(const Action& a, const Result<std::string>& r, Actions
   if (!r) {
     const std::string why = r.status().message();
     if (r.status().code() == StatusCode::kUnavailable || r.status().code() == StatusCode::kDeadlineExceeded ||
-        r.status().code() == StatusCode::kIo) {
-      // Slurm out of reach, or the work folder: tried again at the next poll; the job says why it waits.
+        r.status().code() == StatusCode::kIo || r.status().code() == StatusCode::kResourceExhausted) {
+      // Slurm out of reach, the work folder, or a submit limit of the service account: tried again at the next poll
+      // (a timed-out sbatch that Slurm took is adopted by its comment first); the job says why it waits.
       if (isWaiting(j->state) && j->reason != waitingReason(*j, "waiting: " + why)) {
         Job next = *j;
         next.reason = waitingReason(*j, "waiting: " + why);
@@ -87,8 +89,13 @@ void Manager::applySubmit(const Action& a, const Result<std::string>& r, Actions
     more.push_back({Action::Kind::kStop, a.jobId, slurmId, {}, {}, {}});
     return;
   }
+  if (!j->slurmJobId.empty()) {  // adopted by a poll while sbatch answered: the same job
+    if (j->slurmJobId != slurmId) more.push_back({Action::Kind::kStop, a.jobId, slurmId, {}, {}, {}});
+    return;
+  }
   Job next = *j;
   next.slurmJobId = slurmId;
+  m_slurmRecordedAt[a.jobId] = m_clock.now();
   next.reason = waitingReason(*j, "submitted to Slurm as job " + slurmId);
   (void)commitLocked(next, "submitted to Slurm as job " + slurmId + " (" + std::to_string(a.submission.tasks) + " task(s)" +
                                (a.submission.gpusPerTask > 0 ? ", one GPU each" : "") + ")");
@@ -97,10 +104,11 @@ void Manager::applySubmit(const Action& a, const Result<std::string>& r, Actions
 void Manager::pollSlurm() {
   std::unique_lock pollLock(m_pollMu, std::try_to_lock);
   if (!pollLock.owns_lock()) return;
+  double began = 0;
   {
     std::lock_guard lock(m_mu);
     if (m_clock.now() - m_slurmPolledAt < m_options.slurm->pollSeconds) return;
-    m_slurmPolledAt = m_clock.now();
+    m_slurmPolledAt = began = m_clock.now();
   }
   auto nodes = m_slurm->nodes();
   auto jobs = nodes ? m_slurm->jobs({}) : Result<std::map<std::string, slurm::JobInfo>>(nodes.status());
@@ -114,7 +122,7 @@ void Manager::pollSlurm() {
   Actions actions;
   {
     std::lock_guard lock(m_mu);
-    applySlurmLocked(all, nodes.value(), actions);
+    applySlurmLocked(all, nodes.value(), began, actions);
   }
   runActions(std::move(actions));
 }
@@ -132,7 +140,10 @@ Job Manager::startedFromSlurmLocked(const Job& job, const slurm::JobInfo& info) 
 void Manager::applySlurmJobLocked(const Job& job, const slurm::JobInfo* info) {
   using K = slurm::Outcome::Kind;
   const std::string sid = job.slurmJobId;
+  if (info) m_slurmMissing.erase(job.id);
+  if (!info && ++m_slurmMissing[job.id] < 2) return;  // one read without it may be a blip: ask again
   if (!info) {
+    m_slurmMissing.erase(job.id);
     // slurmctld forgot it (finished longer ago than its MinJobAge while the manager was away) or never had it.
     const std::string why = "Slurm no longer knows job " + sid + " (it ended longer ago than slurmctld keeps jobs)";
     if (job.state == JobState::kCancelling || isWaiting(job.state)) endLocked(job, JobState::kCancelled, why, std::nullopt, "cancelled: " + why);
@@ -152,7 +163,13 @@ void Manager::applySlurmJobLocked(const Job& job, const slurm::JobInfo* info) {
     return;
   }
   if (o.kind == K::kRunning) {
-    if (isWaiting(job.state)) startedFromSlurmLocked(job, *info);
+    if (isWaiting(job.state)) {
+      startedFromSlurmLocked(job, *info);
+    } else if (job.devices.empty() && !info->devices.empty() && holdsDevices(job.state)) {  // started by its first report
+      Job next = job;
+      next.devices = info->devices;
+      (void)commitLocked(next, "running on " + describeDevices(next.devices));
+    }
     return;
   }
   // Final in Slurm.
@@ -168,7 +185,11 @@ void Manager::applySlurmJobLocked(const Job& job, const slurm::JobInfo* info) {
     if (!line.empty()) why += ": " + log::escaped(line, 400);
   }
   switch (o.kind) {
-    case K::kSucceeded: endLocked(started, JobState::kSucceeded, "", 0, "succeeded (Slurm job " + sid + " COMPLETED)"); break;
+    case K::kSucceeded:
+      // Exit 0: the worker reached its end (one stopped by a signal pflow did not send exits 143, and the manager's
+      // own cancel ended above), whether or not its last progress report got here (the manager may have been away).
+      endLocked(started, JobState::kSucceeded, "", 0, "succeeded (Slurm job " + sid + " COMPLETED)");
+      break;
     case K::kCancelled:
       endLocked(started, JobState::kFailed, why + ": scancel from outside pflow", o.exitCode, "failed: " + why);
       break;
@@ -183,23 +204,31 @@ void Manager::applySlurmJobLocked(const Job& job, const slurm::JobInfo* info) {
   }
 }
 
-void Manager::applySlurmLocked(const std::vector<slurm::JobInfo>& jobs, const std::vector<slurm::NodeInfo>& nodes, Actions& actions) {
+void Manager::applySlurmLocked(const std::vector<slurm::JobInfo>& jobs, const std::vector<slurm::NodeInfo>& nodes, double began,
+                               Actions& actions) {
   std::map<std::string, const slurm::JobInfo*> byId;
   for (const slurm::JobInfo& j : jobs) byId[j.id] = &j;
 
-  // After a start: an attempt submitted by a manager that stopped before it recorded the Slurm job is adopted (its
-  // comment names the pflow job and the attempt), so no attempt runs twice.
-  if (!m_slurmAdopted) {
-    m_slurmAdopted = true;
-    for (const slurm::JobInfo& info : jobs) {
-      std::string id;
-      int attempt = 0;
-      if (!slurm::parseComment(info.comment, id, attempt)) continue;
-      const Job* j = m_jobs.find(id);
-      if (!j || !isWaiting(j->state) || !j->slurmJobId.empty() || attempt != j->attempts + 1) continue;
+  // pflow's own Slurm jobs: submitted by this service account, named and commented by the manager.
+  const long uid = long(::geteuid());
+  for (const slurm::JobInfo& info : jobs) {
+    std::string id;
+    int attempt = 0;
+    if (!slurm::parseComment(info.comment, id, attempt) || info.name != "pflow-" + id || (info.userId >= 0 && info.userId != uid))
+      continue;
+    const Job* j = m_jobs.find(id);
+    const bool active = slurm::outcomeOf(info).kind == slurm::Outcome::Kind::kPending ||
+                        slurm::outcomeOf(info).kind == slurm::Outcome::Kind::kRunning;
+    if (j && isWaiting(j->state) && j->slurmJobId.empty() && !m_submitting.count(id) && attempt == j->attempts + 1 && active) {
+      // An attempt that was submitted but not recorded (the manager stopped, or sbatch timed out after Slurm took
+      // it): adopted, never submitted twice.
       Job next = *j;
       next.slurmJobId = info.id;
-      (void)commitLocked(next, "adopted Slurm job " + info.id + " (submitted before the manager restarted)");
+      m_slurmRecordedAt[id] = m_clock.now();
+      (void)commitLocked(next, "adopted Slurm job " + info.id + " (submitted, but its id was not recorded)");
+    } else if (active && !m_submitting.count(id) && (!j || isFinal(j->state) || (!j->slurmJobId.empty() && j->slurmJobId != info.id))) {
+      // A Slurm job no pflow attempt owns (its job ended, or a scancel that failed): it would only hold devices.
+      actions.push_back({Action::Kind::kStop, id, info.id, {}, {}, {}});
     }
   }
 
@@ -216,6 +245,9 @@ void Manager::applySlurmLocked(const std::vector<slurm::JobInfo>& jobs, const st
     const Job* j = m_jobs.find(id);
     if (!j || j->slurmJobId.empty() || isFinal(j->state)) continue;
     const auto it = byId.find(j->slurmJobId);
+    const auto recorded = m_slurmRecordedAt.find(id);
+    if (it == byId.end() && recorded != m_slurmRecordedAt.end() && recorded->second >= began)
+      continue;  // recorded after this read of Slurm began: it may not be in it yet
     const Job job = *j;
     applySlurmJobLocked(job, it == byId.end() ? nullptr : it->second);
   }

@@ -52,6 +52,7 @@ struct NodeView {
   // Placement through Slurm (agentAddress "slurm"): the node's state and reason as Slurm reports them, its load.
   std::string slurmState;
   std::string slurmReason;
+  std::vector<std::string> slurmPartitions;
   double cpuLoad = -1;  // -1 = unknown
 };
 

@@ -38,18 +38,17 @@ def measure(path):
     Hi = float(np.max(x0[:, 2] + r0))
     d = 2 * float(np.max(r))
     order = np.argsort(x[:, 0])
-    xs = x[order, 0]
-    inside = xs > -1  # every grain on the channel floor (none fell off the open end)
-    front = xs[0]
+    xs, rs = x[order, 0], r[order]
+    last = 0  # the connected deposit's front grain
     for i in range(1, len(xs)):
         if xs[i] - xs[i - 1] > 1.5 * d:
             break
-        front = xs[i]
-    front += float(r[order][min(i, len(xs) - 1)])
+        last = i
+    front = float(xs[last] + rs[last])
     Hf = float(np.max(x[:, 2] + r))
-    vmax = float(np.max(np.linalg.norm(v, axis=1)))
+    speed = np.linalg.norm(v, axis=1)
     return dict(a=Hi / Li, L_i=Li, H_i=Hi, L_f=front, H_f=Hf, runout=(front - Li) / Li, particles=len(r), d=d, t_settled=t_settled,
-                t_end=t_end, v_max=vmax, on_floor=int(np.sum(inside)))
+                t_end=t_end, v_max=float(np.max(speed)), v_99=float(np.percentile(speed, 99)), ahead=int(len(xs) - 1 - last))
 
 
 def main():
@@ -64,9 +63,18 @@ def main():
         for r in rows:
             w.writerow({k: ("%.6g" % v if isinstance(v, float) else v) for k, v in r.items()})
     for r in rows:
-        print("a = %.2f: run-out %.2f (Lube %s, Lajeunesse %.2f), H_f/L_i %.2f, %d grains, v_max %.3f m/s at t = %.2f s" % (
-            r["a"], r["runout"], "%.2f" % r["lube"] if r["lube"] == r["lube"] else "-", r["lajeunesse"], r["H_f"] / r["L_i"],
-            r["particles"], r["v_max"], r["t_end"]))
+        print("a = %.2f: run-out %.2f (Lajeunesse %.2f: %+.1f %%; Lube %s), H_f/L_i %.2f, %d grains (%d ahead of the front), "
+              "v_99 %.4f m/s, v_max %.3f m/s at t = %.2f s" % (
+                  r["a"], r["runout"], r["lajeunesse"], 100 * (r["runout"] / r["lajeunesse"] - 1),
+                  "%.2f (%+.0f %%)" % (r["lube"], 100 * (r["runout"] / r["lube"] - 1)) if r["lube"] == r["lube"] else "-",
+                  r["H_f"] / r["L_i"], r["particles"], r["ahead"], r["v_99"], r["v_max"], r["t_end"]))
+    a_ = np.array([r["a"] for r in rows])
+    y_ = np.array([r["runout"] for r in rows])
+    lin, pw = a_ < 2, a_ > 3  # least squares through the origin, as the experiments' fits
+    if lin.any():
+        print("linear prefactor (a < 2): %.3f" % (np.sum(a_[lin] * y_[lin]) / np.sum(a_[lin] ** 2)))
+    if pw.any():
+        print("power-law prefactor (a > 3, exponent 2/3): %.3f" % (np.sum(a_[pw] ** (2 / 3) * y_[pw]) / np.sum(a_[pw] ** (4 / 3))))
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Column-collapse sweep over aspect ratio (docs/accuracy.md, "Column run-out against Lube et al."): scenes from
+"""Column-collapse sweep over aspect ratio (docs/accuracy.md, "Column run-out against the published scalings"): scenes from
 examples/column_collapse.yaml with the column's height set for each target aspect ratio a = H/L (L = 20 mm), a
 channel long enough for the run-out, and outputs at the gate's start (the settled column: L_i, H_i) and the end.
 

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The column-collapse sweep (docs/accuracy.md, "Column run-out against the published scalings"): the scenes of
 # make_scenes.py run one after another with `pflow run` (on the GPU by default: 3 600 to 45 000 grains, 0.25-0.5
-# million steps each, about 8 min in all on an H100 (about 100 us a step); one process at a time, since processes sharing a GPU time-slice and
-# ran 19x slower per step), then analyze.py writes docs/accuracy/column_runout.{csv,png}.
+# million steps each, about 8 min in all on an H100 (0.2-0.37 ms a step); one process at a time, since processes sharing a GPU time-slice and
+# ran about ten times slower per step), then analyze.py writes docs/accuracy/column_runout.{csv,png}.
 #   bench/collapse/run.sh [--executor cuda|cpu] [OUTDIR]      (PFLOW_BIN: the folder of pflow, default build/bin)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"

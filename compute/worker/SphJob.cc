@@ -99,6 +99,7 @@ int runSphRank(const WorkerOptions& o, int rank, int ranks, const frontend::Load
   const auto start = std::chrono::steady_clock::now();
   auto lastPost = start - std::chrono::hours(1);
   bool cancelled = false;
+  int stopWhy = 0;
   auto seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
   auto rate = [&](const SphSimulation& s, double wall) { return wall > 0 ? particles * double(s.stepCount() - firstStep) / wall : 0; };
   auto observer = [&](const SphSimulation& s) -> Status {
@@ -106,7 +107,7 @@ int runSphRank(const WorkerOptions& o, int rank, int ranks, const frontend::Load
     if (s.outputDue())
       if (Status st = write(); !st.isOk()) return st;
     checkpoints.maybeTake(s, sim.timers());
-    if (stopAgreed(progress.cancelRequested(), domain)) {
+    if ((stopWhy = stopAgreed(progress.cancelRequested(), domain)) != 0) {
       cancelled = true;
       return Status(StatusCode::kCancelled, "cancelled at step " + std::to_string(s.stepCount()));
     }
@@ -126,7 +127,7 @@ int runSphRank(const WorkerOptions& o, int rank, int ranks, const frontend::Load
     spdlog::info("job {} cancelled at step {} (t = {} s)", o.jobId, sim.stepCount(), sim.time());
     if (sink)
       if (Status s = sink->close(); !s.isOk()) spdlog::warn("{}", s.message());
-    return -1;
+    return -1 - stoppedExitCode(stopWhy);
   }
   const double wall = seconds();
   progress.final(sphProgress(sim, duration, rate(sim, wall), wall), "finished");

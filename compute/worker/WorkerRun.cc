@@ -2,6 +2,7 @@
 
 #include <mpi.h>
 
+#include <csignal>
 #include <cstdio>
 
 namespace pflow::worker {
@@ -21,10 +22,16 @@ RankPlacement placeRank(const WorkerOptions& o, int rank, int ranks, const compu
   return p;
 }
 
-bool stopAgreed(bool cancelRequested, const std::shared_ptr<compute::MpiDomain>& domain) {
-  int stop = (g_stopSignal || cancelRequested) ? 1 : 0;
-  if (domain) MPI_Allreduce(MPI_IN_PLACE, &stop, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);  // every rank stops together
-  return stop != 0;
+int stopAgreed(bool cancelRequested, const std::shared_ptr<compute::MpiDomain>& domain) {
+  int stop = (g_stopSignal ? kStopSignal : 0) | (cancelRequested ? kStopCancel : 0);
+  if (domain) MPI_Allreduce(MPI_IN_PLACE, &stop, 1, MPI_INT, MPI_BOR, MPI_COMM_WORLD);  // every rank stops together
+  return stop;
+}
+
+int stoppedExitCode(int why) {
+  if (why & kStopCancel) return 0;
+  spdlog::warn("stopped by a signal the manager did not ask for: exit code {} (the job goes on from its checkpoint)", 128 + SIGTERM);
+  return 128 + SIGTERM;
 }
 
 int fail(int code, const std::string& message) {

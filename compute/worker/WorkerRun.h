@@ -107,14 +107,20 @@ struct RankPlacement {
 };
 RankPlacement placeRank(const WorkerOptions& o, int rank, int ranks, const compute::RunConfig& config);
 
-// Collective with several ranks: true on every rank when any rank saw SIGTERM/SIGINT or the manager's cancel.
-bool stopAgreed(bool cancelRequested, const std::shared_ptr<compute::MpiDomain>& domain);
+// Collective with several ranks: why the run stops, the same on every rank: kStopSignal when a rank saw SIGTERM or
+// SIGINT, kStopCancel when the manager asked (either or both); 0 = go on.
+inline constexpr int kStopSignal = 1, kStopCancel = 2;
+int stopAgreed(bool cancelRequested, const std::shared_ptr<compute::MpiDomain>& domain);
+// The exit code of a run that stopped for `why`: 0 when the manager cancelled it (it knows), else 128 + SIGTERM, so
+// that the agent or Slurm reports a worker stopped from outside (an agent shutting down, preemption, someone's
+// scancel) and the job goes on from its checkpoint instead of counting as finished.
+int stoppedExitCode(int why);
 
 // Logs the message, prints it as the last stderr line (the agent reports it) and returns code.
 int fail(int code, const std::string& message);
 
 // Runs an SPH job (solver: sph) on this rank: the same sink, progress, cancel and exit codes as DEM's runRank.
-// Returns the exit code (the same on every rank), -1 when cancelled.
+// Returns the exit code (the same on every rank), or -1 - code when it stopped early (worker::stoppedExitCode).
 int runSphRank(const WorkerOptions& o, int rank, int ranks, const frontend::LoadedScene& scene);
 
 }  // namespace pflow::worker

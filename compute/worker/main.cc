@@ -8,8 +8,9 @@
 // closed. Every outcome that one rank sees alone (a device that fails, a back-end that refuses a snapshot) is
 // agreed on by all ranks before the next collective, so no rank is left waiting.
 //
-// Exit codes: 0 finished (or cancelled: the manager knows it asked), 1 bad options or model, 2 I/O (back-end or
-// files), 3 the simulation failed (the message names particle, step and quantity). The last line on stderr is the
+// Exit codes: 0 finished (or cancelled by the manager: it knows it asked), 1 bad options or model, 2 I/O (back-end or
+// files), 3 the simulation failed (the message names particle, step and quantity), 143 stopped by SIGTERM/SIGINT that
+// the manager did not ask for (an agent shutting down, preemption): the job is requeued. The last line on stderr is the
 // reason the agent reports.
 #include <mpi.h>
 
@@ -85,7 +86,8 @@ manager::v1::Progress progressOf(const compute::Simulation& sim, std::int64_t to
   return p;
 }
 
-// Runs the job on this rank; returns the exit code (the same on every rank), -1 when cancelled.
+// Runs the job on this rank; returns the exit code (the same on every rank), or -1 - code when it stopped early (code 0:
+// the manager cancelled it; 143: a signal from elsewhere, worker::stoppedExitCode).
 int runRank(const worker::WorkerOptions& o, int rank, int ranks) {
   const bool lead = rank == 0;
   // The model as the frontend checked it: its files inside the model's folder only, as when it was built.
@@ -159,6 +161,7 @@ int runRank(const worker::WorkerOptions& o, int rank, int ranks) {
   const auto start = std::chrono::steady_clock::now();
   auto lastPost = start - std::chrono::hours(1);
   bool cancelled = false;
+  int stopWhy = 0;
   auto rate = [&](const compute::Simulation& s, double wall) { return wall > 0 ? particles * double(s.stepCount() - firstStep) / wall : 0; };
   auto observer = [&](const compute::Simulation& s) -> Status {
     series.sample(s, all);  // collective
@@ -167,7 +170,7 @@ int runRank(const worker::WorkerOptions& o, int rank, int ranks) {
       if (Status st = all.agree(sendSeries()); !st.isOk()) return st;
     }
     checkpoints.maybeTake(s, sim.timers());
-    if (worker::stopAgreed(progress.cancelRequested(), domain)) {
+    if ((stopWhy = worker::stopAgreed(progress.cancelRequested(), domain)) != 0) {
       cancelled = true;
       return Status(StatusCode::kCancelled, "cancelled at step " + std::to_string(s.stepCount()));
     }
@@ -185,7 +188,7 @@ int runRank(const worker::WorkerOptions& o, int rank, int ranks) {
     spdlog::info("job {} cancelled at step {} (t = {} s)", o.jobId, sim.stepCount(), sim.time());
     if (sink)
       if (Status s = sink->close(); !s.isOk()) spdlog::warn("{}", s.message());
-    return -1;  // tells main: cancelled
+    return -1 - worker::stoppedExitCode(stopWhy);  // tells main: stopped (-1: by the manager, its cancel)
   }
   if (Status s = all.agree(sendSeries()); !s.isOk() && run.isOk()) run = s;
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -265,7 +268,7 @@ int main(int argc, char** argv) {
 
   // Option errors are the same on every rank (same command line).
   if (code == 0) code = runRank(o, rank, size);
-  if (code < 0) code = 0;  // cancelled: a clean stop
+  if (code < 0) code = -1 - code;  // stopped: 0 when the manager cancelled, 143 when a signal came from elsewhere
   MPI_Finalize();
   return code;
 }

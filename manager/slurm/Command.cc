@@ -78,7 +78,8 @@ Result<CommandResult> runCommand(const std::vector<std::string>& argv, double ti
         continue;
       }
       std::string& dst = k == 0 ? result.out : result.err;
-      const std::size_t cap = k == 0 ? (16u << 20) : (1u << 20);
+      const std::size_t cap = k == 0 ? (256u << 20) : (1u << 20);
+      if (k == 0 && dst.size() + std::size_t(got) > cap) result.truncated = true;
       if (dst.size() < cap) dst.append(buf, std::min<std::size_t>(std::size_t(got), cap - dst.size()));
     }
   }

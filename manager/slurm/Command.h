@@ -10,8 +10,9 @@ namespace pflow::manager::slurm {
 
 struct CommandResult {
   int exitCode = -1;    // the program's exit code; 128 + N when killed by signal N
-  std::string out;      // stdout (at most 16 MiB kept)
+  std::string out;      // stdout (at most 256 MiB kept)
   std::string err;      // stderr (at most 1 MiB kept)
+  bool truncated = false;  // stdout was longer than it keeps: a reader must not take it as whole
 };
 
 // NOT_FOUND when the program cannot be started (not on PATH); DEADLINE_EXCEEDED when it ran past `timeoutSeconds`

@@ -23,7 +23,11 @@ Status slurmError(const std::string& command, const std::string& stderrText, Sta
   const bool unreachable = mentions(stderrText, "Unable to contact slurm controller") || mentions(stderrText, "Socket timed out") ||
                            mentions(stderrText, "Connection refused") || mentions(stderrText, "Munge") ||
                            mentions(stderrText, "munge") || mentions(stderrText, "Zero Bytes were transmitted");
-  return Status(unreachable ? StatusCode::kUnavailable : otherwise, command + ": " + (msg.empty() ? "failed" : msg));
+  // Per-user limits of the service account (every pflow job is submitted as it): a later try may pass.
+  const bool limit = mentions(stderrText, "QOSMax") || mentions(stderrText, "AssocMax") || mentions(stderrText, "MaxSubmit") ||
+                     mentions(stderrText, "violates accounting/QOS policy");
+  return Status(unreachable ? StatusCode::kUnavailable : limit ? StatusCode::kResourceExhausted : otherwise,
+                command + ": " + (msg.empty() ? "failed" : msg));
 }
 
 std::string SlurmCommands::tool(const std::string& name) const {
@@ -64,6 +68,8 @@ Result<std::map<std::string, JobInfo>> SlurmCommands::jobs(const std::vector<std
     if (mentions(r.value().err, "No jobs in the system")) return out;
     return slurmError("scontrol show job", r.value().err, StatusCode::kInternal);
   }
+  if (r.value().truncated)  // a partial list would make the jobs past the cut look gone
+    return resourceExhausted("scontrol show job: more than 256 MiB of output; raise --slurm-poll or ask the site for a partition of pflow's own");
   const std::set<std::string> wanted(ids.begin(), ids.end());
   for (const Record& rec : parseRecords(r.value().out)) {
     JobInfo j = jobFromRecord(rec);

@@ -149,6 +149,9 @@ JobInfo jobFromRecord(const Record& r) {
   j.state = field(r, "JobState");
   j.reason = field(r, "Reason");
   j.comment = field(r, "Comment");
+  j.name = field(r, "JobName");
+  if (const std::string u = field(r, "UserId"); u.find('(') != std::string::npos)
+    j.userId = std::atol(u.c_str() + u.find('(') + 1);
   j.stdOut = field(r, "StdOut");
   j.timeLimit = field(r, "TimeLimit");
   const std::string exit = field(r, "ExitCode");

@@ -48,13 +48,16 @@ std::vector<NodeView> nodeViews(const std::vector<NodeInfo>& nodes, const std::v
     v.slurmState = n.state;
     v.slurmReason = n.reason == "(null)" ? "" : n.reason;
     v.cpuLoad = n.cpuLoad;
+    v.slurmPartitions = n.partitions;
     const bool gpus = n.gpus > 0;
-    const int count = gpus ? n.gpus : n.cpus;
+    // A CPU job's rank takes cpusPerTask CPUs: that many make one slot.
+    const int perSlot = std::max(1, settings.cpusPerTask);
+    const int count = gpus ? n.gpus : n.cpus / perSlot;
     for (int i = 0; i < count; ++i) {
       DeviceView d;
       d.info.key = {n.name, i, gpus ? DeviceKind::kGpu : DeviceKind::kCpu};
       d.info.name = gpus ? "GPU" + (n.gpuType.empty() ? std::string() : " " + n.gpuType) + " (Slurm GRES)" : "CPU slot (Slurm)";
-      d.info.memoryTotalBytes = gpus ? settings.gpuMemoryBytes : (n.cpus > 0 ? n.memoryBytes / std::uint64_t(n.cpus) : 0);
+      d.info.memoryTotalBytes = gpus ? settings.gpuMemoryBytes : (count > 0 ? n.memoryBytes / std::uint64_t(count) : 0);
       d.info.utilization = gpus ? 0 : std::clamp(n.cpuLoad / std::max(1, n.cpus), 0.0, 1.0);
       if (v.lost) {
         d.state = DeviceState::kLost;
@@ -65,7 +68,7 @@ std::vector<NodeView> nodeViews(const std::vector<NodeInfo>& nodes, const std::v
       v.devices.push_back(std::move(d));
     }
     // Jobs whose devices we could not see (a record without details) still count as busy, lowest free first.
-    const int allocated = gpus ? n.gpusAllocated : n.cpusAllocated;
+    const int allocated = gpus ? n.gpusAllocated : (n.cpusAllocated + perSlot - 1) / perSlot;
     int busy = int(std::count_if(v.devices.begin(), v.devices.end(), [](const DeviceView& d) { return d.state == DeviceState::kBusy; }));
     for (DeviceView& d : v.devices) {
       if (busy >= allocated) break;
@@ -80,19 +83,33 @@ std::vector<NodeView> nodeViews(const std::vector<NodeInfo>& nodes, const std::v
   return out;
 }
 
+std::vector<NodeView> everyDevice(const std::vector<NodeView>& nodes, const std::string& partition) {
+  std::vector<NodeView> out;
+  for (const NodeView& n : nodes) {
+    if (!partition.empty() && std::find(n.slurmPartitions.begin(), n.slurmPartitions.end(), partition) == n.slurmPartitions.end())
+      continue;
+    NodeView v = n;
+    v.lost = false;  // a drained or powered-down node's devices still exist: Slurm holds the job until they return
+    for (DeviceView& d : v.devices) {
+      d.state = DeviceState::kFree;
+      d.jobId.clear();
+    }
+    out.push_back(std::move(v));
+  }
+  return out;
+}
+
 Request requestFor(const Job& job, int attempt, const std::vector<NodeView>& nodes, const PlacementThresholds& thresholds,
                    const SlurmSettings& settings) {
-  // Slurm queues the job until its devices are free: the count follows the devices that exist, so every device
-  // counts as free here (a lost node's do not).
-  std::vector<NodeView> all = nodes;
-  for (NodeView& n : all)
-    for (DeviceView& d : n.devices)
-      if (d.state == DeviceState::kBusy) {
-        d.state = DeviceState::kFree;
-        d.jobId.clear();
-      }
-  const Placement p = place({job.particles, job.memoryBytes, job.maxDevices}, all, thresholds);
+  const std::string partition = job.slurm.partition.empty() ? settings.partition : job.slurm.partition;
   Request r;
+  const std::vector<NodeView> all = everyDevice(nodes, partition);
+  if (all.empty()) {
+    r.reason = partition.empty() ? "Slurm shows this manager no nodes"
+                                 : "partition '" + partition + "' has no nodes this manager shows (--slurm-partition)";
+    return r;
+  }
+  const Placement p = place({job.particles, job.memoryBytes, job.maxDevices}, all, thresholds);
   if (p.outcome == PlacementOutcome::kNeverFits) {
     r.reason = p.reason;
     return r;

@@ -36,8 +36,12 @@ struct SlurmSettings {
 std::vector<NodeView> nodeViews(const std::vector<NodeInfo>& nodes, const std::vector<JobInfo>& running,
                                 const std::map<std::string, std::string>& pflowJobOf, const SlurmSettings& settings);
 
+// `nodes` as they count for a job's device count: those of `partition` ("" = all), every device free and no node
+// lost (Slurm queues the job until its devices are free and its nodes back).
+std::vector<NodeView> everyDevice(const std::vector<NodeView>& nodes, const std::string& partition);
+
 // The request for one attempt of `job`: the device count and kind by the manager's rule (Placement.h) over every
-// device that exists (Slurm queues the job until they are free), or the reason it can never fit.
+// device that exists in its partition (the scene's, else the manager's), or the reason it can never fit.
 struct Request {
   bool fits = false;
   std::string reason;     // when it never fits

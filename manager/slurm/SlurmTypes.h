@@ -32,6 +32,8 @@ struct JobInfo {
   int exitCode = 0;           // ExitCode=code:signal
   int exitSignal = 0;
   std::string comment;
+  std::string name;           // JobName
+  long userId = -1;           // UserId=name(uid)
   std::string stdOut;         // the script's log
   std::string timeLimit;
   std::vector<DeviceKey> devices;  // the allocation: per node its CPU ids, or its GPU indices when it has GPUs

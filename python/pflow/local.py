@@ -57,7 +57,7 @@ def validate(scene, **overrides):
 def run(scene, output=None, executor="auto", threads=None, steps=None, **overrides):
     """Runs a scene locally (`pflow run`, its own process) and returns the Results of its snapshot file. `scene`: a
     path, a dict or a Scene; `overrides`: dotted keys, e.g. run("drum.yaml", **{"simulation.duration": 0.1}) (or
-    simulation__duration=0.1). The file goes to `output` (default: a temporary folder that lives with the process).
+    simulation__duration=0.1). The file goes to `output` (default: run.h5 in a new temporary folder, left in place).
     Raises SceneError for an invalid scene, Error with the CLI's message when the run fails."""
     overrides = {k.replace("__", "."): v for k, v in overrides.items()}
     folder = tempfile.mkdtemp(prefix="pflow-run-")

@@ -145,12 +145,18 @@ TEST(SlurmPlacement, RequestFollowsTheDevicesThatExist) {
   for (const char* want : {"--ntasks=3", "--gpus-per-task=1", "--partition=gpu", "--time=2:00:00", "--no-requeue", "--parsable"})
     EXPECT_NE(std::find(args.begin(), args.end(), want), args.end()) << want;
   EXPECT_EQ(args.back(), "/shared/pflow/job-000009-1.sbatch");
-  job.slurm = {"gpu-long", "proj42", "3-00:00:00"};  // the scene's slurm: section wins over the manager's defaults
+  job.slurm = {"all", "proj42", "3-00:00:00"};  // the scene's slurm: section wins over the manager's defaults
   const Request own = requestFor(job, 2, views, th, settings);
-  EXPECT_EQ(own.submission.partition, "gpu-long");
+  ASSERT_TRUE(own.fits) << own.reason;
+  EXPECT_EQ(own.submission.partition, "all");
   EXPECT_EQ(own.submission.account, "proj42");
   EXPECT_EQ(own.submission.timeLimit, "3-00:00:00");
   EXPECT_EQ(own.submission.logPath, "/shared/pflow/job-000009-2.log");
+  job.slurm.partition = "debug";  // no node this manager shows is in it
+  const Request nowhere = requestFor(job, 1, views, th, settings);
+  EXPECT_FALSE(nowhere.fits);
+  EXPECT_NE(nowhere.reason.find("partition 'debug' has no nodes"), std::string::npos) << nowhere.reason;
+  job.slurm = {};
   job.memoryBytes = 5 * 80e9;  // needs 5 GPUs of 80 GiB at 90 %: 4 exist
   const Request never = requestFor(job, 1, views, th, settings);
   EXPECT_FALSE(never.fits);
@@ -266,6 +272,7 @@ class FakeSlurm final : public SlurmClient {
     j.state = "PENDING";
     j.reason = "Priority";
     j.comment = s.comment;
+    j.name = s.jobName;
     j.stdOut = s.logPath;
     jobsById[id] = j;
     return id;
@@ -380,6 +387,9 @@ TEST_F(ManagerSlurmTest, AJobsLifeThroughSlurm) {
   ASSERT_TRUE(manager->reportProgress(id, p, "", 1));
   EXPECT_EQ(job(id).state, JobState::kRunning);
   EXPECT_EQ(manager->nodes()[0].devices[0].jobId, id);
+  p.step = 1000;  // the worker's final report
+  p.time = p.duration = 1.0;
+  ASSERT_TRUE(manager->reportProgress(id, p, "finished", 1));
   slurm.set("100", "COMPLETED");
   poll();
   j = job(id);
@@ -453,12 +463,74 @@ TEST_F(ManagerSlurmTest, RestartFollowsAndAdopts) {
   EXPECT_EQ(job(running).state, JobState::kStarting);
   EXPECT_EQ(job(lost).slurmJobId, "101");  // adopted by its comment, not submitted twice
   EXPECT_EQ(slurm.submissions.size(), 2u);
+  Progress end;
+  end.step = end.totalSteps = 1000;
+  end.time = end.duration = 1.0;
+  ASSERT_TRUE(manager->reportProgress(running, end, "finished", 1));
   slurm.set("100", "COMPLETED");
   slurm.jobsById.erase("101");  // purged from slurmctld while the manager was away
+  poll();
+  EXPECT_EQ(job(lost).state, JobState::kQueued);  // one read without it may be a blip
   poll();
   EXPECT_EQ(job(running).state, JobState::kSucceeded);
   EXPECT_EQ(job(lost).state, JobState::kCancelled);
   EXPECT_NE(job(lost).reason.find("Slurm no longer knows job 101"), std::string::npos);
+}
+
+TEST_F(ManagerSlurmTest, ACompletedJobSucceedsWithoutItsLastReport) {
+  poll();
+  const std::string id = manager->submit(submitRequest(1000, true)).value().id;
+  slurm.set("100", "RUNNING");
+  poll();
+  Progress p;
+  p.step = 400;
+  p.totalSteps = 1000;
+  ASSERT_TRUE(manager->reportProgress(id, p, "", 1));
+  slurm.set("100", "COMPLETED");  // exit 0: the worker finished; its last reports were lost (the manager was away)
+  poll();
+  EXPECT_EQ(job(id).state, JobState::kSucceeded);
+  // A worker stopped by a SIGTERM that pflow did not send exits 143: another attempt goes on from the checkpoint.
+  const std::string other = manager->submit(submitRequest(1000, true)).value().id;
+  slurm.set("101", "RUNNING");
+  poll();
+  slurm.set("101", "FAILED", 143, "NonZeroExitCode");
+  poll();
+  EXPECT_EQ(job(other).state, JobState::kRequeued);
+}
+
+TEST_F(ManagerSlurmTest, AWorkerReportingBeforeThePollStartsItsJob) {
+  poll();
+  const std::string id = manager->submit(submitRequest(1000, true)).value().id;
+  Progress p;
+  p.step = 5;
+  p.totalSteps = 1000;
+  const auto stop = manager->reportProgress(id, p, "", 1);  // Slurm started it; the manager has not read that yet
+  ASSERT_TRUE(stop);
+  EXPECT_FALSE(stop.value());
+  EXPECT_EQ(job(id).state, JobState::kRunning);
+  slurm.set("100", "RUNNING");
+  poll();
+  EXPECT_EQ(job(id).devices.size(), 2u);  // the poll brings its devices
+  EXPECT_TRUE(manager->reportProgress(id, p, "", 2).value());  // a worker of another attempt is told to stop
+}
+
+TEST_F(ManagerSlurmTest, DrainedNodesHoldJobsAndOrphansAreCancelled) {
+  slurm.nodeList[0].state = "IDLE+DRAIN";
+  poll();
+  EXPECT_TRUE(manager->nodes()[0].lost);
+  const std::string id = manager->submit(submitRequest(2000, true)).value().id;  // waits in Slurm, not refused
+  EXPECT_EQ(job(id).state, JobState::kQueued);
+  EXPECT_EQ(slurm.submissions.size(), 1u);
+  {  // a Slurm job of pflow's whose pflow job ended (a scancel that failed): cancelled at the next read
+    JobInfo stray;
+    stray.id = "555";
+    stray.state = "PENDING";
+    stray.name = "pflow-job-000042";
+    stray.comment = "pflow job-000042 attempt 1";
+    slurm.jobsById["555"] = stray;
+  }
+  poll();
+  EXPECT_NE(std::find(slurm.cancels.begin(), slurm.cancels.end(), "555"), slurm.cancels.end());
 }
 
 TEST_F(ManagerSlurmTest, RefusalsAndAnUnreachableSlurm) {
