@@ -765,5 +765,30 @@ TEST_F(ManagerRestartTest, MigratesASchemaVersion2Database) {
   EXPECT_EQ(job(running->id).state, JobState::kRequeued);
 }
 
+// A job database of schema version 4 (no Slurm columns) gains them and keeps its jobs; a Slurm job id is stored.
+TEST_F(ManagerRestartTest, MigratesASchemaVersion4Database) {
+  ASSERT_TRUE(manager->heartbeat(nodeBeat("a", 1)));
+  auto running = manager->submit(submitRequest(10));
+  ASSERT_TRUE(running);
+  manager.reset();
+  store.reset();
+  const std::string downgrade = "sqlite3 '" + path.string() +
+                                "' 'ALTER TABLE jobs DROP COLUMN slurm_job_id; ALTER TABLE jobs DROP COLUMN slurm_partition; "
+                                "ALTER TABLE jobs DROP COLUMN slurm_account; ALTER TABLE jobs DROP COLUMN slurm_time_limit; "
+                                "UPDATE schema_info SET version = 4;'";
+  if (std::system(downgrade.c_str()) != 0) GTEST_SKIP() << "no sqlite3 command to write a version 4 database";
+  reopen();
+  Job j = job(running->id);
+  EXPECT_EQ(j.state, JobState::kRunning);
+  EXPECT_EQ(j.devices, running->devices);
+  EXPECT_EQ(j.slurmJobId, "");
+  j.slurmJobId = "4711";
+  j.slurm = {"gpu", "proj42", "1:00:00"};
+  ASSERT_TRUE(store->save(j));
+  reopen();
+  EXPECT_EQ(job(running->id).slurmJobId, "4711");
+  EXPECT_EQ(job(running->id).slurm.timeLimit, "1:00:00");
+}
+
 }  // namespace
 }  // namespace pflow::manager
