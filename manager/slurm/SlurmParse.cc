@@ -95,34 +95,44 @@ Result<std::vector<int>> expandIdList(const std::string& list) {
   return out;
 }
 
+namespace {
+
+// One name of a host list, its brackets expanded left to right ("rack[1-2]-n[01-02]": four names).
+Status expandHostItem(const std::string& item, const std::string& list, std::vector<std::string>& out) {
+  const auto open = item.find('[');
+  if (open == std::string::npos) {
+    if (item.find(']') != std::string::npos) return invalidArgument("host list '" + list + "': unbalanced ']'");
+    out.push_back(item);
+    return Status::ok();
+  }
+  const auto close = item.find(']', open);
+  if (close == std::string::npos) return invalidArgument("host list '" + list + "': unbalanced '['");
+  const std::string prefix = item.substr(0, open), suffix = item.substr(close + 1);
+  for (const std::string& range : split(item.substr(open + 1, close - open - 1), ',')) {
+    const auto dash = range.find('-');
+    const std::string first = dash == std::string::npos ? range : range.substr(0, dash);
+    const std::string last = dash == std::string::npos ? range : range.substr(dash + 1);
+    int a = 0, b = 0;
+    if (!toInt(first, a) || !toInt(last, b) || b < a || b - a > 100000)
+      return invalidArgument("host list '" + list + "': bad range '" + range + "'");
+    const std::size_t width = first.size();
+    for (int i = a; i <= b; ++i) {
+      std::string n = std::to_string(i);
+      if (n.size() < width) n.insert(0, width - n.size(), '0');
+      if (Status s = expandHostItem(prefix + n + suffix, list, out); !s) return s;
+      if (out.size() > 1000000) return invalidArgument("host list '" + list + "': more than a million names");
+    }
+  }
+  return Status::ok();
+}
+
+}  // namespace
+
 Result<std::vector<std::string>> expandHostList(const std::string& list) {
   std::vector<std::string> out;
   if (list.empty() || list == "(null)") return out;
-  for (const std::string& item : split(list, ',')) {
-    const auto open = item.find('[');
-    if (open == std::string::npos) {
-      if (item.find(']') != std::string::npos) return invalidArgument("host list '" + list + "': unbalanced ']'");
-      out.push_back(item);
-      continue;
-    }
-    const auto close = item.find(']', open);
-    if (close == std::string::npos) return invalidArgument("host list '" + list + "': unbalanced '['");
-    const std::string prefix = item.substr(0, open), suffix = item.substr(close + 1);
-    for (const std::string& range : split(item.substr(open + 1, close - open - 1), ',')) {
-      const auto dash = range.find('-');
-      const std::string first = dash == std::string::npos ? range : range.substr(0, dash);
-      const std::string last = dash == std::string::npos ? range : range.substr(dash + 1);
-      int a = 0, b = 0;
-      if (!toInt(first, a) || !toInt(last, b) || b < a || b - a > 100000)
-        return invalidArgument("host list '" + list + "': bad range '" + range + "'");
-      const std::size_t width = first.size();
-      for (int i = a; i <= b; ++i) {
-        std::string n = std::to_string(i);
-        if (n.size() < width) n.insert(0, width - n.size(), '0');
-        out.push_back(prefix + n + suffix);
-      }
-    }
-  }
+  for (const std::string& item : split(list, ','))
+    if (Status s = expandHostItem(item, list, out); !s) return s;
   return out;
 }
 
@@ -134,11 +144,15 @@ int gpuCount(const std::string& value) {
       if (entry.compare(0, eq, "gres/gpu") == 0 && eq != std::string::npos) total += intOr(entry.substr(eq + 1), 0);
       continue;
     }
-    if (entry.rfind("gpu", 0) != 0) continue;  // Gres: gpu[:type]:count[(S:...)]
+    if (entry.rfind("gpu", 0) != 0) continue;  // Gres: gpu[:type][:count][(S:...)]
     std::string e = entry.substr(0, entry.find('('));
     const auto colon = e.rfind(':');
-    if (colon == std::string::npos) continue;
-    total += intOr(e.substr(colon + 1), 0);
+    if (colon == std::string::npos) {  // "gpu": one
+      total += e == "gpu" ? 1 : 0;
+      continue;
+    }
+    int n = 0;
+    total += toInt(e.substr(colon + 1), n) ? n : 1;  // "gpu:h100": one of that type
   }
   return total;
 }
@@ -170,12 +184,18 @@ JobInfo jobFromRecord(const Record& r) {
         for (const std::string& n : nodes)
           for (int id : ids.value()) j.devices.push_back({n, id, DeviceKind::kCpu});
     } else if (k == "GRES" && !nodes.empty()) {
-      const auto idx = v.find("IDX:");
-      if (v.rfind("gpu", 0) != 0 || idx == std::string::npos) continue;
-      const auto end = v.find(')', idx);
-      if (auto ids = expandIdList(v.substr(idx + 4, end == std::string::npos ? std::string::npos : end - idx - 4))) {
-        // GPUs allocated: the job's devices on these nodes are its GPUs, not its CPUs.
-        std::erase_if(j.devices, [&](const DeviceKey& d) { return d.kind == DeviceKind::kCpu && std::count(nodes.begin(), nodes.end(), d.node); });
+      // "gpu(IDX:0-1)", "gpu:2(IDX:0-1)", or one entry per type: "gpu:a100:1(IDX:0),gpu:h100:2(IDX:2-3)".
+      bool gpus = false;
+      for (const std::string& entry : split(v, ',')) {
+        const auto idx = entry.find("IDX:");
+        if (entry.rfind("gpu", 0) != 0 || idx == std::string::npos) continue;
+        const auto end = entry.find(')', idx);
+        auto ids = expandIdList(entry.substr(idx + 4, end == std::string::npos ? std::string::npos : end - idx - 4));
+        if (!ids) continue;
+        if (!gpus) {  // GPUs allocated: the job's devices on these nodes are its GPUs, not its CPUs
+          std::erase_if(j.devices, [&](const DeviceKey& d) { return d.kind == DeviceKind::kCpu && std::count(nodes.begin(), nodes.end(), d.node); });
+          gpus = true;
+        }
         for (const std::string& n : nodes)
           for (int id : ids.value()) j.devices.push_back({n, id, DeviceKind::kGpu});
       }

@@ -54,6 +54,8 @@ TEST(SlurmParse, RecordsKeepValuesWithSpaces) {
 TEST(SlurmParse, HostAndIdLists) {
   EXPECT_EQ(expandHostList("gpu[07-09,11],login").value(), (std::vector<std::string>{"gpu07", "gpu08", "gpu09", "gpu11", "login"}));
   EXPECT_EQ(expandHostList("n[8-10]").value(), (std::vector<std::string>{"n8", "n9", "n10"}));
+  EXPECT_EQ(expandHostList("rack[1-2]-n[01-02],x").value(),
+            (std::vector<std::string>{"rack1-n01", "rack1-n02", "rack2-n01", "rack2-n02", "x"}));
   EXPECT_TRUE(expandHostList("(null)").value().empty());
   EXPECT_FALSE(expandHostList("gpu[07-09"));
   EXPECT_FALSE(expandHostList("gpu[9-7]"));
@@ -67,6 +69,8 @@ TEST(SlurmParse, GpuCounts) {
   EXPECT_EQ(gpuCount("gpu:a100:2,gpu:h100:2"), 4);
   EXPECT_EQ(gpuCount("cpu=8,gres/gpu=2,gres/gpu:h100=2"), 2);
   EXPECT_EQ(gpuCount("cpu=8"), 0);
+  EXPECT_EQ(gpuCount("gpu"), 1);
+  EXPECT_EQ(gpuCount("gpu:h100"), 1);
 }
 
 TEST(SlurmParse, NodesAndJobs) {
@@ -91,6 +95,8 @@ TEST(SlurmParse, NodesAndJobs) {
   ASSERT_EQ(j.devices.size(), 4u);  // the GPUs of both nodes, not their CPUs
   EXPECT_EQ(j.devices[0], (DeviceKey{"gpu07", 2, DeviceKind::kGpu}));
   EXPECT_EQ(j.devices[3], (DeviceKey{"gpu08", 3, DeviceKind::kGpu}));
+  const JobInfo mixed = jobFromRecord(parseRecord("JobId=44 JobState=RUNNING Nodes=g1 CPU_IDs=0-3 GRES=gpu:a100:1(IDX:0),gpu:h100:2(IDX:2-3)"));
+  EXPECT_EQ(mixed.devices, (std::vector<DeviceKey>{{"g1", 0, DeviceKind::kGpu}, {"g1", 2, DeviceKind::kGpu}, {"g1", 3, DeviceKind::kGpu}}));
   const JobInfo failed = jobFromRecord(parseRecord("JobId=43 JobState=FAILED Reason=NonZeroExitCode ExitCode=0:9 Nodes=cpu01 CPU_IDs=0,2 GRES="));
   EXPECT_EQ(failed.exitSignal, 9);
   EXPECT_EQ(failed.devices, (std::vector<DeviceKey>{{"cpu01", 0, DeviceKind::kCpu}, {"cpu01", 2, DeviceKind::kCpu}}));
