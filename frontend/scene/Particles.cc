@@ -425,6 +425,18 @@ void Loader::parseParticleSet(const YAML::Node& item, const std::string& path, L
                f->find("solid_fraction")->loc);
       return;
     }
+    // A tiled set without a count or a solid fraction fills the region at the tile's default fraction: refuse before
+    // generating when that would pass the limit (millions of particles are made before they could be counted).
+    if (method == "tiled" && !tiled.count && !fraction) {
+      const double estimate = regionVolume * TiledOptions::kDefaultTileSolidFraction / size->meanVolume();
+      if (estimate + double(m_config.particles.size()) > double(m_options.maxParticles)) {
+        badValue(path, "fills its region with about " + num(estimate) + " particles (the tile's solid fraction " +
+                           num(TiledOptions::kDefaultTileSolidFraction) + "); the limit is " + std::to_string(m_options.maxParticles) +
+                           " in all (give a count, a solid_fraction or a smaller region)",
+                 f->loc);
+        return;
+      }
+    }
     // A lattice without a count fills the region: refuse before generating when that would pass the limit
     // (the sites are tested one by one against the region and the walls, which takes long for millions).
     if (method == "lattice" && !lattice.count) {

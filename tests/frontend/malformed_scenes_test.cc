@@ -133,6 +133,10 @@ TEST_F(MalformedScenes, EachGivesItsPreciseMessage) {
       // a site is generated (found by the fuzzer as a 30 s input).
       {"lattice filling a region beyond the limit", scene("  - {method: lattice, region: {box: {min: [0, 0, 0], max: [1, 1, 1]}}, size: 0.004, lattice: {spacing: 0.01}}\n"),
        {"particles[0]: fills its region with about 1e+06 lattice particles; the limit is 100000 in all (give a count or a larger spacing)"}},
+      // A tiled set without a count or solid_fraction fills its region at the tile's 0.3: refused before a tile is made
+      // (found by the fuzzer as a 33 s input: 2*10^7 particles generated before they were counted).
+      {"tiled set filling a region beyond the limit", scene("  - {method: tiled, region: {box: {min: [0, 0, 0], max: [1, 1, 1]}}, size: 0.001}\n"),
+       {"particles[0]: fills its region with about 7.16197e+07 particles (the tile's solid fraction 0.3); the limit is 100000 in all"}},
       {"inverted region", scene("  - {method: random, count: 10, size: 0.001, region: {box: {min: [0, 0, 0], max: [0.01, -0.01, 0.01]}}}\n"),
        {"particles[0].region.box: max [0.01, -0.01, 0.01] must be > min [0, 0, 0] on every axis"}},
       {"region names an unknown wall", scene("  - {method: random, count: 10, size: 0.001, region: {mesh: bim}}\n", "  - {name: bin, box: {min: [0, 0, 0], max: [0.1, 0.1, 0.1]}}\n"),
