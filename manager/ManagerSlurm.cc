@@ -217,8 +217,8 @@ void Manager::applySlurmLocked(const std::vector<slurm::JobInfo>& jobs, const st
     if (!slurm::parseComment(info.comment, id, attempt) || info.name != "pflow-" + id || (info.userId >= 0 && info.userId != uid))
       continue;
     const Job* j = m_jobs.find(id);
-    const bool active = slurm::outcomeOf(info).kind == slurm::Outcome::Kind::kPending ||
-                        slurm::outcomeOf(info).kind == slurm::Outcome::Kind::kRunning;
+    const auto kind = slurm::outcomeOf(info).kind;
+    const bool active = kind == slurm::Outcome::Kind::kPending || kind == slurm::Outcome::Kind::kRunning;
     if (j && isWaiting(j->state) && j->slurmJobId.empty() && !m_submitting.count(id) && attempt == j->attempts + 1 && active) {
       // An attempt that was submitted but not recorded (the manager stopped, or sbatch timed out after Slurm took
       // it): adopted, never submitted twice.

@@ -30,8 +30,7 @@ std::string quoted(const std::string& s) {
 
 std::vector<NodeView> nodeViews(const std::vector<NodeInfo>& nodes, const std::vector<JobInfo>& running,
                                 const std::map<std::string, std::string>& pflowJobOf, const SlurmSettings& settings) {
-  std::set<std::string> wanted(settings.partitions.begin(), settings.partitions.end());
-  if (!settings.partition.empty()) wanted.insert(settings.partition);
+  const std::string& wanted = settings.partition;
   std::map<DeviceKey, std::string> holder;
   for (const JobInfo& j : running) {
     const auto it = pflowJobOf.find(j.id);
@@ -39,8 +38,7 @@ std::vector<NodeView> nodeViews(const std::vector<NodeInfo>& nodes, const std::v
   }
   std::vector<NodeView> out;
   for (const NodeInfo& n : nodes) {
-    if (!wanted.empty() && std::none_of(n.partitions.begin(), n.partitions.end(), [&](const std::string& p) { return wanted.count(p) > 0; }))
-      continue;
+    if (!wanted.empty() && std::find(n.partitions.begin(), n.partitions.end(), wanted) == n.partitions.end()) continue;
     NodeView v;
     v.name = n.name;
     v.agentAddress = "slurm";

@@ -23,7 +23,6 @@ struct SlurmSettings {
   std::string partition;          // defaults for every job ("" = the cluster's)
   std::string account;
   std::string timeLimit;
-  std::vector<std::string> partitions;  // only these partitions' nodes count (empty: all; `partition` when set)
   std::uint64_t gpuMemoryBytes = 0;     // GRES says nothing of a GPU's memory; 0 = unknown (no memory minimum)
   int cpusPerTask = 1;            // each rank of a CPU job (its OpenMP threads)
   double pollSeconds = 2;         // how often jobs and nodes are read from slurmctld
@@ -31,8 +30,8 @@ struct SlurmSettings {
 
 // Slurm's nodes as node views: a node with GPUs (GRES gpu) shows them, others their CPUs as slots. A device is BUSY
 // when a job of `running` holds it (with the pflow job's id when `pflowJobOf` names one, else "slurm:<id>"); a
-// node that is down, drained, failing or not responding is lost. Nodes outside `settings.partitions` (or
-// `partition`) are left out.
+// node that is down, drained, failing or not responding is lost. Nodes outside `settings.partition`, when
+// set, are left out.
 std::vector<NodeView> nodeViews(const std::vector<NodeInfo>& nodes, const std::vector<JobInfo>& running,
                                 const std::map<std::string, std::string>& pflowJobOf, const SlurmSettings& settings);
 

@@ -169,9 +169,7 @@ class Client:
         if job.state == "failed" and job.attempts == 0:
             if job.reason.startswith("refused"):
                 raise Refused("submit %s: %s" % (scene_name, job.reason))
-            lines = job.reason.splitlines()
-            findings = [tuple(x.strip().split(": ", 1)) for x in lines[1:] if ": " in x]
-            raise SceneError("submit %s: %s" % (scene_name, job.reason), [(k.split(": ")[-1], v) for k, v in findings])
+            raise SceneError.from_text("submit %s: %s" % (scene_name, job.reason), job.reason)
         return job
 
     def job(self, job_id):

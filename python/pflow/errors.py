@@ -1,4 +1,8 @@
 """pflow's errors as Python exceptions: the service's own message, and the same classes the CLI's exit codes name."""
+import re
+
+# One finding of the scene loader's report: "[line L, column C: ]key.path: message".
+_FINDING = re.compile(r"^(?:line \d+, column \d+: )?([A-Za-z0-9_\[\].:/-]*): (.*)$")
 
 
 class Error(Exception):
@@ -24,6 +28,18 @@ class SceneError(InvalidArgument):
     def __init__(self, message, errors=()):
         super().__init__(message)
         self.errors = list(errors)
+
+    @classmethod
+    def from_text(cls, message, text):
+        """From the loader's report (`pflow validate`, a build's reason): a first line, then one finding a line as
+        `[line L, column C: ]key.path: message`."""
+        findings = []
+        for line in text.splitlines()[1:]:
+            m = _FINDING.match(line.strip())
+            if m:
+                findings.append((m.group(1), m.group(2)))
+        return cls(message, findings)
+
 
 
 class NotFound(Error):

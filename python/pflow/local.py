@@ -3,7 +3,6 @@ scene (a file, a dict or a Scene, with overrides) and runs it in a process of it
 `validate` checks a scene and returns `pflow validate --json`'s summary, or raises SceneError with every finding."""
 import json
 import os
-import re
 import shutil
 import subprocess
 import tempfile
@@ -11,7 +10,6 @@ import tempfile
 from .errors import Error, SceneError
 from .results import Results
 
-_ERROR_LINE = re.compile(r"^(?:line \d+, column \d+: )?([A-Za-z0-9_\[\].:/-]*): (.*)$")
 
 
 def cli():
@@ -45,12 +43,7 @@ def validate(scene, **overrides):
         raise Error("pflow validate %s: %s" % (path, (r.stderr or r.stdout).strip())) from None
     if out.get("valid") is False or r.returncode != 0:
         text = out.get("errors", "") if isinstance(out.get("errors"), str) else "\n".join(out.get("errors", []))
-        findings = []
-        for line in text.splitlines()[1:]:
-            m = _ERROR_LINE.match(line.strip())
-            if m:
-                findings.append((m.group(1), m.group(2)))
-        raise SceneError(text.strip(), findings)
+        raise SceneError.from_text(text.strip(), text)
     return out
 
 
