@@ -47,8 +47,10 @@ struct Rebound {
 
 // The contact point's tangential velocity of a sphere below its contact (contact at +R z from its centre) and of one
 // above the plane (contact at -R z): u = v_x + R w_y and v_x - R w_y.
-Rebound pflowImpact(const Material& m, bool pair, Incoming in) {
-  const double gap = 1e-7 * m.R / 2.5e-3;
+// `phase` in [0, 1): where within a step the contact begins (the initial gap is (1 + phase) steps of approach at the
+// default step); negative: a fixed gap.
+Rebound pflowImpact(const Material& m, bool pair, Incoming in, double phase = -1) {
+  const double gap = phase >= 0 ? (1 + phase) * in.vn * 0.2 * compute::rayleighTime(m.R, m.rho, m.E, m.nu) : 1e-7 * m.R / 2.5e-3;
   RunConfig c;
   c.materials = {material("sphere", m.E, m.nu, m.rho, m.e, m.mu), rigid(m.e, m.mu)};
   compute::MaterialPairConfig wall;
@@ -124,19 +126,19 @@ Rebound referenceImpact(const Material& m, Incoming in) {
 }
 
 // Every case of a test: the three computations, printed, and held together where they are known to agree.
-//   - The wall kernel against the converged model (`withReference`: test 4, e = 0.98): u'/u to 0.005 where the contact
-//     point's incidence |u| / v_n is at least 0.25 and to 0.035 below it, the spin change to 1 % of its gross-sliding
-//     value. Below 0.25 the rebound depends on where in a step the contact began (at 2 degrees u'/u runs from 0.97 to
-//     1.02 over that phase, against 0.949 converged): the step that begins a contact adds a whole step of tangential
-//     displacement. Counting it from the first touch removes most of it, but cost 14 % of the double force kernel on
-//     an H100 (an fp64 division) and was left out. With e = 0.5 (tests 5 and 6) pflow differs from the reference by up
-//     to 0.08 in u'/u at |u|/v_n = 0.1 at the default step (at 1/64 of it they agree; the first-touch correction does
-//     not change it): not held here (docs/accuracy.md, "Micro-slip").
+//   - The wall kernel against the converged model: u'/u to `nearTol` where the contact point's incidence |u| / v_n is
+//     below 0.25 and to `farTol` from it, the spin change to 1 % of its gross-sliding value. Test 4 (e = 0.98): 0.045
+//     and 0.005; the 0.045 is the curve's steep stretch (u'/u falls from 0.95 to -0.05 between 2 and 10 degrees), where
+//     pflow's default step leaves u'/u 0.03-0.04 below the converged value at 5 degrees whatever the phase. Tests 5 and
+//     6 (e = 0.5): 0.015 throughout. Before the tangential dashpot and displacement were counted over the part of a
+//     step in contact (docs/accuracy.md, "Micro-slip"), a contact beginning late in a step slid from its first step
+//     and kept sliding: u'/u 0.12-0.23 against 0.04 at |u|/v_n = 0.1, and worse at smaller steps.
 //   - The wall kernel against the rigid-body closed form in gross sliding (|u| / v_n >= 4): the spin change to 0.5 %.
 //   - The pair kernel against the wall kernel: u'/u to 0.01 and the spin change to 1 % up to |u| / v_n = 2; in gross
-//     sliding the pair's spin change comes out up to 2.8 % below the wall's and the closed form (an open finding: the
-//     pair's sliding impulse is smaller), held to 3.5 % so that it does not grow unseen.
-void check(const char* test, const Material& m, const std::vector<Incoming>& cases, bool withReference) {
+//     sliding the pair's spin change comes out up to 2.8 % below the wall's and the closed form (the translating
+//     pair's line of centres turns during the contact, which a sphere on a plane's does not), held to 3.5 % so that it
+//     does not grow unseen.
+void check(const char* test, const Material& m, const std::vector<Incoming>& cases, double nearTol, double farTol) {
   std::printf("%s\n  |u|/vn  u'/u: wall    pair    reference | spin change: wall   pair    reference  gross-sliding\n", test);
   for (const Incoming& in : cases) {
     const Rebound w = pflowImpact(m, false, in), p = pflowImpact(m, true, in), r = referenceImpact(m, in);
@@ -144,10 +146,8 @@ void check(const char* test, const Material& m, const std::vector<Incoming>& cas
     std::printf("  %6.3f  %+9.4f %+9.4f %+9.4f | %+9.5f %+9.5f %+9.5f  %9.5f\n", inc, w.tangentialRatio, p.tangentialRatio,
                 r.tangentialRatio, w.spin, p.spin, r.spin, slide);
     const double spinScale = 0.01 * std::min(slide, 3.5);  // the gross-sliding change, at most (7/2) |u| (rolling)
-    if (withReference) {
-      EXPECT_NEAR(w.spin, r.spin, spinScale) << test << " |u|/vn " << inc << ": wall vs reference";
-      EXPECT_NEAR(w.tangentialRatio, r.tangentialRatio, inc < 0.25 ? 0.035 : 0.005) << test << " |u|/vn " << inc << ": wall vs reference";
-    }
+    EXPECT_NEAR(w.spin, r.spin, spinScale) << test << " |u|/vn " << inc << ": wall vs reference";
+    EXPECT_NEAR(w.tangentialRatio, r.tangentialRatio, inc < 0.25 ? nearTol : farTol) << test << " |u|/vn " << inc << ": wall vs reference";
     if (inc >= 4) EXPECT_NEAR(w.spin, slide, 0.005 * slide) << test << " |u|/vn " << inc << ": wall vs gross sliding";
     if (inc <= 2) {
       EXPECT_NEAR(p.spin, w.spin, spinScale) << test << " |u|/vn " << inc << ": pair vs wall";
@@ -164,19 +164,39 @@ TEST(MicroSlip, ChungOoiTest4ConstantSpeedAcrossIncidence) {
     const double th = deg * std::numbers::pi / 180;
     cases.push_back({3.9 * std::cos(th), 3.9 * std::sin(th), 0});
   }
-  check("Chung & Ooi test 4 (alumina, 3.9 m/s)", kAlumina, cases, true);
+  check("Chung & Ooi test 4 (alumina, 3.9 m/s)", kAlumina, cases, 0.045, 0.005);
 }
 
 TEST(MicroSlip, ChungOoiTest5ConstantNormalSpeedTangentialVelocities) {
   std::vector<Incoming> cases;
   for (double vt : {0.02, 0.05, 0.1, 0.2, 0.4, 0.8, 1.6}) cases.push_back({0.2, vt, 0});
-  check("Chung & Ooi test 5 (aluminium alloy, v_n = 0.2 m/s)", kAluminium, cases, false);
+  check("Chung & Ooi test 5 (aluminium alloy, v_n = 0.2 m/s)", kAluminium, cases, 0.015, 0.015);
 }
 
 TEST(MicroSlip, ChungOoiTest6ConstantNormalSpeedSpins) {
   std::vector<Incoming> cases;
   for (double u : {0.02, 0.05, 0.1, 0.2, 0.4, 0.8, 1.6}) cases.push_back({0.2, 0, -u / kAluminium.R});  // backspin: u = +R |w|
-  check("Chung & Ooi test 6 (aluminium alloy, v_n = 0.2 m/s, spinning)", kAluminium, cases, false);
+  check("Chung & Ooi test 6 (aluminium alloy, v_n = 0.2 m/s, spinning)", kAluminium, cases, 0.015, 0.015);
+}
+
+// Where in a step a grazing, strongly damped contact begins must not decide its rebound: test 5's smallest incidences
+// (|u|/v_n = 0.1 and 0.25, e = 0.5) begun at eight points of a step, at the default step. Each within 0.015 of the
+// converged model and within 0.012 of each other (measured: 0.042-0.051 and 0.042-0.044 against 0.039 and 0.033).
+// Before the fix a contact beginning in the last 60 % of a step slid from its first step (its normal dashpot counted
+// only the part of the step in contact, its tangential one the whole step) and then kept sliding: up to 0.23.
+TEST(MicroSlip, GrazingReboundDoesNotDependOnWhereInAStepTheContactBegan) {
+  for (double vt : {0.02, 0.05}) {
+    const Incoming in{0.2, vt, 0};
+    const double ref = referenceImpact(kAluminium, in).tangentialRatio;
+    double lo = 1e9, hi = -1e9;
+    for (int k = 0; k < 8; ++k) {
+      const double r = pflowImpact(kAluminium, false, in, (k + 0.01) / 8).tangentialRatio;
+      EXPECT_NEAR(r, ref, 0.015) << "vt " << vt << " phase " << (k + 0.01) / 8;
+      lo = std::min(lo, r), hi = std::max(hi, r);
+    }
+    std::printf("|u|/vn %.2f: u'/u %.4f .. %.4f over the phase, converged %.4f\n", vt / 0.2, lo, hi, ref);
+    EXPECT_LT(hi - lo, 0.012) << "vt " << vt;
+  }
 }
 
 // Two spheres (radii Ri below, Rj above, the same material) meeting along z: the lower one moving up at vn / 2 with
@@ -260,8 +280,9 @@ PairRebound referencePair(const Material& m, double Ri, double Rj, PairIncoming 
   return {u / u0, (wi - in.wi) * Ri / std::fabs(u0), (wj - in.wj) * Rj / std::fabs(u0)};
 }
 
-// pflow's pair kernel against the two-body reference, from the incidence |u| / v_n = 0.5 on (below it the step effect
-// of tests 5 and 6): u'/u to 0.01, the spin changes to 1 % of their largest.
+// pflow's pair kernel against the two-body reference: u'/u to 0.01 from the incidence |u| / v_n = 0.5 on and to 0.015
+// below it (the default step's first-order error at grazing incidence, as tests 5 and 6), the spin changes to 1 % of
+// their largest.
 void checkPairs(const char* test, const Material& m, double Ri, double Rj, const std::vector<PairIncoming>& cases) {
   std::printf("%s\n  |u|/vn  u'/u: pflow  reference | spin change i: pflow  reference | j: pflow  reference\n", test);
   double scale = 0;
@@ -276,8 +297,7 @@ void checkPairs(const char* test, const Material& m, double Ri, double Rj, const
     const double inc = std::fabs(in.vt + Ri * in.wi + Rj * in.wj) / in.vn;
     std::printf("  %6.3f  %+9.4f %+9.4f | %+9.5f %+9.5f | %+9.5f %+9.5f\n", inc, p.tangentialRatio, r.tangentialRatio, p.spinI,
                 r.spinI, p.spinJ, r.spinJ);
-    if (inc < 0.5) continue;
-    EXPECT_NEAR(p.tangentialRatio, r.tangentialRatio, 0.01) << test << " |u|/vn " << inc;
+    EXPECT_NEAR(p.tangentialRatio, r.tangentialRatio, inc < 0.5 ? 0.015 : 0.01) << test << " |u|/vn " << inc;
     EXPECT_NEAR(p.spinI, r.spinI, 0.01 * scale) << test << " |u|/vn " << inc;
     EXPECT_NEAR(p.spinJ, r.spinJ, 0.01 * scale) << test << " |u|/vn " << inc;
   }

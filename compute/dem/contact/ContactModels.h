@@ -72,9 +72,11 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE float dashpotQuotient(float a, float b) {
 // smooth in the step and calibrated away (the factor in hertzNormal). It is continuous in the state: 0 at first touch.
 // dampN = C delta^{1/4} (the continuous coefficient). Most evaluations (|vn dt| <= delta / 4) take the quotient
 // (a^{5/4} - b^{5/4}) / (a - b) from its series in eps = vn dt / delta (to 2e-7), the others from the fourth root
-// of the overlaps' ratio, without cancellation. Returns the force along -n on i (positive when approaching).
+// of the overlaps' ratio, without cancellation. Returns the force along -n on i (positive when approaching), and in
+// `share` the step's mean of delta^{1/4} over its end value, counted over the whole step (0 to 1 on a first step: only
+// the part in contact counts), so that the tangential dashpot can act over the same step as the normal one.
 template <class T>
-PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T stepDashpot(T dampN, T overlap, T vn, T dt) {
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T stepDashpot(T dampN, T overlap, T vn, T dt, T& share) {
   const T step = vn * dt;  // the overlap gained over the step
   if (T(16) * step * step <= overlap * overlap) {
     // (1 - (1 - eps)^{5/4}) / (5/4 eps) to eps^6. A relative correction below 4 % needs no more than float,
@@ -86,7 +88,8 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T stepDashpot(T dampN, T overlap, T vn, T dt)
     c = std::fma(e, c, -0.013671875f);
     c = std::fma(e, c, -0.03125f);
     c = std::fma(e, c, -0.125f);
-    return dampN * vn * T(std::fma(e, c, 1.0f));
+    share = T(std::fma(e, c, 1.0f));
+    return dampN * vn * share;
   }
   // Beyond: with r = (overlap a step ago) / overlap and q = r^{1/4}, (1 - r^{5/4}) / (1 - r) is
   // (1 + q + q^2 + q^3 + q^4) / ((1 + q)(1 + q^2)), without cancellation; 4/5 of it is 1 at r = 1.
@@ -94,7 +97,18 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T stepDashpot(T dampN, T overlap, T vn, T dt)
   const T q = std::sqrt(std::sqrt(before / overlap));
   const T q2 = q * q;
   const T ratio = (T(1) + q + q2 + q * q2 + q2 * q2) / ((T(1) + q) * (T(1) + q2));
+  // The share of the step's end coefficient: 4/5 of the ratio, times the part of the step in contact when it began
+  // within the step (a float quotient: only on a contact's first step).
+  share = T(0.8) * ratio;
+  if (before == T(0)) share *= T(dashpotQuotient<T>(float(overlap), float(step)));
   return T(0.8) * dampN * ((overlap - before) / dt) * ratio;
+}
+
+// The same, when the share is not needed.
+template <class T>
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T stepDashpot(T dampN, T overlap, T vn, T dt) {
+  T share;
+  return stepDashpot(dampN, overlap, vn, dt, share);
 }
 
 // The normal force magnitude on a contact, clipped at zero: Hertz elastic (4/3) E* sqrt(R*) delta^{3/2} plus the
@@ -120,7 +134,9 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T hertzNormal(const ContactParams& p, T overl
     // No dashpot can do more within one step than stop the relative normal motion: where a contact is resolved by
     // a handful of steps the explicit dashpot would otherwise overshoot and reverse it (the damping instability
     // of strongly damped contacts, docs/accuracy.md). Inactive at 12 or more steps per contact for e >= 0.1.
-    T fd = stepDashpot(T(factor) * dampN, overlap, vn, dt);
+    T share;
+    T fd = stepDashpot(T(factor) * dampN, overlap, vn, dt, share);
+    dampN *= share;  // the tangential dashpot's coefficient over the same step: the normal's mean over it
     const T mv = effMass * (vn < T(0) ? -vn : vn);
     if ((fd < T(0) ? -fd : fd) * dt > mv) fd = (fd < T(0) ? -mv : mv) / dt;
     fn += fd;
@@ -314,7 +330,11 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE ContactOutput<T> hertzMindlin(const ContactPa
 
   if constexpr (kTangential) {
     const Vec3<T> vt = s.vRel - vn * s.n;
-    Vec3<T> xi = tangential::rotateHistory(xiOld, s.n) + dt * vt;
+    // The displacement over the part of the step in contact: from the first touch on a contact's first step (the
+    // normal dashpot's rule), so that where in a step a contact begins does not add a step of spring.
+    T span = dt;
+    if (vn * dt > s.overlap && s.overlap > T(0)) span = T(normal::dashpotQuotient<T>(float(s.overlap), float(vn)));
+    Vec3<T> xi = tangential::rotateHistory(xiOld, s.n) + span * vt;
     const T st = T(8) * G * np.contactRadius;
     const Vec3<T> ft =
         tangential::mindlinForce(st, np.damp * T(p.tangentialRatio), T(p.friction), np.load, vt, xi, out.sliding);

@@ -182,6 +182,22 @@ TEST(StepDashpot, ImpulseOverTheStepFromTheFirstTouch) {
   EXPECT_NEAR(u * dt, 0.8 * C * (std::pow(d, 1.25) - std::pow(d + vn * dt, 1.25)), 1e-12 * std::fabs(u * dt));
 }
 
+TEST(StepDashpot, ShareIsTheStepsMeanCoefficient) {
+  // The force is C delta^{1/4} vn times the share, on both branches; on a contact's first step the share counts the
+  // part of the step in contact only: (4/5) delta / (vn dt) (the tangential dashpot uses it, ContactModels.h).
+  const double C = 2.0, dt = 1e-6;
+  for (double d : {2.7e-6, 1e-6, 0.3e-6}) {
+    for (double vn : {0.01, 0.2, 1.0, -0.2}) {
+      double share = -1;
+      const double r = std::sqrt(std::sqrt(d));
+      const double f = normal::stepDashpot(C * r, d, vn, dt, share);
+      EXPECT_NEAR(f, C * r * vn * share, 1e-6 * std::fabs(f)) << d << " " << vn;  // a float quotient on first steps
+      if (vn * dt > d) EXPECT_NEAR(share, 0.8 * d / (vn * dt), 1e-6) << d << " " << vn;
+      EXPECT_GT(share, 0.0);
+    }
+  }
+}
+
 TEST(StepDashpot, DiscreteStepRestitutesTheRequestedValue) {
   // pflow's step on the dimensionless impact: within 1 % for every e from 0.1 to 1 when the contact lasts at
   // least 12 steps (h <= 0.268), wherever in its first step the contact begins; to 3e-4 at 1600 steps.
