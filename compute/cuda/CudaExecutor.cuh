@@ -53,6 +53,13 @@ __global__ void __maxnreg__(64) forEachKernelCap64(Index n, F f) {
   if (i < n) f(i);
 }
 
+// The same with at most 128 registers a thread (F::kRegisterCap128 true): the DEM pair forces in double.
+template <class F>
+__global__ void __maxnreg__(128) forEachKernelCap128(Index n, F f) {
+  const Index i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i < n) f(i);
+}
+
 // The block's reduction of v by `op` (warp shuffles, then one warp over the warps' results in shared
 // memory); valid in thread 0 only.
 template <class Op>
@@ -140,6 +147,13 @@ class CudaExecutor {
       if (F::kRegisterCap64) {
         launch(reinterpret_cast<const void*>(&forEachKernelCap64<F>), typeid(F).name(), n,
                [&](unsigned grid, int block) { forEachKernelCap64<F><<<grid, block>>>(n, f); });
+        return;
+      }
+    }
+    if constexpr (requires { F::kRegisterCap128; }) {
+      if constexpr (F::kRegisterCap128) {
+        launch(reinterpret_cast<const void*>(&forEachKernelCap128<F>), typeid(F).name(), n,
+               [&](unsigned grid, int block) { forEachKernelCap128<F><<<grid, block>>>(n, f); });
         return;
       }
     }

@@ -64,9 +64,16 @@ constexpr bool registerCap64() {
 }
 
 template <class F>
+constexpr bool registerCap128() {
+  if constexpr (requires { F::kRegisterCap128; }) return F::kRegisterCap128;
+  else return false;
+}
+
+template <class F>
 struct OverList {
   static constexpr bool kVariableCost = true;  // CpuExecutor::forEach: dynamic chunks
   static constexpr bool kRegisterCap64 = registerCap64<F>();  // CudaExecutor: as f's
+  static constexpr bool kRegisterCap128 = registerCap128<F>();
   F f;
   const Index* list;
   PFLOW_HOSTDEVICE void operator()(Index k) const { f(list[k]); }

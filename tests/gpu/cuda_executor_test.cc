@@ -152,8 +152,12 @@ TEST_P(CudaVsCpu, SameCandidatesForcesAndTrajectories) {
 
   // Trajectories over 200 more steps (with rebuilds): positions and spins to round-off growth. In float
   // the round-off is 1e-7 of each force, and this violent cluster (speeds up to 9 m/s, 40 % initial
-  // overlaps) amplifies it: on the H100 after 261 steps |dx| = 1.6e-7 m, |dv| = 9e-5 and |dw| = 4e-4 of
-  // their largest values; the float bounds allow 2-6 times that.
+  // overlaps) amplifies it. How much depends on the contact law, not on the executors: the same CPU run
+  // started with every velocity changed by one part in 10^7 (a float rounding) parts from itself by as much.
+  // So in float the executors must agree within the fixed bounds (2-6 times what the H100 gave before the
+  // tangential dashpot's first-step share, docs/accuracy.md "Micro-slip") or within 10 times the CPU's own
+  // parting, whichever is larger (measured at 261 steps: |dv| 0.048 of 8.9 m/s against 0.018 for the CPU
+  // with itself; before the share, 4.1e-4 against 3.6e-4).
   ASSERT_TRUE(cpu->runSteps(200).isOk());
   ASSERT_TRUE(gpu->runSteps(200).isOk());
   const auto sc = cpu->snapshot(), sg = gpu->snapshot();
@@ -162,9 +166,21 @@ TEST_P(CudaVsCpu, SameCandidatesForcesAndTrajectories) {
   const auto [dw, sw] = maxDiff(byGid(sg, "angular_velocity"), byGid(sc, "angular_velocity"));
   std::printf("after %lld steps: |dx| %.3g m, |dv| %.3g of %.3g m/s, |dw| %.3g of %.3g rad/s, rebuilds %lld\n",
               (long long)cpu->stepCount(), dx, dv, sv, dw, sw, (long long)cpu->rebuilds());
-  EXPECT_LE(dx, single ? 1e-6 : 1e-12);  // on a 1 mm sphere
-  EXPECT_LE(dv, (single ? 5e-4 : 1e-8) * sv);
-  EXPECT_LE(dw, (single ? 2e-3 : 1e-8) * sw);
+  double px = 0, pv = 0, pw = 0;  // the CPU's parting from itself (float only)
+  if (single) {
+    auto perturbed = cfg;
+    for (auto& v : perturbed.particles.velocity) v.x *= 1 + 1e-7;
+    auto again = make(perturbed, ExecutorKind::kCpu);
+    ASSERT_TRUE(again && again->runSteps(cpu->stepCount()).isOk());
+    const auto sp = again->snapshot();
+    px = maxDiff(byGid(sp, "position"), byGid(sc, "position")).first;
+    pv = maxDiff(byGid(sp, "velocity"), byGid(sc, "velocity")).first;
+    pw = maxDiff(byGid(sp, "angular_velocity"), byGid(sc, "angular_velocity")).first;
+    std::printf("the CPU against itself perturbed: |dx| %.3g m, |dv| %.3g m/s, |dw| %.3g rad/s\n", px, pv, pw);
+  }
+  EXPECT_LE(dx, single ? std::max(1e-6, 10 * px) : 1e-12);  // on a 1 mm sphere
+  EXPECT_LE(dv, single ? std::max(5e-4 * sv, 10 * pv) : 1e-8 * sv);
+  EXPECT_LE(dw, single ? std::max(2e-3 * sw, 10 * pw) : 1e-8 * sw);
   if (!single) {
     EXPECT_EQ(cpu->contactStats().historyEntries, gpu->contactStats().historyEntries);
   }

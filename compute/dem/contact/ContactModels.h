@@ -72,12 +72,16 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE float dashpotQuotient(float a, float b) {
 // smooth in the step and calibrated away (the factor in hertzNormal). It is continuous in the state: 0 at first touch.
 // dampN = C delta^{1/4} (the continuous coefficient). Most evaluations (|vn dt| <= delta / 4) take the quotient
 // (a^{5/4} - b^{5/4}) / (a - b) from its series in eps = vn dt / delta (to 2e-7), the others from the fourth root
-// of the overlaps' ratio, without cancellation. Returns the force along -n on i (positive when approaching), and in
-// `share` the step's mean of delta^{1/4} over its end value, counted over the whole step (0 to 1 on a first step: only
-// the part in contact counts), so that the tangential dashpot can act over the same step as the normal one.
+// of the overlaps' ratio, without cancellation. Returns the force along -n on i (positive when approaching). For the
+// tangential dashpot, which must act over the same part of the step: `touch`, the part of the step in contact (below 1
+// only on a contact's first step), and `share`, the step's mean of delta^{1/4} over its end value counted over the
+// whole step (4/5 of the part in contact on a first step). Both are continuous in the state, across the two branches
+// too (a jump there, tried, made CPU and GPU trajectories part: a flip of branch by rounding became a 3 % jump of the
+// tangential damping). The first step's quotient is the division the fourth roots need anyway.
 template <class T>
-PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T stepDashpot(T dampN, T overlap, T vn, T dt, T& share) {
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T stepDashpot(T dampN, T overlap, T vn, T dt, T& share, T& touch) {
   const T step = vn * dt;  // the overlap gained over the step
+  share = touch = T(1);
   if (T(16) * step * step <= overlap * overlap) {
     // (1 - (1 - eps)^{5/4}) / (5/4 eps) to eps^6. A relative correction below 4 % needs no more than float,
     // formed by operations that round alike on every executor in double runs (a correctly rounded quotient,
@@ -92,23 +96,24 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T stepDashpot(T dampN, T overlap, T vn, T dt,
     return dampN * vn * share;
   }
   // Beyond: with r = (overlap a step ago) / overlap and q = r^{1/4}, (1 - r^{5/4}) / (1 - r) is
-  // (1 + q + q^2 + q^3 + q^4) / ((1 + q)(1 + q^2)), without cancellation; 4/5 of it is 1 at r = 1.
-  const T before = overlap > step ? overlap - step : T(0);
-  const T q = std::sqrt(std::sqrt(before / overlap));
+  // (1 + q + q^2 + q^3 + q^4) / ((1 + q)(1 + q^2)), without cancellation; 4/5 of it is 1 at r = 1. On a first step
+  // (the overlap a step ago clipped at 0) r = 0, and the one quotient is the part of the step in contact instead.
+  const bool first = !(overlap > step);
+  const T before = first ? T(0) : overlap - step;
+  const T quotient = first ? overlap / step : before / overlap;
+  const T q = first ? T(0) : std::sqrt(std::sqrt(quotient));
   const T q2 = q * q;
   const T ratio = (T(1) + q + q2 + q * q2 + q2 * q2) / ((T(1) + q) * (T(1) + q2));
-  // The share of the step's end coefficient: 4/5 of the ratio, times the part of the step in contact when it began
-  // within the step (a float quotient: only on a contact's first step).
-  share = T(0.8) * ratio;
-  if (before == T(0)) share *= T(dashpotQuotient<T>(float(overlap), float(step)));
+  if (first) touch = quotient;
+  share = T(0.8) * ratio * touch;
   return T(0.8) * dampN * ((overlap - before) / dt) * ratio;
 }
 
-// The same, when the share is not needed.
+// The same, without the tangential dashpot's share.
 template <class T>
 PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T stepDashpot(T dampN, T overlap, T vn, T dt) {
-  T share;
-  return stepDashpot(dampN, overlap, vn, dt, share);
+  T share, touch;
+  return stepDashpot(dampN, overlap, vn, dt, share, touch);
 }
 
 // The normal force magnitude on a contact, clipped at zero: Hertz elastic (4/3) E* sqrt(R*) delta^{3/2} plus the
@@ -116,15 +121,16 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T stepDashpot(T dampN, T overlap, T vn, T dt)
 // step in units of the contact's present normal frequency omega = sqrt(S_n / m*) (clamped at 0.75) and
 // (a1, a2, a3) = ContactParams::dashpotStep, fitted so that the discrete step restitutes e (calibrateDashpotForStep).
 // u comes from what the dashpot needs anyway (omega dt = c sqrt(S_n m*) dt / (c m*)): no extra root.
-// sqrtRd = sqrt(R* delta). Also returns the continuous dashpot's coefficient c sqrt(S_n m*) in `dampN` (the
-// tangential dashpot's scale).
+// sqrtRd = sqrt(R* delta). Also returns, for the tangential dashpot, the continuous dashpot's coefficient
+// c sqrt(S_n m*) times stepDashpot's share in `dampN`, and the part of the step in contact in `touch` (1 without a dashpot).
 template <class T>
 PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T hertzNormal(const ContactParams& p, T overlap, T sqrtRd, T vn, T effMass, T dt,
-                                                 T& dampN) {
+                                                 T& dampN, T& touch) {
   const T E = T(p.effYoung), c = T(p.dampingCoeff);
   const T sn = T(2) * E * sqrtRd;
   T fn = T(4) / T(3) * E * sqrtRd * overlap;
   dampN = c * std::sqrt(sn * effMass);
+  touch = T(1);
   if (c > T(0)) {
     // The factor in float, by operations that round alike on every executor in double runs (as stepDashpot's series).
     float u = dashpotQuotient<T>(float(dampN) * float(dt), float(c) * float(effMass));
@@ -135,7 +141,7 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T hertzNormal(const ContactParams& p, T overl
     // a handful of steps the explicit dashpot would otherwise overshoot and reverse it (the damping instability
     // of strongly damped contacts, docs/accuracy.md). Inactive at 12 or more steps per contact for e >= 0.1.
     T share;
-    T fd = stepDashpot(T(factor) * dampN, overlap, vn, dt, share);
+    T fd = stepDashpot(T(factor) * dampN, overlap, vn, dt, share, touch);
     dampN *= share;  // the tangential dashpot's coefficient over the same step: the normal's mean over it
     const T mv = effMass * (vn < T(0) ? -vn : vn);
     if ((fd < T(0) ? -fd : fd) * dt > mv) fd = (fd < T(0) ? -mv : mv) / dt;
@@ -266,7 +272,8 @@ template <class T> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T constantAdhesion(T effYo
 template <class T>
 struct NormalPart {
   T force;          // along -n on i (positive repulsive; negative when adhesion pulls)
-  T damp;           // the continuous dashpot's coefficient c sqrt(S_n m*) (the tangential dashpot's scale)
+  T damp;           // the continuous dashpot's coefficient c sqrt(S_n m*) over the step (the tangential dashpot's scale)
+  T touch;          // the part of the step in contact (below 1 on a damped contact's first step; hertzNormal)
   T contactRadius;  // a [m]: sqrt(R* delta) for Hertz, JKR's a with adhesion (the Mindlin stiffness is 8 G* a)
   T load;           // what the Coulomb cap and rolling resistance scale with: the force, plus 2 F_c for JKR
                     // (Thornton & Yin 1991) or the constant adhesion for DMT, never negative
@@ -285,9 +292,10 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE NormalPart<T> normalPart(const ContactParams&
       const T E = T(p.effYoung), B = T(p.jkrB);
       T fd = T(0), sqrtRd = T(0);
       out.damp = T(0);
+      out.touch = T(1);
       if (overlap > T(0)) {  // Hertz and its dashpot, clipped; the dashpot's share kept
         sqrtRd = std::sqrt(effRadius * overlap);
-        fd = normal::hertzNormal(p, overlap, sqrtRd, vn, effMass, dt, out.damp);
+        fd = normal::hertzNormal(p, overlap, sqrtRd, vn, effMass, dt, out.damp, out.touch);
       }
       if (p.cohesion == cohesion::kJkr) {
         const T s = cohesion::jkrRootRadius(B, effRadius, overlap, sqrtRd);
@@ -306,7 +314,7 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE NormalPart<T> normalPart(const ContactParams&
     }
   }
   const T sqrtRd = std::sqrt(effRadius * overlap);
-  out.force = normal::hertzNormal(p, overlap, sqrtRd, vn, effMass, dt, out.damp);
+  out.force = normal::hertzNormal(p, overlap, sqrtRd, vn, effMass, dt, out.damp, out.touch);
   out.contactRadius = sqrtRd;
   out.load = out.force;
   return out;
@@ -330,11 +338,9 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE ContactOutput<T> hertzMindlin(const ContactPa
 
   if constexpr (kTangential) {
     const Vec3<T> vt = s.vRel - vn * s.n;
-    // The displacement over the part of the step in contact: from the first touch on a contact's first step (the
-    // normal dashpot's rule), so that where in a step a contact begins does not add a step of spring.
-    T span = dt;
-    if (vn * dt > s.overlap && s.overlap > T(0)) span = T(normal::dashpotQuotient<T>(float(s.overlap), float(vn)));
-    Vec3<T> xi = tangential::rotateHistory(xiOld, s.n) + span * vt;
+    // The displacement over the part of the step in contact: from the first touch on a damped contact's first step
+    // (the normal dashpot's rule), so that where in a step a contact begins does not add a step of spring.
+    Vec3<T> xi = tangential::rotateHistory(xiOld, s.n) + (dt * np.touch) * vt;
     const T st = T(8) * G * np.contactRadius;
     const Vec3<T> ft =
         tangential::mindlinForce(st, np.damp * T(p.tangentialRatio), T(p.friction), np.load, vt, xi, out.sliding);

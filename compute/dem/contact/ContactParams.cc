@@ -77,8 +77,8 @@ double restitutionOfStep(double c, const double poly[3], double h, double phase)
   for (int k = 0; k < 3; ++k) p.dashpotStep[k] = float(poly[k]);
   auto accel = [&](double x, double v) {
     if (x <= 0) return 0.0;
-    double dampN;
-    return -contact::normal::hertzNormal(p, x, std::sqrt(x), v, 1.0, h, dampN);
+    double dampN, touch;
+    return -contact::normal::hertzNormal(p, x, std::sqrt(x), v, 1.0, h, dampN, touch);
   };
   // pflow's velocity Verlet: the force at the new overlap with the half-step velocity.
   double x = -phase * h, v = 1, a = 0;

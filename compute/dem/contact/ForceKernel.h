@@ -7,6 +7,7 @@
 // starts from zero displacement) and raises a flag; the host grows the slots and runs a store-only
 // pass that records just the displacements that could not be stored, so growth changes no result.
 #pragma once
+#include <type_traits>
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -149,6 +150,9 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE contact::ContactState<R> pairState(Vec3d d, d
 template <class R, bool kCohesion = false>
 struct ComputeForces {
   static constexpr bool kVariableCost = true;  // work per particle varies (CpuExecutor::forEach)
+  // Double: held to 128 registers a thread (16 resident warps an SM); the compiler's 130-136 left 14 and cost the
+  // forces phase a third on an H100 (docs/performance.md). CudaExecutor::forEach.
+  static constexpr bool kRegisterCap128 = std::is_same_v<R, double>;
   using V = Vec3<R>;
   ForceArgs<R> a;
 

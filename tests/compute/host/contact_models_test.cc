@@ -43,15 +43,15 @@ TEST(NormalModel, KernelNormalForceIsTheReferenceHertzAndDashpot) {
   const double R = 5e-3, d = 1e-5, m = 1e-3, dt = 1e-7, sqrtRd = std::sqrt(R * d);
   for (double e : {1.0, 0.5, 0.1}) {
     const ContactParams p = params(0.5, e);
-    double dampN = -1;
-    EXPECT_NEAR(normal::hertzNormal(p, d, sqrtRd, 0.0, m, dt, dampN), normal::hertzForce(p.effYoung, R, d),
+    double dampN = -1, touch = -1;
+    EXPECT_NEAR(normal::hertzNormal(p, d, sqrtRd, 0.0, m, dt, dampN, touch), normal::hertzForce(p.effYoung, R, d),
                 1e-12 * normal::hertzForce(p.effYoung, R, d)) << e;
     EXPECT_NEAR(dampN, p.dampingCoeff * std::sqrt(normal::hertzStiffness(p.effYoung, R, d) * m), 1e-12 * (dampN + 1e-30)) << e;
   }
   // Approaching, a damped contact pushes harder than the elastic force alone; e = 1 does not.
-  double dampN;
-  EXPECT_GT(normal::hertzNormal(params(0.5, 0.5), d, sqrtRd, 1.0, m, dt, dampN), normal::hertzForce(5e9, R, d));
-  EXPECT_DOUBLE_EQ(normal::hertzNormal(params(0.5, 1.0), d, sqrtRd, 1.0, m, dt, dampN), normal::hertzForce(5e9, R, d));
+  double dampN, touch;
+  EXPECT_GT(normal::hertzNormal(params(0.5, 0.5), d, sqrtRd, 1.0, m, dt, dampN, touch), normal::hertzForce(5e9, R, d));
+  EXPECT_DOUBLE_EQ(normal::hertzNormal(params(0.5, 1.0), d, sqrtRd, 1.0, m, dt, dampN, touch), normal::hertzForce(5e9, R, d));
 }
 
 TEST(HertzMindlin, NormalForceIsRepulsive) {
@@ -182,19 +182,33 @@ TEST(StepDashpot, ImpulseOverTheStepFromTheFirstTouch) {
   EXPECT_NEAR(u * dt, 0.8 * C * (std::pow(d, 1.25) - std::pow(d + vn * dt, 1.25)), 1e-12 * std::fabs(u * dt));
 }
 
-TEST(StepDashpot, ShareIsTheStepsMeanCoefficient) {
-  // The force is C delta^{1/4} vn times the share, on both branches; on a contact's first step the share counts the
-  // part of the step in contact only: (4/5) delta / (vn dt) (the tangential dashpot uses it, ContactModels.h).
+TEST(StepDashpot, ShareAndTouchForTheTangentialDashpot) {
+  // The force is C delta^{1/4} vn times the share; on a contact's first step the part in contact is delta / (vn dt)
+  // and the share 4/5 of it (ContactModels.h, hertzMindlin); touch is 1 on every other step.
   const double C = 2.0, dt = 1e-6;
   for (double d : {2.7e-6, 1e-6, 0.3e-6}) {
-    for (double vn : {0.01, 0.2, 1.0, -0.2}) {
-      double share = -1;
+    for (double vn : {0.01, 0.2, 1.0, -0.2, -1.0}) {
+      double share = -1, touch = -1;
       const double r = std::sqrt(std::sqrt(d));
-      const double f = normal::stepDashpot(C * r, d, vn, dt, share);
-      EXPECT_NEAR(f, C * r * vn * share, 1e-6 * std::fabs(f)) << d << " " << vn;  // a float quotient on first steps
-      if (vn * dt > d) EXPECT_NEAR(share, 0.8 * d / (vn * dt), 1e-6) << d << " " << vn;
-      EXPECT_GT(share, 0.0);
+      const double f = normal::stepDashpot(C * r, d, vn, dt, share, touch);
+      EXPECT_NEAR(f, C * r * vn * share, 1e-12 * std::fabs(f)) << d << " " << vn;
+      if (vn * dt >= d) {  // a first step
+        EXPECT_NEAR(touch, d / (vn * dt), 1e-15) << d << " " << vn;
+        EXPECT_NEAR(share, 0.8 * d / (vn * dt), 1e-15) << d << " " << vn;
+      } else {
+        EXPECT_EQ(touch, 1.0) << d << " " << vn;
+      }
     }
+  }
+}
+
+TEST(StepDashpot, ShareContinuousAcrossTheBranches) {
+  const double C = 2.0, d = 1e-6, r0 = std::sqrt(std::sqrt(d)), dt = 1e-6;
+  for (double sign : {1.0, -1.0}) {
+    double below = 0, above = 0, t = 0;
+    normal::stepDashpot(C * r0, d, sign * 0.2499999 * d / dt, dt, below, t);
+    normal::stepDashpot(C * r0, d, sign * 0.2500001 * d / dt, dt, above, t);
+    EXPECT_NEAR(below, above, 4e-7) << sign;
   }
 }
 
