@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
   std::string overlap = "on", integrator = "scene";
   double advance = 0;
   std::optional<double> skin;
-  bool lists = false;
+  bool masks = false;
   std::string decomposition = "scene";
   app.add_option("--scene", scene, "an SPH scene file")->capture_default_str();
   app.add_option("--spacing", spacings, "particle spacings dp [m], one run each (the scene's sph.spacing replaced)")->delimiter(',');
@@ -62,7 +62,7 @@ int main(int argc, char** argv) {
   app.add_option("--decomposition", decomposition, "distributed runs: the scene's simulation.decomposition, or sfc | multisection")
       ->check(CLI::IsMember({"scene", "sfc", "multisection"}))->capture_default_str();
   app.add_option("--skin", skin, "the neighbour skin as a fraction of h instead of the scene's sph.skin");
-  app.add_flag("--lists", lists, "the rates pass over neighbour lists built at each sort (SphConfig::neighbourLists)");
+  app.add_flag("--masks", masks, "the rates pass reads hit masks built at each sort (SphConfig::hitMasks)");
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::warn);
   std::ifstream in(scene);
@@ -94,7 +94,7 @@ int main(int argc, char** argv) {
     const bool verlet = cfg.sph.integrator == compute::sph::Integrator::kVerlet;
     const bool kdk = cfg.sph.integrator == compute::sph::Integrator::kVelocityVerlet;
     if (skin) cfg.sph.skin = *skin;
-    cfg.sph.neighbourLists = lists;
+    cfg.sph.hitMasks = masks;
     const compute::DecompositionKind strategy = decomposition == "scene" ? cfg.sim.decomposition
                                                 : decomposition == "sfc"  ? compute::DecompositionKind::kSfc
                                                                           : compute::DecompositionKind::kMultiSection;
@@ -178,7 +178,7 @@ int main(int argc, char** argv) {
                      {"cell_sorts", sim.rebuilds() - sortsBefore},
                      {"advance_s", advance},
                      {"skin", cfg.sph.skin},
-                     {"neighbour_lists", cfg.sph.neighbourLists},
+                     {"hit_masks", cfg.sph.hitMasks},
                      {"device_bytes_per_particle", double(sim.deviceBytes()) / n},
                      {"compulsory_bytes_per_particle_step", bytesPerStep},
                      {"device", device},

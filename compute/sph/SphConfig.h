@@ -67,10 +67,10 @@ struct SphConfig {
   bool freeSlip = false;       // mirror walls: the image keeps the tangential velocity (sph.wall_slip: free_slip)
   int boundaryLayers = 0;      // dynamic walls: 0 = enough to cover the kernel support, ceil(2h/dp)
   double skin = 0.25;          // neighbour skin as a fraction of h: cells are 2h + skin wide
-  // The rates pass over neighbour lists built at each sort (SphRateLists.h) instead of walking the cells: the same
-  // sums; faster with few sorts (from rest), slower where the flow sorts every few steps (docs/sph.md, Performance).
-  // Not a scene key yet: pflow-sph-bench --lists.
-  bool neighbourLists = false;
+  // The rates pass reads hit masks, marked by the first pass after each sort (SphKernels.h, RatePass), instead of
+  // testing every candidate of the walk: the same pairs in the same order, so the same sums; faster from rest, level
+  // in a flow that sorts every few steps (docs/sph.md, Performance). Not a scene key: pflow-sph-bench --masks.
+  bool hitMasks = false;
   // Density bounds (DualSPHysics's RhopOut): a fluid particle outside [min, max] x rho0 stops the run.
   double minDensityRatio = 0.7, maxDensityRatio = 1.3;
 

@@ -33,7 +33,7 @@ struct SphSetup {
   MirrorWalls mirror;     // sph.boundary: mirror (mirror.any false: none)
   CellGrid grid;
   double skin = 0;  // [m]
-  bool neighbourLists = false;  // SphConfig::neighbourLists
+  bool hitMasks = false;  // SphConfig::hitMasks
   int threads = 0;
   // Neighbours summed in global-id order (SortCellByGid): forces independent of the rows' order, so a
   // distributed run equals one process with this set, bit for bit. Distributed runs always set it.

@@ -14,7 +14,6 @@
 #include "compute/sph/SphEngine.h"
 #include "compute/sph/SphFields.h"
 #include "compute/sph/SphKernels.h"
-#include "compute/sph/SphRateLists.h"
 
 namespace pflow::compute::sph {
 
@@ -52,7 +51,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     if (m_ref.bytes() < std::size_t(m_n) * sizeof(Vec3d)) m_ref.resize(std::size_t(m_n) * sizeof(Vec3d) * 5 / 4 + sizeof(Vec3d));
     m_mem.copyWithin(m_ref.data(), ptr<SphField::Position>(), std::size_t(m_n) * sizeof(Vec3d));
     m_wetStale = true;
-    m_listStale = true;
+    m_masksStale = true;
     m_sorted = true;
   }
 
@@ -69,7 +68,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     sizeLocalBuffers();
     splitBoundary();
     m_wetStale = true;
-    m_listStale = true;
+    m_masksStale = true;
   }
   bool cellKeys(const CellGrid& grid, std::vector<std::uint32_t>& cells) override {
     sizeLocalBuffers();
@@ -98,7 +97,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
   void dropGhosts() override {
     m_numBoundary = 0;
     m_rows.dropGhosts();
-    m_listStale = true;
+    m_masksStale = true;
   }
 
   void computeRates(RateSet set) override {
@@ -127,24 +126,38 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     k.wet = m_wet.as<std::uint8_t>();
     // The step loop computes rates only while no particle has moved half the skin since the sort (SphSimulation::rates).
     k.margin = R(0.5 * m_setup.skin * 1.001 + 1e-5 * m_setup.grid.cellSize);
-    // The neighbour lists (SphSetup::neighbourLists), built by the first pass over every row after a sort (the ghosts
-    // packed too).
-    if (m_setup.neighbourLists && m_listStale && set == RateSet::kAll && m_n <= Index(kernels::kMaxListedRow)) buildLists(k);
-    if (m_setup.neighbourLists && !m_listStale) {
-      k.list = m_list.as<std::uint32_t>();
-      k.listCount = m_listCount.as<std::uint32_t>();
-      k.listLayout = m_listLayout;
+    // The hit masks (SphSetup::hitMasks): marked by the first pass after a sort (positions at home), read by the
+    // passes until the next. Not with ghosts: the masks name a candidate by its place in a row's one range of rows.
+    const bool whole = set == RateSet::kAll || (m_numBoundary == 0 && set == RateSet::kInterior);  // one pass over every row
+    if (m_setup.hitMasks && whole && !ghosts && m_setup.grid.reach == 2) {
+      const Index n = std::max<Index>(m_owned, 1);
+      if (m_masksStale) {
+        if (m_maskRows.bytes() < std::size_t(n) * 8) m_maskRows.resize(std::size_t(n) * 10);
+        if (m_masks.bytes() < std::size_t(n) * 4 * kernels::kMaskSlots) m_masks.resize(std::size_t(n) * 5 * kernels::kMaskSlots);
+        const double reach = double(m_kernel.support()) + m_setup.skin;
+        k.markMasks = m_masks.as<std::uint32_t>();
+        k.markRows = m_maskRows.as<std::uint64_t>();
+        k.markCut2 = R(reach * reach * (1 + 1e-4));
+        m_masksStale = false;
+      } else {
+        k.masks = m_masks.as<std::uint32_t>();
+        k.maskRows = m_maskRows.as<std::uint64_t>();
+      }
+      k.maskLayout = Exec::kColumnMajorLists ? ListLayout::columnMajor(n) : ListLayout::rowMajor(kernels::kMaskSlots);
     }
     const bool mirror = m_setup.mirror.any;
-    if (set == RateSet::kAll || (m_numBoundary == 0 && set == RateSet::kInterior)) {
-      m_exec.forEach(m_owned, k);
+    if (whole) {
+      using P = kernels::RatePass;
+      if (k.markMasks) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kMark>{k});
+      else if (k.masks) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kMasks>{k});
+      else m_exec.forEach(m_owned, kernels::InteractPass<R, P::kWalk>{k});
       if (mirror) m_exec.forEach(m_owned, kernels::MirrorImages<R>{k, f, m_setup.mirror});
       return;
     }
     // The list splitBoundary made: boundary rows first, then interior ones.
     const Index* list = m_split.as<Index>() + (set == RateSet::kBoundary ? 0 : m_numBoundary);
     const Index count = set == RateSet::kBoundary ? m_numBoundary : m_owned - m_numBoundary;
-    m_exec.forEach(count, compute::kernels::OverList<kernels::Interact<R>>{k, list});
+    m_exec.forEach(count, compute::kernels::OverList<kernels::InteractPass<R, kernels::RatePass::kWalk>>{{k}, list});
     if (mirror) m_exec.forEach(count, compute::kernels::OverList<kernels::MirrorImages<R>>{kernels::MirrorImages<R>{k, f, m_setup.mirror}, list});
   }
 
@@ -212,7 +225,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     Status st = m_rows.loadState(s, kMigrate | kCheckpoint);
     sizeLocalBuffers();
     m_wetStale = true;
-    m_listStale = true;
+    m_masksStale = true;
     return st;
   }
 
@@ -241,7 +254,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
   const Rows& rows() const override { return m_rows; }
   void localRowsChanged() override {
     sizeLocalBuffers();
-    m_listStale = true;
+    m_masksStale = true;
   }
   template <SphField F> typename Store::template Type<F>* ptr() { return m_fields.template ptr<F>(); }
   template <SphField F> const typename Store::template Type<F>* cptr() const { return m_fields.template ptr<F>(); }
@@ -277,33 +290,6 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
                                m_packRow.as<kernels::RateRow<R>>(), m_packState.as<kernels::RateState<R>>(),
                                m_packPm.as<kernels::RatePm<R>>()};
     m_exec.forEach(to - from, compute::kernels::Offset<kernels::PackRates<R>>{pack, from});
-  }
-
-  // Each owned particle's candidates within the support plus the skin, in the walk's order (SphRateLists.h), with the
-  // capacity grown to the largest count when it did not suffice.
-  void buildLists(const kernels::Interact<R>& k) {
-    const Index n = m_owned;
-    const double reach = double(m_kernel.support()) + m_setup.skin;
-    kernels::BuildRateLists<R> b{m_setup.grid, k.cellStart, k.home, k.row, R(reach * reach * (1 + 1e-4)), k.wet,
-                                 k.ghostCellStart, k.ghostItems, k.ghostBase, k.gid};
-    b.margin = k.margin;
-    for (int attempt = 0; attempt < 2; ++attempt) {
-      if (m_listCount.bytes() < std::size_t(std::max<Index>(n, 1)) * 4) m_listCount.resize(std::size_t(std::max<Index>(n, 1)) * 5);
-      const std::size_t entries = std::size_t(std::max<Index>(n, 1)) * m_listCapacity;
-      if (m_list.bytes() < entries * 4) m_list.resize(entries * 4 + entries);
-      b.capacity = m_listCapacity;
-      b.layout = Exec::kColumnMajorLists ? ListLayout::columnMajor(n) : ListLayout::rowMajor(m_listCapacity);
-      b.list = m_list.as<std::uint32_t>();
-      b.count = m_listCount.as<std::uint32_t>();
-      m_exec.forEach(n, b);
-      const auto most = std::uint32_t(m_exec.maxOf(n, kernels::ListCountOf{b.count}));
-      if (most <= m_listCapacity) {
-        m_listLayout = b.layout;
-        m_listStale = false;
-        return;
-      }
-      m_listCapacity = most + most / 5 + 4;
-    }
   }
 
   // Which boundary particles can have fluid neighbours until the next sort (MarkWet), after each sort and halo.
@@ -435,11 +421,9 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
   Buffer m_wet{m_mem, 0};  // MarkWet, per owned particle
   Buffer m_packRow{m_mem, 0}, m_packState{m_mem, 0}, m_packPm{m_mem, 0};  // PackRates, per local row
   bool m_wetStale = true;
-  // Neighbour lists (buildLists): stale after every sort, halo and load; entries per particle.
-  Buffer m_list{m_mem, 0}, m_listCount{m_mem, 0};
-  std::uint32_t m_listCapacity = 0;
-  ListLayout m_listLayout;
-  bool m_listStale = true;
+  // Hit masks (computeRates): stale after every sort, halo and load.
+  Buffer m_masks{m_mem, 0}, m_maskRows{m_mem, 0};
+  bool m_masksStale = true;
   bool m_sorted = false;  // cellStart and the wet flags exist from the first sortByCell
   Index m_numBoundary = 0;
 };

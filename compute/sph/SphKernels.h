@@ -1,6 +1,7 @@
 // The SPH engine's kernels: one particle per call, PFLOW_HOSTDEVICE, run by either executor. The pair loop
-// walks the cells within two of a particle's (125; 25 in 2D), so there are no neighbour lists to store: the
-// cells are h + skin/2 wide and re-sorted when a particle may have moved half the skin (docs/sph.md, "Neighbours").
+// walks the cells within two of a particle's (125; 25 in 2D), so there are no neighbour lists to store (opt-in: hit
+// masks, a bit per candidate of each row): the cells are h + skin/2 wide and re-sorted when a particle may have moved
+// half the skin (docs/sph.md, "Neighbours").
 // Each kernel writes only the particle it owns: no atomics on the rates.
 #pragma once
 #include <cmath>
@@ -108,6 +109,25 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE R walkGap(R o, int d, R cs, R margin, bool fi
   return (o < lo && !first) ? lo - o : ((o > hi && !last) ? o - hi : R(0));
 }
 
+// The hit masks the pass can read instead of walking every candidate (the first pass after a sort marks them).
+inline constexpr int kMaskRows = 25;   // rows of cells around a's, (dz + 2) * 5 + (dy + 2); reach 2 only
+inline constexpr int kMaskPieces = 2;  // 32-candidate pieces kept per row, counted from the row's first cell
+inline constexpr int kMaskSlots = kMaskRows * kMaskPieces;
+
+// The first sorted particle of the walk's row of cells (y, z) around column cx: a row's pieces count from there (the
+// cell two to the left, or the grid's first along x), whatever the walk prunes; and the row's end.
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE Index maskRowBase(const CellGrid& grid, const Index* cellStart, int cx, int y, int z) {
+  return cellStart[grid.index(cx > 2 ? cx - 2 : 0, y, z)];
+}
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE Index maskRowEnd(const CellGrid& grid, const Index* cellStart, int cx, int y, int z) {
+  return cellStart[grid.index(cx + 2 < grid.nx ? cx + 2 : grid.nx - 1, y, z) + 1];
+}
+
+// Which loop a rates pass runs (Interact::run): the walk of the cells, the walk that also marks the hit masks (the
+// first pass after a sort), or the loop over the masks. Each is a kernel of its own on the GPU (InteractPass), so
+// that none carries the others' registers.
+enum class RatePass { kWalk, kMark, kMasks };
+
 template <class R>
 struct Interact {
   static constexpr bool kVariableCost = true;  // work per particle varies (CpuExecutor::forEach)
@@ -140,20 +160,35 @@ struct Interact {
   // How far a particle may be from the cell it is listed in: half the skin (the step loop sorts again before any
   // particle moves more), widened by 0.1 % and 1e-5 of a cell for the roundings of the gaps. Negative: walk all.
   R margin = R(-1);
-  // Neighbour lists (SphRateLists.h; null: walk the cells): a's candidates within the support plus the skin at the
-  // last sort, in the walk's order, each as (row << 5) | its row of cells (RateListEntry), so a particle evaluates
-  // the same pairs in the same order as the walk and tests only the candidates listed.
-  const std::uint32_t* list = nullptr;
-  const std::uint32_t* listCount = nullptr;
-  ListLayout listLayout;
+  // Hit masks (RatePass::kMasks): which candidates of each of a's rows lay within the support plus the skin at the
+  // last sort, a bit each for the first kMaskPieces x 32 places of a row (docs/sph.md, "Performance"), so a particle
+  // evaluates the same pairs in the same order as the walk and tests only the candidates marked (and the rest of an
+  // overfull row).
+  const std::uint32_t* masks = nullptr;
+  const std::uint64_t* maskRows = nullptr;
+  ListLayout maskLayout;
+  // The first pass after a sort (positions at home; no ghosts) writes them while it walks: which candidates lie
+  // within markCut2 (the support plus the skin, widened for rounding), a row's used/overfull bits in markRows.
+  std::uint32_t* markMasks = nullptr;
+  std::uint64_t* markRows = nullptr;
+  R markCut2 = R(0);
 
+  // The pass the pointers set call for (the tests; the engine launches InteractPass).
   PFLOW_HOSTDEVICE void operator()(Index a) const {
+    if (markMasks) run<RatePass::kMark>(a);
+    else if (masks) run<RatePass::kMasks>(a);
+    else run<RatePass::kWalk>(a);
+  }
+
+  template <RatePass P>
+  PFLOW_HOSTDEVICE void run(Index a) const {
     const RateRow<R> ra = row[a];
     const bool fluidA = !boundaryTag(ra.tag);
     if (!fluidA && wet && !wet[a]) {
       acc[a] = Vec3<R>{R(0), R(0), R(0)};
       drho[a] = R(0);
       visc[a] = R(0);
+      if constexpr (P == RatePass::kMark) markRows[a] = 0;
       return;
     }
     const RateState<R> sa = state[a];
@@ -185,14 +220,41 @@ struct Interact {
       sumDrho += out.densityRate;
       maxVisc = out.viscousRate > maxVisc ? out.viscousRate : maxVisc;
     };
-    if (list) {
-      const std::uint32_t count = listCount[a];
-      for (std::uint32_t e = 0; e < count; ++e) {
-        const std::uint32_t entry = list[listLayout.at(a, e)];
-        const Index b = Index(entry >> 5);
-        const int rowCode = int(entry & 31u);
-        zRow = ra.z - R(rowCode / 5 - 2) * cs;  // the walk's row offsets, rounded the same way
-        yRow = ra.y - R(rowCode % 5 - 2) * cs;
+    int cx, cy, cz;
+    grid.coords(home[a], cx, cy, cz);
+    if constexpr (P == RatePass::kMasks) {
+      // One flat loop over the marked candidates, row by row and piece by piece, so that a warp's lanes evaluate
+      // their pairs together (nested loops over rows, pieces and bits make the warp wait at every level through
+      // the lane with the most bits there). The pieces past the masks of an overfull row are tested as the walk's.
+      const std::uint64_t used = maskRows[a];
+      std::uint32_t rowsLeft = std::uint32_t(used), bits = 0;
+      int code = 0, piece = kMaskPieces;
+      Index base = 0, end = 0;
+      for (;;) {
+        while (bits == 0) {
+          ++piece;
+          if (piece >= kMaskPieces && base + Index(32 * piece) >= end) {  // the next row with marks
+            if (rowsLeft == 0) break;
+            code = lowestSetBit(rowsLeft);  // (dz + 2) * 5 + dy + 2: the walk's order
+            rowsLeft &= rowsLeft - 1;
+            const int dz = code / 5 - 2, dy = code % 5 - 2;
+            zRow = ra.z - R(dz) * cs;  // the walk's row offsets, rounded the same way
+            yRow = ra.y - R(dy) * cs;
+            base = maskRowBase(grid, cellStart, cx, cy + dy, cz + dz);
+            end = (used >> (32 + code)) & 1u ? maskRowEnd(grid, cellStart, cx, cy + dy, cz + dz) : Index(0);
+            piece = 0;
+          }
+          if (piece < kMaskPieces) {
+            bits = masks[maskLayout.at(a, std::uint32_t(code * kMaskPieces + piece))];
+          } else {
+            const Index lo = base + Index(32 * piece);
+            const int len = end - lo < 32 ? int(end - lo) : 32;
+            for (int j = 0; j < len; ++j) bits |= std::uint32_t(isNeighbour(lo + j, row[lo + j])) << j;
+          }
+        }
+        if (bits == 0) break;
+        const Index b = base + Index(32 * piece + lowestSetBit(bits));
+        bits &= bits - 1;
         const RateRow<R> rb = row[b];
         if (norm2(separation(rb)) < cut2) add(b, rb);
       }
@@ -201,24 +263,25 @@ struct Interact {
       visc[a] = maxVisc;
       return;
     }
-    int cx, cy, cz;
-    grid.coords(home[a], cx, cy, cz);
     const int r = grid.reach;
     const bool prune = margin >= R(0);
+    constexpr bool mark = P == RatePass::kMark;
+    const R reach2 = mark ? markCut2 : cut2;  // the cells walked: within the support (plus the skin when marking)
+    std::uint64_t used = 0;                   // marking: rows with marks, rows overfull
     for (int z = cz > r ? cz - r : 0; z <= (cz + r < grid.nz ? cz + r : grid.nz - 1); ++z) {
       const R gz = prune ? walkGap(ra.z, z - cz, cs, margin, z == 0, z == grid.nz - 1) : R(0);
-      if (gz * gz >= cut2) continue;
+      if (gz * gz >= reach2) continue;
       zRow = ra.z - R(z - cz) * cs;
       for (int y = cy > r ? cy - r : 0; y <= (cy + r < grid.ny ? cy + r : grid.ny - 1); ++y) {
         const R gy = prune ? walkGap(ra.y, y - cy, cs, margin, y == 0, y == grid.ny - 1) : R(0);
         const R g2 = gz * gz + gy * gy;
-        if (g2 >= cut2) continue;
+        if (g2 >= reach2) continue;
         yRow = ra.y - R(y - cy) * cs;
         // The row's cells within reach along x (a convex set: trimmed from both ends).
         int x0 = cx > r ? cx - r : 0, x1 = cx + r < grid.nx ? cx + r : grid.nx - 1;
         if (prune) {
-          while (x0 < cx && [&] { const R g = walkGap(ra.x, x0 - cx, cs, margin, x0 == 0, false); return g2 + g * g >= cut2; }()) ++x0;
-          while (x1 > cx && [&] { const R g = walkGap(ra.x, x1 - cx, cs, margin, false, x1 == grid.nx - 1); return g2 + g * g >= cut2; }()) --x1;
+          while (x0 < cx && [&] { const R g = walkGap(ra.x, x0 - cx, cs, margin, x0 == 0, false); return g2 + g * g >= reach2; }()) ++x0;
+          while (x1 > cx && [&] { const R g = walkGap(ra.x, x1 - cx, cs, margin, false, x1 == grid.nx - 1); return g2 + g * g >= reach2; }()) --x1;
         }
         const std::uint32_t c0 = grid.index(x0, y, z), c1 = grid.index(x1, y, z);
         if (ghostCellStart) {  // merged by id, cell by cell
@@ -232,22 +295,69 @@ struct Interact {
         // The row's range in pieces of 32 candidates: first which of them are neighbours (one bit each), then the
         // pair terms of those, in the same order. A warp's lanes evaluate pairs together instead of each lane
         // waiting through the others' pairs while its own candidate is not a neighbour (docs/sph.md, "Performance").
-        const Index end = cellStart[c1 + 1];
-        for (Index piece = cellStart[c0]; piece < end; piece += 32) {
+        const Index from = cellStart[c0], end = cellStart[c1 + 1];
+        if constexpr (!mark) {
+          for (Index piece = from; piece < end; piece += 32) {
+            const int len = end - piece < 32 ? int(end - piece) : 32;
+            std::uint32_t hits = 0;
+            for (int j = 0; j < len; ++j) hits |= std::uint32_t(isNeighbour(piece + j, row[piece + j])) << j;
+            for (; hits != 0; hits &= hits - 1) {
+              const Index b = piece + Index(lowestSetBit(hits));
+              add(b, row[b]);
+            }
+          }
+          continue;
+        }
+        // Marking: the pieces counted from the row's first cell (the masks' pieces), each candidate tested against
+        // both radii; the masks of the row's first kMaskPieces pieces written, zero where nothing was walked.
+        const Index base = maskRowBase(grid, cellStart, cx, y, z);
+        const int code = (z - cz + 2) * 5 + (y - cy + 2);
+        std::uint32_t* slots = markMasks + maskLayout.at(a, std::uint32_t(code * kMaskPieces));
+        const std::size_t stride = maskLayout.at(0, 1);
+        std::uint32_t any = 0;
+        Index k = (from - base) / 32;  // the first piece walked: those before it have no marks
+        for (Index q = 0; q < k && q < Index(kMaskPieces); ++q) slots[q * stride] = 0;
+        for (Index piece = base + k * 32; piece < end; piece += 32, ++k) {
           const int len = end - piece < 32 ? int(end - piece) : 32;
-          std::uint32_t hits = 0;
-          for (int j = 0; j < len; ++j) hits |= std::uint32_t(isNeighbour(piece + j, row[piece + j])) << j;
+          std::uint32_t hits = 0, marks = 0;
+          for (int j = 0; j < len; ++j) {
+            const Index b = piece + Index(j);
+            const RateRow<R> rb = row[b];
+            const bool candidate = b >= from && b != a && (fluidA || !boundaryTag(rb.tag));  // walls: fluid neighbours only
+            const R r2 = norm2(separation(rb));
+            marks |= std::uint32_t(candidate && r2 < markCut2) << j;
+            hits |= std::uint32_t(candidate && r2 < cut2) << j;
+          }
+          if (k < Index(kMaskPieces)) {
+            slots[k * stride] = marks;
+            any |= marks;
+          }
           for (; hits != 0; hits &= hits - 1) {
             const Index b = piece + Index(lowestSetBit(hits));
             add(b, row[b]);
           }
         }
+        for (; k < Index(kMaskPieces); ++k) slots[k * stride] = 0;
+        const bool overfull = end > base + Index(32 * kMaskPieces);
+        if (any != 0 || overfull) used |= std::uint64_t(1) << code;
+        if (overfull) used |= std::uint64_t(1) << (32 + code);
       }
     }
+    if constexpr (mark) markRows[a] = used;
     acc[a] = fluidA ? sumAcc + gravity : Vec3<R>{R(0), R(0), R(0)};
     drho[a] = sumDrho;
     visc[a] = maxVisc;
   }
+};
+
+// One pass of Interact as a kernel of its own.
+template <class R, RatePass P>
+struct InteractPass {
+  static constexpr bool kVariableCost = true;
+  // The marking walk spills under the cap (96 bytes in float) and runs once a sort: uncapped.
+  static constexpr bool kRegisterCap64 = Interact<R>::kRegisterCap64 && P != RatePass::kMark;
+  Interact<R> k;
+  PFLOW_HOSTDEVICE void operator()(Index a) const { k.template run<P>(a); }
 };
 
 // The field table's arrays of a rates pass, for the passes that read it directly (MirrorImages).

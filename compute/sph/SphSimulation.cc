@@ -436,7 +436,7 @@ Result<SphSetup> prepareSphSetup(const RunConfig& config) {
   // The grid: cells h + skin/2 wide (two of them hold every neighbour: reach 2) over the particles' box plus
   // 2h + skin, one layer across a 2D run's plane.
   s.skin = c.skin * d.h;
-  s.neighbourLists = c.neighbourLists;
+  s.hitMasks = c.hitMasks;
   const double reachLength = 2 * d.h + s.skin;
   const double cell = 0.5 * reachLength;
   s.grid.reach = 2;

@@ -82,22 +82,31 @@ TEST(SphConservation, MassIsConservedExactly) {
   EXPECT_NEAR(before.first, 800 * 1000 * 0.01 * 0.01, 1e-9);
 }
 
-// The rates pass over neighbour lists (SphConfig::neighbourLists) runs the dam break exactly as the walk of the cells:
+// The rates pass over hit masks (SphConfig::hitMasks) runs the dam break exactly as the walk of the cells:
 // the same pairs in the same order, so the same positions bit for bit after 0.3 s and several hundred sorts.
-TEST(SphNeighbourLists, SameRunAsTheWalk) {
-  RunConfig c = test::damBreak2D(0.01, 0.3);
+// Runs `c` to `t` with the walk and with hit masks (CPU) and expects the same positions bit for bit.
+void expectSameRunWithHitMasks(RunConfig c, double t) {
   auto walk = SphSimulation::create(c, cpu());
-  c.sph.neighbourLists = true;
-  auto lists = SphSimulation::create(c, cpu());
-  ASSERT_TRUE(walk.isOk() && lists.isOk());
-  ASSERT_TRUE(walk.value()->runUntil(0.3).isOk());
-  ASSERT_TRUE(lists.value()->runUntil(0.3).isOk());
-  EXPECT_EQ(walk.value()->stepCount(), lists.value()->stepCount());
-  const ParticleSnapshot a = walk.value()->snapshot(), b = lists.value()->snapshot();
+  c.sph.hitMasks = true;
+  auto masks = SphSimulation::create(c, cpu());
+  ASSERT_TRUE(walk.isOk() && masks.isOk());
+  ASSERT_TRUE(walk.value()->runUntil(t).isOk());
+  ASSERT_TRUE(masks.value()->runUntil(t).isOk());
+  EXPECT_EQ(walk.value()->stepCount(), masks.value()->stepCount());
+  const ParticleSnapshot a = walk.value()->snapshot(), b = masks.value()->snapshot();
   ASSERT_EQ(a.n, b.n);
   const auto* pa = a.find("position")->as<double>();
   const auto* pb = b.find("position")->as<double>();
   for (std::size_t i = 0; i < 3 * a.n; ++i) ASSERT_EQ(pa[i], pb[i]) << "row " << i / 3;
+}
+
+TEST(SphHitMasks, SameRunAsTheWalk) { expectSameRunWithHitMasks(test::damBreak2D(0.01, 0.3), 0.3); }
+
+// In 3D (all 25 rows of cells), float: the collapse's first 0.1 s.
+TEST(SphHitMasks, SameRunAsTheWalk3DFloat) {
+  RunConfig c = test::damBreak3D(0.02, 0.1);
+  c.sim.precision = Precision::kFloat;
+  expectSameRunWithHitMasks(c, 0.1);
 }
 
 // Without gravity or walls, a blob with a shear flow conserves its linear momentum: every pair term is

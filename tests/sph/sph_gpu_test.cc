@@ -99,4 +99,26 @@ TEST(SphCudaVsCpu, MirrorWallsDamBreakAgrees) {
       << "largest position difference [m]";
 }
 
+// Hit masks (SphConfig::hitMasks, column-major on the GPU) against the CPU's walk, double: the 2D dam break and a
+// 3D one to 0.1 s, every particle within 1e-6 m of its CPU position, as without masks.
+TEST(SphCudaVsCpu, HitMasksAgreeWithTheWalk) {
+  SKIP_WITHOUT_GPU();
+  for (RunConfig c : {test::damBreak2D(0.01, 0.1), test::damBreak3D(0.02, 0.1)}) {
+    auto cpu = make(c, ExecutorKind::kCpu);
+    c.sph.hitMasks = true;
+    auto gpu = make(c, ExecutorKind::kCuda);
+    ASSERT_TRUE(cpu && gpu);
+    ASSERT_TRUE(cpu->runUntil(0.1).isOk());
+    ASSERT_TRUE(gpu->runUntil(0.1).isOk());
+    EXPECT_EQ(cpu->stepCount(), gpu->stepCount());
+    const auto a = positions(cpu->snapshot()), b = positions(gpu->snapshot());
+    ASSERT_EQ(a.size(), b.size());
+    double worst = 0;
+    for (const auto& [id, x] : a) worst = std::max(worst, b.count(id) ? norm(x - b.at(id)) : 1e300);
+    std::printf("hit masks, %d-D: largest CPU-GPU position difference after %lld steps: %.3g m\n", c.sph.dimension,
+                (long long)cpu->stepCount(), worst);
+    EXPECT_LT(worst, 1e-6);
+  }
+}
+
 }  // namespace

@@ -11,7 +11,6 @@
 #include <vector>
 
 #include "compute/sph/SphKernels.h"
-#include "compute/sph/SphRateLists.h"
 
 using namespace pflow;
 using namespace pflow::compute;
@@ -37,10 +36,12 @@ Outputs<R> runPass(const sph::kernels::Interact<R>& base, R margin, Index n) {
   return o;
 }
 
-// How many particles' rates differ between the full walk and one that skips with `marginOfSkin` times half the skin
-// as its margin (and 1e-5 of a cell for rounding); a negative `marginOfSkin`: the pass over neighbour lists instead.
+// How many of n particles' rates differ between the full walk and one that skips with `marginOfSkin` times half the
+// skin as its margin (and 1e-5 of a cell for rounding); a negative `marginOfSkin`: the pass over hit masks instead
+// (overfullRows: how many particles had a row longer than the masks hold).
 template <class R>
-int differingRates(unsigned seed, double marginOfSkin) {
+int differingRates(unsigned seed, double marginOfSkin, Index n = 6000, int* overfullRows = nullptr) {
+  int overfull = 0, markedDiffer = 0;
   const double h = 0.01, skin = 0.25 * h, cs = h + skin / 2;
   CellGrid grid;
   grid.lo = {0, 0, 0};
@@ -50,7 +51,6 @@ int differingRates(unsigned seed, double marginOfSkin) {
   grid.reach = 2;
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(0, 1);
-  const Index n = 6000;
   // Positions at the sort: in the grid, and 3 % up to a cell beyond it (listed in the edge cells).
   std::vector<Vec3d> home(n), pos(n);
   for (Index i = 0; i < n; ++i) {
@@ -111,23 +111,29 @@ int differingRates(unsigned seed, double marginOfSkin) {
     packAtSort.row = atSort.data();
     for (Index i = 0; i < n; ++i) packAtSort(i);
     const double reach = 2 * h + skin;
-    sph::kernels::BuildRateLists<R> build{grid, cellStart.data(), home.data(), atSort.data(), R(reach * reach * (1 + 1e-4))};
-    std::uint32_t capacity = 0;
-    std::vector<std::uint32_t> list, count(n);
-    for (int attempt = 0; attempt < 2; ++attempt) {
-      list.assign(std::size_t(n) * std::max<std::uint32_t>(capacity, 1), 0);
-      build.capacity = capacity;
-      build.layout = ListLayout::columnMajor(n);  // the GPU's layout
-      build.list = list.data();
-      build.count = count.data();
-      for (Index a = 0; a < n; ++a) build(a);
-      capacity = *std::max_element(count.begin(), count.end());
-    }
-    sph::kernels::Interact<R> withLists = k;
-    withLists.list = list.data();
-    withLists.listCount = count.data();
-    withLists.listLayout = build.layout;
-    pruned = runPass(withLists, R(-1), n);
+    std::vector<std::uint32_t> masks(std::size_t(n) * sph::kernels::kMaskSlots, 0xdeadbeefu);  // unused slots hold junk
+    std::vector<std::uint64_t> rows(n);
+    sph::kernels::Interact<R> marking = k;
+    marking.row = atSort.data();
+    marking.markMasks = masks.data();
+    marking.markRows = rows.data();
+    marking.markCut2 = R(reach * reach * (1 + 1e-4));
+    marking.maskLayout = ListLayout::columnMajor(n);  // the GPU's layout
+    const Outputs<R> marked = runPass(marking, R(0.5 * skin * 1.001 + 1e-5 * cs), n);
+    for (Index a = 0; a < n; ++a) overfull += (rows[a] >> 32) != 0;
+    // The marking pass's own rates (at the sort) are the full walk's there.
+    sph::kernels::Interact<R> atSortWalk = k;
+    atSortWalk.row = atSort.data();
+    const Outputs<R> walked = runPass(atSortWalk, R(-1), n);
+    for (Index a = 0; a < n; ++a)
+      markedDiffer += marked.drho[a] != walked.drho[a] || marked.visc[a] != walked.visc[a] || marked.acc[a].x != walked.acc[a].x ||
+                      marked.acc[a].y != walked.acc[a].y || marked.acc[a].z != walked.acc[a].z;
+    sph::kernels::Interact<R> withMasks = k;
+    withMasks.masks = masks.data();
+    withMasks.maskRows = rows.data();
+    withMasks.maskLayout = marking.maskLayout;
+    pruned = runPass(withMasks, R(-1), n);
+    if (overfullRows) *overfullRows = overfull;
   }
   int differ = 0, neighbours = 0;
   for (Index a = 0; a < n; ++a) {
@@ -136,7 +142,7 @@ int differingRates(unsigned seed, double marginOfSkin) {
     neighbours += full.drho[a] != R(0);
   }
   EXPECT_GT(neighbours, int(n / 2));  // the pass did see neighbours
-  return differ;
+  return differ + markedDiffer;
 }
 
 TEST(SphWalk, SkippedCellsHoldNoNeighbourDouble) {
@@ -147,10 +153,15 @@ TEST(SphWalk, SkippedCellsHoldNoNeighbourFloat) {
   for (unsigned seed : {4u, 5u, 6u}) EXPECT_EQ(differingRates<float>(seed, 1.001), 0) << "seed " << seed;
 }
 
-// The neighbour lists (SphRateLists.h) built at the sort give the walk's rates bit for bit after the particles moved.
-TEST(SphWalk, NeighbourListsGiveTheWalksRates) {
+// The hit masks marked by the pass at the sort give the walk's rates bit for bit after the particles moved: at
+// about 12 particles a cell (rows of about 60) and at 48 (rows past the 128 the masks hold: the rest walked).
+TEST(SphWalk, HitMasksGiveTheWalksRates) {
   for (unsigned seed : {7u, 8u}) EXPECT_EQ(differingRates<double>(seed, -1.0), 0) << "seed " << seed;
   for (unsigned seed : {9u, 10u}) EXPECT_EQ(differingRates<float>(seed, -1.0), 0) << "seed " << seed;
+  int overfull = 0;
+  EXPECT_EQ(differingRates<float>(11u, -1.0, 24000, &overfull), 0);
+  EXPECT_GT(overfull, 20000);
+  EXPECT_EQ(differingRates<double>(12u, -1.0, 24000, &overfull), 0);
 }
 
 // The check is sharp: skipping as if no particle had moved drops real neighbours of some that did.

@@ -37,6 +37,16 @@ inline compute::RunConfig damBreak2D(double dp, double duration = 0.45) {
   return c;
 }
 
+// A small 3D dam break (all 25 rows of cells the rates pass walks): a column 0.2 x 0.12 x 0.3 m in a tank 0.5 x
+// 0.12 m (closed sides), for the comparisons of passes and executors.
+inline compute::RunConfig damBreak3D(double dp, double duration) {
+  compute::RunConfig c = sphBase(dp, duration);
+  c.sph.dimension = 3;
+  compute::sph::addFluidBlock(c.sph, "fluid.blocks[0]", {0, 0, 0}, {0.2, 0.12, 0.3});
+  compute::sph::addTank(c.sph, "tank", {0, 0, 0}, {0.5, 0.12, 0.4});
+  return c;
+}
+
 // The tank's walls as mirrors instead of boundary particles (sph.boundary: mirror).
 inline compute::RunConfig withMirrorWalls(compute::RunConfig c) {
   c.sph.boundary = compute::sph::BoundaryKind::kMirror;
