@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Where the time of the SPH rates pass goes in the flow, with and without hit masks (SPHERIC test 2, float,
 # velocity Verlet, after SPH_ADVANCE s of flow): pflow-sph-bench's phase timers for both, then Nsight
-# Compute on one mask build in the flow (its duration, throughput and stalls).
+# Compute on one marking pass in the flow (its duration, throughput and stalls).
 #   bash bench/gpu/masks_profile.sh [spacing]
 source "$(dirname "$0")/setup.sh"
 sp=${1:-0.006}
@@ -14,9 +14,9 @@ for mode in walk masks; do
     --warmup 10 --steps 100 "${extra[@]}" --copy-bandwidth "$bw" --device "$dev" --commit "$commit" >> "$OUT/masks.jsonl" 2>> "$OUT/masks_bench.log"
   echo "$mode rc=$?"
 done
-# One mask build in the flow under Nsight Compute (the 300th: well into the flow).
+# One marking pass (InteractPass<float, RatePass::kMark>) under Nsight Compute: the 300th, well into the flow.
 NCU=$(command -v ncu || echo /usr/local/cuda/bin/ncu)
-timeout 400 "$NCU" --kernel-name-base demangled --kernel-name regex:'BuildRateMasks' --launch-skip 300 --launch-count 1 \
+timeout 400 "$NCU" --kernel-name-base demangled --kernel-name regex:'InteractPass<float, .*RatePass.1>' --launch-skip 300 --launch-count 1 \
   --section SpeedOfLight --section LaunchStats --section WarpStateStats \
   "$B/pflow-sph-bench" --executor cuda --precision float --integrator velocity_verlet --spacing "$sp" --advance "$adv" \
   --warmup 2 --steps 3 --masks > "$OUT/masks_ncu.txt" 2>&1

@@ -2,7 +2,7 @@
 # A/B of pflow-sph-bench builds in one device call (same machine, same clocks): each binary named on the command
 # line (file names under .gpu/bin after unpacking .gpuz/b.tgz) runs SPHERIC test 2 in float with velocity Verlet,
 # from rest at SPH_AB_SPACING (default 0.006 m) and in the flow (after 0.32 s) at SPH_AB_FLOW_SPACING (default 0.01 m),
-# twice each, interleaved; then the last binary in the flow with the skins in SPH_AB_SKINS. JSON lines and logs to $OUT.
+# SPH_AB_ROUNDS times (default 2), interleaved; then the last binary in the flow with the skins in SPH_AB_SKINS. JSON lines and logs to $OUT.
 # A binary may carry options after a colon (pflow-sph-bench:--masks): one build with and without a switch.
 #   bash bench/gpu/sph_ab.sh pflow-sph-bench-base pflow-sph-bench
 #   bash bench/gpu/sph_ab.sh pflow-sph-bench pflow-sph-bench:--masks

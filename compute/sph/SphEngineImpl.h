@@ -52,6 +52,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     m_mem.copyWithin(m_ref.data(), ptr<SphField::Position>(), std::size_t(m_n) * sizeof(Vec3d));
     m_wetStale = true;
     m_masksStale = true;
+    m_atHome = true;
     m_sorted = true;
   }
 
@@ -126,12 +127,13 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     k.wet = m_wet.as<std::uint8_t>();
     // The step loop computes rates only while no particle has moved half the skin since the sort (SphSimulation::rates).
     k.margin = R(0.5 * m_setup.skin * 1.001 + 1e-5 * m_setup.grid.cellSize);
-    // The hit masks (SphSetup::hitMasks): marked by the first pass after a sort (positions at home), read by the
-    // passes until the next. Not with ghosts: the masks name a candidate by its place in a row's one range of rows.
+    // The hit masks (SphSetup::hitMasks): marked by the first pass after a sort while the positions are still those
+    // of the sort (not after a resume's sort that a step followed: walked until the next sort), read by the passes
+    // until the next sort. Not on a rank with ghosts: the masks name a candidate by its place in a row's one range.
     const bool whole = set == RateSet::kAll || (m_numBoundary == 0 && set == RateSet::kInterior);  // one pass over every row
     if (m_setup.hitMasks && whole && !ghosts && m_setup.grid.reach == 2) {
       const Index n = std::max<Index>(m_owned, 1);
-      if (m_masksStale) {
+      if (m_masksStale && m_atHome) {
         if (m_maskRows.bytes() < std::size_t(n) * 8) m_maskRows.resize(std::size_t(n) * 10);
         if (m_masks.bytes() < std::size_t(n) * 4 * kernels::kMaskSlots) m_masks.resize(std::size_t(n) * 5 * kernels::kMaskSlots);
         const double reach = double(m_kernel.support()) + m_setup.skin;
@@ -139,7 +141,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
         k.markRows = m_maskRows.as<std::uint64_t>();
         k.markCut2 = R(reach * reach * (1 + 1e-4));
         m_masksStale = false;
-      } else {
+      } else if (!m_masksStale) {
         k.masks = m_masks.as<std::uint32_t>();
         k.maskRows = m_maskRows.as<std::uint64_t>();
       }
@@ -166,21 +168,29 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
                                                          cptr<SphField::Kind>(), m_setup.h, m_setup.c0});
   }
 
-  double predictor(double dt) override { return m_exec.maxOf(m_owned, kernels::Predictor<R>{stepArgs(dt)}); }
+  double predictor(double dt) override {
+    m_atHome = false;
+    return m_exec.maxOf(m_owned, kernels::Predictor<R>{stepArgs(dt)});
+  }
 
   Status corrector(double dt, double& moved2) override {
     m_exec.forEach(1, compute::kernels::ResetConditions{m_cond.as<Conditions>()});
+    m_atHome = false;
     moved2 = m_exec.maxOf(m_owned, kernels::Corrector<R>{stepArgs(dt)});
     return checked();
   }
 
   Status verlet(double dt, double dtBefore, double& moved2) override {
     m_exec.forEach(1, compute::kernels::ResetConditions{m_cond.as<Conditions>()});
+    m_atHome = false;
     moved2 = m_exec.maxOf(m_owned, kernels::VerletStep<R>{stepArgs(dt), dtBefore});
     return checked();
   }
 
-  double kickDrift(double dt) override { return m_exec.maxOf(m_owned, kernels::KickDrift<R>{stepArgs(dt)}); }
+  double kickDrift(double dt) override {
+    m_atHome = false;
+    return m_exec.maxOf(m_owned, kernels::KickDrift<R>{stepArgs(dt)});
+  }
 
   Status kick(double dt) override {
     m_exec.forEach(1, compute::kernels::ResetConditions{m_cond.as<Conditions>()});
@@ -226,6 +236,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     sizeLocalBuffers();
     m_wetStale = true;
     m_masksStale = true;
+    m_atHome = false;
     return st;
   }
 
@@ -255,6 +266,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
   void localRowsChanged() override {
     sizeLocalBuffers();
     m_masksStale = true;
+    m_atHome = false;
   }
   template <SphField F> typename Store::template Type<F>* ptr() { return m_fields.template ptr<F>(); }
   template <SphField F> const typename Store::template Type<F>* cptr() const { return m_fields.template ptr<F>(); }
@@ -424,6 +436,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
   // Hit masks (computeRates): stale after every sort, halo and load.
   Buffer m_masks{m_mem, 0}, m_maskRows{m_mem, 0};
   bool m_masksStale = true;
+  bool m_atHome = false;  // the positions are those of the last sort (m_ref): no integration step since
   bool m_sorted = false;  // cellStart and the wet flags exist from the first sortByCell
   Index m_numBoundary = 0;
 };

@@ -1,6 +1,6 @@
 // The SPH engine's kernels: one particle per call, PFLOW_HOSTDEVICE, run by either executor. The pair loop
 // walks the cells within two of a particle's (125; 25 in 2D), so there are no neighbour lists to store (opt-in: hit
-// masks, a bit per candidate of each row): the cells are h + skin/2 wide and re-sorted when a particle may have moved
+// masks, a bit for each of the first 64 places of each row): the cells are h + skin/2 wide and re-sorted when a particle may have moved
 // half the skin (docs/sph.md, "Neighbours").
 // Each kernel writes only the particle it owns: no atomics on the rates.
 #pragma once

@@ -2,6 +2,8 @@
 // bit for bit, on the CPU (the state arrays are the executor's own; docs/operations.md, "Checkpoints").
 #include <gtest/gtest.h>
 
+#include <string>
+
 #include <cstring>
 #include <map>
 
@@ -67,17 +69,21 @@ TEST(Checkpoint, StateOnlyJustAfterARebuild) {
 // The 2D dam break (20 x 40, each integrator): checkpointed at the first cell sort after step 300, resumed in a new
 // run of the same scene, both taken to step 900: every position, velocity, density and pressure is the
 // uninterrupted run's, bit for bit.
+// With hit masks (sph::SphConfig::hitMasks) in the interrupted and resumed runs, against the straight run's walk: the
+// resumed run walks until its first sort after the resume's (its positions are no longer those of that sort).
 TEST(Checkpoint, ResumedSphRunIsBitIdentical) {
+  for (bool masks : {false, true})
   for (auto integrator : {sph::Integrator::kSymplectic, sph::Integrator::kVerlet, sph::Integrator::kVelocityVerlet}) {
-    SCOPED_TRACE(sph::integratorName(integrator));
+    SCOPED_TRACE(std::string(sph::integratorName(integrator)) + (masks ? ", hit masks" : ""));
     RunConfig c = test::damBreak2D(0.01, 1.0);
     c.sph.integrator = integrator;
-    auto make = [&] {
+    auto make = [&](bool withMasks) {
+      c.sph.hitMasks = withMasks;
       auto sim = sph::SphSimulation::create(c);
       EXPECT_TRUE(sim.isOk()) << sim.status().message();
       return sim.isOk() ? std::move(sim).value() : nullptr;
     };
-    auto straight = make(), first = make(), resumed = make();
+    auto straight = make(false), first = make(masks), resumed = make(masks);
     ASSERT_TRUE(straight && first && resumed);
     ASSERT_TRUE(straight->runSteps(900).isOk());
     const auto state = test::checkpointAfter(*first, 300);
