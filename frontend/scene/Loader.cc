@@ -6,6 +6,9 @@
 
 #include "compute/dem/ParticleFields.h"
 #include <new>
+#include <unordered_map>
+#include <utility>
+#include <vector>
 
 #include <algorithm>
 #include <cmath>
@@ -604,18 +607,47 @@ int textNesting(const std::string& text, int& line) {
   return deepest;
 }
 
+// How many nodes a document expands to when its aliases are followed, counted in the time of its text: each
+// collection's count is kept by its place in the text (an alias is the anchored node itself, at the anchor's place),
+// so nine levels of ten aliases cost a hundred visits, not a billion. Saturates at kMaxExpandedNodes + 1. A cycle or
+// nesting past kMaxNesting counts as one node here: checkStructure reports them.
+class Expansion {
+public:
+  std::size_t count(const YAML::Node& node, int depth) {
+    if (++m_visits > kMaxExpandedNodes) return kMaxExpandedNodes + 1;  // a memo defeated: still bounded
+    if (!node.IsMap() && !node.IsSequence()) return 1;
+    if (depth > kMaxNesting) return 1;
+    for (const YAML::Node& a : m_open)
+      if (a.is(node)) return 1;
+    const long pos = node.Mark().pos;
+    if (pos >= 0) {
+      const auto it = m_memo.find(pos);
+      if (it != m_memo.end() && it->second.first.is(node)) return it->second.second;
+    }
+    m_open.push_back(node);
+    std::size_t total = 1;
+    auto add = [&](const YAML::Node& child) { total = std::min(total + count(child, depth + 1), kMaxExpandedNodes + 1); };
+    if (node.IsMap()) {
+      for (auto it = node.begin(); it != node.end(); ++it) add(it->second);
+    } else {
+      for (std::size_t i = 0; i < node.size(); ++i) add(node[i]);
+    }
+    m_open.pop_back();
+    if (pos >= 0) m_memo.insert_or_assign(pos, std::make_pair(node, total));
+    return total;
+  }
+
+private:
+  std::unordered_map<long, std::pair<YAML::Node, std::size_t>> m_memo;
+  std::vector<YAML::Node> m_open;
+  std::size_t m_visits = 0;
+};
+
 }  // namespace
 
-// Refuses aliases that refer to a node containing them (a cycle), nesting deeper than kMaxNesting, and documents that
-// expand (aliases followed) to more than kMaxExpandedNodes nodes.
+// Refuses aliases that refer to a node containing them (a cycle) and nesting deeper than kMaxNesting. A document
+// that expands past kMaxExpandedNodes was refused before (Expansion), so this walk is bounded.
 void Loader::checkStructure(const YAML::Node& node, const std::string& path, std::vector<YAML::Node>& ancestors) {
-  if (m_expandedNodes > kMaxExpandedNodes) return;
-  if (++m_expandedNodes > kMaxExpandedNodes) {
-    badValue(path, "the scene expands to more than " + std::to_string(kMaxExpandedNodes) +
-                       " values when its aliases ('*name') are followed; repeat less, or give the values once",
-             locOf(node));
-    return;
-  }
   if (!node.IsMap() && !node.IsSequence()) return;
   for (const YAML::Node& a : ancestors) {
     if (a.is(node)) {
@@ -659,6 +691,12 @@ Result<LoadedScene> Loader::run(const std::string& yaml, const std::string& sour
     }
     if (!root.IsDefined() || root.IsNull()) {
       error("", "the scene is empty; expected a mapping with keys " + joinNames(kTopKeys), {1, 1});
+      return m_errors.toStatus(sourceName);
+    }
+    if (Expansion().count(root, 0) > kMaxExpandedNodes) {
+      error("", "the scene expands to more than " + std::to_string(kMaxExpandedNodes) +
+                    " values when its aliases ('*name') are followed; repeat less, or give the values once",
+            locOf(root));
       return m_errors.toStatus(sourceName);
     }
     std::vector<YAML::Node> ancestors;

@@ -231,7 +231,6 @@ class Loader {
   Result<std::string> resolveInput(const std::string& name) const;
 
   LoadOptions m_options;
-  std::size_t m_expandedNodes = 0;  // checkStructure: nodes visited, aliases followed
   ErrorList m_errors;
   RunConfig m_config;
   std::string m_outputFile;

@@ -148,6 +148,13 @@ def main():
         assert not failed, "jobs did not succeed"
         assert bad == 0, "snapshots missing or different"
         print("PASS chaos: %d faults, %d jobs, every snapshot identical to an undisturbed run" % (len(events), len(jobs)))
+    except BaseException:
+        # What CI shows of a failure is this output: the faults so far and the end of every service's log.
+        print("chaos failed after these faults:\n  " + "\n  ".join(events))
+        for name in sorted(os.listdir(os.path.join(s.dir, "logs"))):
+            with open(os.path.join(s.dir, "logs", name), errors="replace") as f:
+                print("--- the end of %s\n%s" % (name, "".join(f.readlines()[-15:])))
+        raise
     finally:
         s.close()
 

@@ -153,7 +153,13 @@ class Stack:
         end = time.time() + timeout
         last = None
         while time.time() < end:
-            last = self.json("job", job)
+            # A manager just started again (tests/chaos) may not answer yet: a failed call is retried, not fatal.
+            r = self.cli("job", job, "--json", check=False)
+            if r.returncode != 0:
+                last = "the CLI exited %d: %s" % (r.returncode, (r.stderr or r.stdout).strip()[-300:])
+                time.sleep(0.5)
+                continue
+            last = json.loads(r.stdout)
             if last["state"] in states:
                 return last
             time.sleep(0.3)
