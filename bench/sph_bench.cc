@@ -42,6 +42,8 @@ int main(int argc, char** argv) {
   double advance = 0;
   std::optional<double> skin;
   bool masks = false;
+  int splitSteps = 0;
+  std::vector<std::string> variants;
   std::string decomposition = "scene";
   app.add_option("--scene", scene, "an SPH scene file")->capture_default_str();
   app.add_option("--spacing", spacings, "particle spacings dp [m], one run each (the scene's sph.spacing replaced)")->delimiter(',');
@@ -62,6 +64,13 @@ int main(int argc, char** argv) {
   app.add_option("--decomposition", decomposition, "distributed runs: the scene's simulation.decomposition, or sfc | multisection")
       ->check(CLI::IsMember({"scene", "sfc", "multisection"}))->capture_default_str();
   app.add_option("--skin", skin, "the neighbour skin as a fraction of h instead of the scene's sph.skin");
+  app.add_option("--split-steps", splitSteps,
+                 "after the timed steps, this many more one at a time: the rates pass's time in the steps that sorted "
+                 "(and marked hit masks) apart from the others")->capture_default_str();
+  app.add_option("--variants", variants,
+                 "rates passes timed one after another from the same flow, a JSON line each: walk | wide (64 candidates "
+                 "tested before their pairs) | masks (instead of --masks)")
+      ->delimiter(',')->check(CLI::IsMember({"walk", "wide", "masks"}));
   app.add_flag("--masks", masks, "the rates pass reads hit masks built at each sort (SphConfig::hitMasks)");
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::warn);
@@ -126,6 +135,9 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "%s\n", s.message().c_str());
         return 3;
       }
+    if (variants.empty()) variants.push_back(masks ? "masks" : "walk");
+    for (const std::string& variant : variants) {
+    sim.engine().setRatePasses(variant == "masks", variant == "wide");
     if (Status s = sim.runSteps(warmup); !s.isOk()) {
       std::fprintf(stderr, "%s\n", s.message().c_str());
       return 3;
@@ -178,7 +190,8 @@ int main(int argc, char** argv) {
                      {"cell_sorts", sim.rebuilds() - sortsBefore},
                      {"advance_s", advance},
                      {"skin", cfg.sph.skin},
-                     {"hit_masks", cfg.sph.hitMasks},
+                     {"hit_masks", variant == "masks"},
+                     {"rate_pass", variant},
                      {"device_bytes_per_particle", double(sim.deviceBytes()) / n},
                      {"compulsory_bytes_per_particle_step", bytesPerStep},
                      {"device", device},
@@ -189,6 +202,28 @@ int main(int argc, char** argv) {
     for (int p = 0; p < int(compute::Phase::kCount); ++p)
       if (sim.timers().seconds(compute::Phase(p)) > 0) phases[compute::kPhaseNames[p]] = sim.timers().seconds(compute::Phase(p));
     j["phases_s"] = phases;  // rank 0's
+    if (splitSteps > 0) {
+      // The forces phase (the rates pass; fenced) of each step, summed apart for the steps whose rates followed a
+      // sort (with --masks, the marking pass) and the others (the masks read, or the walk).
+      double sorted = 0, plain = 0;
+      int nSorted = 0, nPlain = 0;
+      for (int i = 0; i < splitSteps; ++i) {
+        const double before = sim.timers().seconds(compute::Phase::kForces);
+        const std::int64_t sorts = sim.rebuilds();
+        if (Status s = sim.runSteps(1); !s.isOk()) {
+          std::fprintf(stderr, "%s\n", s.message().c_str());
+          return 3;
+        }
+        const double t = sim.timers().seconds(compute::Phase::kForces) - before;
+        if (sim.rebuilds() != sorts) sorted += t, ++nSorted;
+        else plain += t, ++nPlain;
+      }
+      j["split"] = {{"steps", splitSteps},
+                    {"after_sort", nSorted},
+                    {"forces_ms_after_sort", nSorted ? 1e3 * sorted / nSorted : 0.0},
+                    {"between_sorts", nPlain},
+                    {"forces_ms_between_sorts", nPlain ? 1e3 * plain / nPlain : 0.0}};
+    }
     if (ranks > 1) {  // each phase's largest over the ranks (the busiest rank sets the pace)
       const auto& domain = static_cast<const compute::MpiDomain&>(*so.domain);
       j["phases_max_s"] = bench::phaseSpread(sim.timers()).largest();
@@ -203,6 +238,7 @@ int main(int argc, char** argv) {
     if (rank == 0) {
       std::printf("%s\n", j.dump().c_str());
       std::fflush(stdout);
+    }
     }
   }
   return 0;

@@ -152,6 +152,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
       using P = kernels::RatePass;
       if (k.markMasks) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kMark>{k});
       else if (k.masks) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kMasks>{k});
+      else if (m_setup.wideWalk) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kWalkWide>{k});
       else m_exec.forEach(m_owned, kernels::InteractPass<R, P::kWalk>{k});
       if (mirror) m_exec.forEach(m_owned, kernels::MirrorImages<R>{k, f, m_setup.mirror});
       return;
@@ -161,6 +162,12 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     const Index count = set == RateSet::kBoundary ? m_numBoundary : m_owned - m_numBoundary;
     m_exec.forEach(count, compute::kernels::OverList<kernels::InteractPass<R, kernels::RatePass::kWalk>>{{k}, list});
     if (mirror) m_exec.forEach(count, compute::kernels::OverList<kernels::MirrorImages<R>>{kernels::MirrorImages<R>{k, f, m_setup.mirror}, list});
+  }
+
+  void setRatePasses(bool hitMasks, bool wideWalk) override {
+    m_setup.hitMasks = hitMasks;
+    m_setup.wideWalk = wideWalk;
+    m_masksStale = true;
   }
 
   double maxInverseStep() const override {
