@@ -5,6 +5,8 @@
 // against --copy-bandwidth (pflow-gpu-bandwidth's figure). Under mpirun the scene is split across the ranks
 // (compute/mpi's MpiDomain, particle-count balance), with the halo overlapped with the interior rates or in
 // sequence (--overlap on|off: seed 003's boundary/centre overlap); rank 0 prints. bench/RESULTS.md records the rows.
+// --variants walk,masks times the rates passes one after another from the same flow (a line each); --split-steps
+// times that many more steps one at a time, the rates pass after a sort (the marking pass) apart from the others.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
@@ -68,9 +70,9 @@ int main(int argc, char** argv) {
                  "after the timed steps, this many more one at a time: the rates pass's time in the steps that sorted "
                  "(and marked hit masks) apart from the others")->capture_default_str();
   app.add_option("--variants", variants,
-                 "rates passes timed one after another from the same flow, a JSON line each: walk | wide (64 candidates "
-                 "tested before their pairs) | masks (instead of --masks)")
-      ->delimiter(',')->check(CLI::IsMember({"walk", "wide", "masks"}));
+                 "rates passes timed one after another from the same flow, a JSON line each: walk | masks (instead of "
+                 "--masks)")
+      ->delimiter(',')->check(CLI::IsMember({"walk", "masks"}));
   app.add_flag("--masks", masks, "the rates pass reads hit masks built at each sort (SphConfig::hitMasks)");
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::warn);
@@ -137,109 +139,109 @@ int main(int argc, char** argv) {
       }
     if (variants.empty()) variants.push_back(masks ? "masks" : "walk");
     for (const std::string& variant : variants) {
-    sim.engine().setRatePasses(variant == "masks", variant == "wide");
-    if (Status s = sim.runSteps(warmup); !s.isOk()) {
-      std::fprintf(stderr, "%s\n", s.message().c_str());
-      return 3;
-    }
-    sim.engine().fence();
-    MPI_Barrier(MPI_COMM_WORLD);
-    sim.timers().reset();
-    const std::int64_t sortsBefore = sim.rebuilds();
-    const auto start = std::chrono::steady_clock::now();
-    if (Status s = sim.runSteps(steps); !s.isOk()) {
-      std::fprintf(stderr, "%s\n", s.message().c_str());
-      return 3;
-    }
-    sim.engine().fence();
-    MPI_Barrier(MPI_COMM_WORLD);
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const double n = double(sim.totalParticles());
-    // Compulsory traffic of one step, in bytes of the field table at the run's precision. Symplectic: two rate
-    // passes (each reads position, velocity, density, pressure, mass, kind and writes acceleration, density rate,
-    // viscous rate) and the two halves (each reads and writes the state and its copy at the start). Verlet: one
-    // pass and one update (reads the state, the one before and the rates; writes both states and the pressure).
-    const double r = precision == "float" ? 4 : 8;
-    const double pass = 8 * 3 + 3 * r + r + r + r + 4 + (3 * r + r + r);
-    const double halves = 2 * (2 * (24 + 3 * r + r) + 3 * r + r + r + 4);
-    const double update = (24 + 6 * r + 2 * r + 3 * r + r + 4) + (24 + 6 * r + 2 * r + r);
-    // Velocity Verlet: one pass, the kick and drift (reads x, v, a, rho, drho, kind, the sort's x; writes x, v, the
-    // half-step v and rho, rho, p) and the second kick (reads the half-step v and rho, the rates, kind, x, the sort's
-    // x; writes x, v, rho, p).
-    const double kickDrift = (24 + 3 * r + 3 * r + r + r + 4 + 24) + (24 + 3 * r + 3 * r + r + r + r);
-    const double kick = (r + r + 3 * r + 3 * r + 4 + 24 + 24) + (24 + 3 * r + r + r);
-    const double bytesPerStep = verlet ? pass + update : kdk ? pass + kickDrift + kick : 2 * pass + halves;
-    nlohmann::json j{{"solver", "sph"},
-                     {"case", scene},
-                     {"executor", executor},
-                     {"precision", precision},
-                     {"integrator", compute::sph::integratorName(cfg.sph.integrator)},
-                     {"spacing", dp},
-                     {"n", sim.totalParticles()},
-                     {"ranks", ranks},
-                     {"gpus", executor == "cuda" ? std::min(ranks, gpus) : 0},
-                     {"threads", threads},
-                     {"overlap", overlap},
-                     {"decomposition", strategy == compute::DecompositionKind::kSfc ? "sfc" : "multisection"},
-                     {"fluid", sim.fluidParticles()},
-                     {"steps", steps},
-                     {"ms_per_step", 1e3 * wall / steps},
-                     {"particle_steps_per_s", n * steps / wall},
-                     {"sim_time", sim.time()},
-                     {"dt", sim.dt()},
-                     {"cell_sorts", sim.rebuilds() - sortsBefore},
-                     {"advance_s", advance},
-                     {"skin", cfg.sph.skin},
-                     {"hit_masks", variant == "masks"},
-                     {"rate_pass", variant},
-                     {"device_bytes_per_particle", double(sim.deviceBytes()) / n},
-                     {"compulsory_bytes_per_particle_step", bytesPerStep},
-                     {"device", device},
-                     {"commit", commit.empty() ? std::string("unknown") : commit},
-                     {"date", bench::today()}};
-    if (bandwidth > 0) j["fraction_of_copy_bandwidth"] = bytesPerStep * n * steps / wall / (bandwidth * 1e9);
-    nlohmann::json phases;
-    for (int p = 0; p < int(compute::Phase::kCount); ++p)
-      if (sim.timers().seconds(compute::Phase(p)) > 0) phases[compute::kPhaseNames[p]] = sim.timers().seconds(compute::Phase(p));
-    j["phases_s"] = phases;  // rank 0's
-    if (splitSteps > 0) {
-      // The forces phase (the rates pass; fenced) of each step, summed apart for the steps whose rates followed a
-      // sort (with --masks, the marking pass) and the others (the masks read, or the walk).
-      double sorted = 0, plain = 0;
-      int nSorted = 0, nPlain = 0;
-      for (int i = 0; i < splitSteps; ++i) {
-        const double before = sim.timers().seconds(compute::Phase::kForces);
-        const std::int64_t sorts = sim.rebuilds();
-        if (Status s = sim.runSteps(1); !s.isOk()) {
-          std::fprintf(stderr, "%s\n", s.message().c_str());
-          return 3;
-        }
-        const double t = sim.timers().seconds(compute::Phase::kForces) - before;
-        if (sim.rebuilds() != sorts) sorted += t, ++nSorted;
-        else plain += t, ++nPlain;
+      sim.engine().setHitMasks(variant == "masks");
+      if (Status s = sim.runSteps(warmup); !s.isOk()) {
+        std::fprintf(stderr, "%s\n", s.message().c_str());
+        return 3;
       }
-      j["split"] = {{"steps", splitSteps},
-                    {"after_sort", nSorted},
-                    {"forces_ms_after_sort", nSorted ? 1e3 * sorted / nSorted : 0.0},
-                    {"between_sorts", nPlain},
-                    {"forces_ms_between_sorts", nPlain ? 1e3 * plain / nPlain : 0.0}};
-    }
-    if (ranks > 1) {  // each phase's largest over the ranks (the busiest rank sets the pace)
-      const auto& domain = static_cast<const compute::MpiDomain&>(*so.domain);
-      j["phases_max_s"] = bench::phaseSpread(sim.timers()).largest();
-      j["owned_per_rank"] = domain.ownedPerRank();  // at the last rebuild (or the scene's partition)
-      // Rank 0's rebuilds, where their time went (MpiDomain::rebuildTimes), and its ghosts.
-      const auto& t = domain.rebuildTimes();
-      j["rebuild_s"] = {{"rebuilds", t.rebuilds}, {"positions", t.positions}, {"weights", t.weights}, {"balance", t.balance},
-                        {"owners", t.owners}, {"migration", t.migration}, {"halo_rows", t.haloRows}, {"ghosts", t.ghosts}};
-      j["rebalances"] = domain.rebalances();
-      j["ghosts"] = sim.engine().ghosts();
-    }
-    if (rank == 0) {
-      std::printf("%s\n", j.dump().c_str());
-      std::fflush(stdout);
-    }
-    }
+      sim.engine().fence();
+      MPI_Barrier(MPI_COMM_WORLD);
+      sim.timers().reset();
+      const std::int64_t sortsBefore = sim.rebuilds();
+      const auto start = std::chrono::steady_clock::now();
+      if (Status s = sim.runSteps(steps); !s.isOk()) {
+        std::fprintf(stderr, "%s\n", s.message().c_str());
+        return 3;
+      }
+      sim.engine().fence();
+      MPI_Barrier(MPI_COMM_WORLD);
+      const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      const double n = double(sim.totalParticles());
+      // Compulsory traffic of one step, in bytes of the field table at the run's precision. Symplectic: two rate
+      // passes (each reads position, velocity, density, pressure, mass, kind and writes acceleration, density rate,
+      // viscous rate) and the two halves (each reads and writes the state and its copy at the start). Verlet: one
+      // pass and one update (reads the state, the one before and the rates; writes both states and the pressure).
+      const double r = precision == "float" ? 4 : 8;
+      const double pass = 8 * 3 + 3 * r + r + r + r + 4 + (3 * r + r + r);
+      const double halves = 2 * (2 * (24 + 3 * r + r) + 3 * r + r + r + 4);
+      const double update = (24 + 6 * r + 2 * r + 3 * r + r + 4) + (24 + 6 * r + 2 * r + r);
+      // Velocity Verlet: one pass, the kick and drift (reads x, v, a, rho, drho, kind, the sort's x; writes x, v, the
+      // half-step v and rho, rho, p) and the second kick (reads the half-step v and rho, the rates, kind, x, the sort's
+      // x; writes x, v, rho, p).
+      const double kickDrift = (24 + 3 * r + 3 * r + r + r + 4 + 24) + (24 + 3 * r + 3 * r + r + r + r);
+      const double kick = (r + r + 3 * r + 3 * r + 4 + 24 + 24) + (24 + 3 * r + r + r);
+      const double bytesPerStep = verlet ? pass + update : kdk ? pass + kickDrift + kick : 2 * pass + halves;
+      nlohmann::json j{{"solver", "sph"},
+                       {"case", scene},
+                       {"executor", executor},
+                       {"precision", precision},
+                       {"integrator", compute::sph::integratorName(cfg.sph.integrator)},
+                       {"spacing", dp},
+                       {"n", sim.totalParticles()},
+                       {"ranks", ranks},
+                       {"gpus", executor == "cuda" ? std::min(ranks, gpus) : 0},
+                       {"threads", threads},
+                       {"overlap", overlap},
+                       {"decomposition", strategy == compute::DecompositionKind::kSfc ? "sfc" : "multisection"},
+                       {"fluid", sim.fluidParticles()},
+                       {"steps", steps},
+                       {"ms_per_step", 1e3 * wall / steps},
+                       {"particle_steps_per_s", n * steps / wall},
+                       {"sim_time", sim.time()},
+                       {"dt", sim.dt()},
+                       {"cell_sorts", sim.rebuilds() - sortsBefore},
+                       {"advance_s", advance},
+                       {"skin", cfg.sph.skin},
+                       {"hit_masks", variant == "masks"},
+                       {"rate_pass", variant},
+                       {"device_bytes_per_particle", double(sim.deviceBytes()) / n},
+                       {"compulsory_bytes_per_particle_step", bytesPerStep},
+                       {"device", device},
+                       {"commit", commit.empty() ? std::string("unknown") : commit},
+                       {"date", bench::today()}};
+      if (bandwidth > 0) j["fraction_of_copy_bandwidth"] = bytesPerStep * n * steps / wall / (bandwidth * 1e9);
+      nlohmann::json phases;
+      for (int p = 0; p < int(compute::Phase::kCount); ++p)
+        if (sim.timers().seconds(compute::Phase(p)) > 0) phases[compute::kPhaseNames[p]] = sim.timers().seconds(compute::Phase(p));
+      j["phases_s"] = phases;  // rank 0's
+      if (splitSteps > 0) {
+        // The forces phase (the rates pass; fenced) of each step, summed apart for the steps whose rates followed a
+        // sort (with --masks, the marking pass) and the others (the masks read, or the walk).
+        double sorted = 0, plain = 0;
+        int nSorted = 0, nPlain = 0;
+        for (int i = 0; i < splitSteps; ++i) {
+          const double before = sim.timers().seconds(compute::Phase::kForces);
+          const std::int64_t sorts = sim.rebuilds();
+          if (Status s = sim.runSteps(1); !s.isOk()) {
+            std::fprintf(stderr, "%s\n", s.message().c_str());
+            return 3;
+          }
+          const double t = sim.timers().seconds(compute::Phase::kForces) - before;
+          if (sim.rebuilds() != sorts) sorted += t, ++nSorted;
+          else plain += t, ++nPlain;
+        }
+        j["split"] = {{"steps", splitSteps},
+                      {"after_sort", nSorted},
+                      {"forces_ms_after_sort", nSorted ? 1e3 * sorted / nSorted : 0.0},
+                      {"between_sorts", nPlain},
+                      {"forces_ms_between_sorts", nPlain ? 1e3 * plain / nPlain : 0.0}};
+      }
+      if (ranks > 1) {  // each phase's largest over the ranks (the busiest rank sets the pace)
+        const auto& domain = static_cast<const compute::MpiDomain&>(*so.domain);
+        j["phases_max_s"] = bench::phaseSpread(sim.timers()).largest();
+        j["owned_per_rank"] = domain.ownedPerRank();  // at the last rebuild (or the scene's partition)
+        // Rank 0's rebuilds, where their time went (MpiDomain::rebuildTimes), and its ghosts.
+        const auto& t = domain.rebuildTimes();
+        j["rebuild_s"] = {{"rebuilds", t.rebuilds}, {"positions", t.positions}, {"weights", t.weights}, {"balance", t.balance},
+                          {"owners", t.owners}, {"migration", t.migration}, {"halo_rows", t.haloRows}, {"ghosts", t.ghosts}};
+        j["rebalances"] = domain.rebalances();
+        j["ghosts"] = sim.engine().ghosts();
+      }
+      if (rank == 0) {
+        std::printf("%s\n", j.dump().c_str());
+        std::fflush(stdout);
+      }
+    }  // variants
   }
   return 0;
 }

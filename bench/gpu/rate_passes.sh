@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
 # The SPH rates pass's variants timed one after another from the same flow (SPHERIC test 2, float, velocity Verlet,
 # after SPH_ADVANCE s): pflow-sph-bench --variants, each with --split-steps (the pass after a sort apart from the
-# others). The order alternates (walk, wide, masks, walk, wide) so that the drift of the flow over the run shows.
+# others). The order alternates (walk, masks, walk, masks) so that the drift of the flow over the run shows.
 #   bash bench/gpu/rate_passes.sh [spacing]
 source "$(dirname "$0")/setup.sh"
 sp=${1:-0.006}
 adv=${SPH_ADVANCE:-0.32}
-variants=${SPH_VARIANTS:-walk,wide,masks,walk,wide}
+variants=${SPH_VARIANTS:-walk,masks,walk,masks}
 bw=$(copy_bandwidth)
 timeout 500 "$B/pflow-sph-bench" --executor cuda --precision float --integrator velocity_verlet --spacing "$sp" --advance "$adv" \
   --warmup 10 --steps 100 --split-steps "${SPH_SPLIT:-100}" --variants "$variants" --copy-bandwidth "$bw" --device "$dev" \

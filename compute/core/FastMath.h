@@ -41,12 +41,5 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE int lowestSetBit(std::uint32_t x) {
   return __builtin_ctz(x);
 #endif
 }
-PFLOW_HOSTDEVICE PFLOW_FORCEINLINE int lowestSetBit(std::uint64_t x) {
-#if defined(__CUDA_ARCH__)
-  return __ffsll((long long)(x)) - 1;
-#else
-  return __builtin_ctzll(x);
-#endif
-}
 
 }  // namespace pflow::compute

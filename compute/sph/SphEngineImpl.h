@@ -152,7 +152,6 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
       using P = kernels::RatePass;
       if (k.markMasks) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kMark>{k});
       else if (k.masks) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kMasks>{k});
-      else if (m_setup.wideWalk) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kWalkWide>{k});
       else m_exec.forEach(m_owned, kernels::InteractPass<R, P::kWalk>{k});
       if (mirror) m_exec.forEach(m_owned, kernels::MirrorImages<R>{k, f, m_setup.mirror});
       return;
@@ -164,9 +163,8 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     if (mirror) m_exec.forEach(count, compute::kernels::OverList<kernels::MirrorImages<R>>{kernels::MirrorImages<R>{k, f, m_setup.mirror}, list});
   }
 
-  void setRatePasses(bool hitMasks, bool wideWalk) override {
-    m_setup.hitMasks = hitMasks;
-    m_setup.wideWalk = wideWalk;
+  void setHitMasks(bool on) override {
+    m_setup.hitMasks = on;
     m_masksStale = true;
   }
 

@@ -126,9 +126,7 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE Index maskRowEnd(const CellGrid& grid, const 
 // Which loop a rates pass runs (Interact::run): the walk of the cells, the walk that also marks the hit masks (the
 // first pass after a sort), or the loop over the masks. Each is a kernel of its own on the GPU (InteractPass), so
 // that none carries the others' registers.
-// kWalkWide is the walk testing 64 candidates of a row before their pairs instead of 32 (the same pairs in the same
-// order): a warp's lanes wait through the lane with the most neighbours once per 64 candidates instead of twice.
-enum class RatePass { kWalk, kMark, kMasks, kWalkWide };
+enum class RatePass { kWalk, kMark, kMasks };
 
 template <class R>
 struct Interact {
@@ -268,25 +266,22 @@ struct Interact {
     const int r = grid.reach;
     const bool prune = margin >= R(0);
     constexpr bool mark = P == RatePass::kMark;
-    // Marking runs while the positions are the sort's (SphEngine's m_atHome): every particle lies in its cell, so
-    // the cells are pruned without the half skin a particle may have moved since (the rounding term kept).
-    const R gapMargin = mark && prune ? R(1e-5 * grid.cellSize) : margin;
     const R reach2 = mark ? markCut2 : cut2;  // the cells walked: within the support (plus the skin when marking)
     std::uint64_t used = 0;                   // marking: rows with marks, rows overfull
     for (int z = cz > r ? cz - r : 0; z <= (cz + r < grid.nz ? cz + r : grid.nz - 1); ++z) {
-      const R gz = prune ? walkGap(ra.z, z - cz, cs, gapMargin, z == 0, z == grid.nz - 1) : R(0);
+      const R gz = prune ? walkGap(ra.z, z - cz, cs, margin, z == 0, z == grid.nz - 1) : R(0);
       if (gz * gz >= reach2) continue;
       zRow = ra.z - R(z - cz) * cs;
       for (int y = cy > r ? cy - r : 0; y <= (cy + r < grid.ny ? cy + r : grid.ny - 1); ++y) {
-        const R gy = prune ? walkGap(ra.y, y - cy, cs, gapMargin, y == 0, y == grid.ny - 1) : R(0);
+        const R gy = prune ? walkGap(ra.y, y - cy, cs, margin, y == 0, y == grid.ny - 1) : R(0);
         const R g2 = gz * gz + gy * gy;
         if (g2 >= reach2) continue;
         yRow = ra.y - R(y - cy) * cs;
         // The row's cells within reach along x (a convex set: trimmed from both ends).
         int x0 = cx > r ? cx - r : 0, x1 = cx + r < grid.nx ? cx + r : grid.nx - 1;
         if (prune) {
-          while (x0 < cx && [&] { const R g = walkGap(ra.x, x0 - cx, cs, gapMargin, x0 == 0, false); return g2 + g * g >= reach2; }()) ++x0;
-          while (x1 > cx && [&] { const R g = walkGap(ra.x, x1 - cx, cs, gapMargin, false, x1 == grid.nx - 1); return g2 + g * g >= reach2; }()) --x1;
+          while (x0 < cx && [&] { const R g = walkGap(ra.x, x0 - cx, cs, margin, x0 == 0, false); return g2 + g * g >= reach2; }()) ++x0;
+          while (x1 > cx && [&] { const R g = walkGap(ra.x, x1 - cx, cs, margin, false, x1 == grid.nx - 1); return g2 + g * g >= reach2; }()) --x1;
         }
         const std::uint32_t c0 = grid.index(x0, y, z), c1 = grid.index(x1, y, z);
         if (ghostCellStart) {  // merged by id, cell by cell
@@ -302,12 +297,10 @@ struct Interact {
         // waiting through the others' pairs while its own candidate is not a neighbour (docs/sph.md, "Performance").
         const Index from = cellStart[c0], end = cellStart[c1 + 1];
         if constexpr (!mark) {
-          using Bits = std::conditional_t<P == RatePass::kWalkWide, std::uint64_t, std::uint32_t>;
-          constexpr int kWidth = 8 * sizeof(Bits);
-          for (Index piece = from; piece < end; piece += kWidth) {
-            const int len = end - piece < kWidth ? int(end - piece) : kWidth;
-            Bits hits = 0;
-            for (int j = 0; j < len; ++j) hits |= Bits(isNeighbour(piece + j, row[piece + j])) << j;
+          for (Index piece = from; piece < end; piece += 32) {
+            const int len = end - piece < 32 ? int(end - piece) : 32;
+            std::uint32_t hits = 0;
+            for (int j = 0; j < len; ++j) hits |= std::uint32_t(isNeighbour(piece + j, row[piece + j])) << j;
             for (; hits != 0; hits &= hits - 1) {
               const Index b = piece + Index(lowestSetBit(hits));
               add(b, row[b]);
