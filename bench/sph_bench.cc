@@ -5,7 +5,7 @@
 // against --copy-bandwidth (pflow-gpu-bandwidth's figure). Under mpirun the scene is split across the ranks
 // (compute/mpi's MpiDomain, particle-count balance), with the halo overlapped with the interior rates or in
 // sequence (--overlap on|off: seed 003's boundary/centre overlap); rank 0 prints. bench/RESULTS.md records the rows.
-// --variants walk,masks times the rates passes one after another from the same flow (a line each); --split-steps
+// --variants walk,masks,twophase times the rates passes one after another from the same flow (a line each); --split-steps
 // times that many more steps one at a time, the rates pass after a sort (the marking pass) apart from the others.
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -71,8 +71,8 @@ int main(int argc, char** argv) {
                  "(and marked hit masks) apart from the others")->capture_default_str();
   app.add_option("--variants", variants,
                  "rates passes timed one after another from the same flow, a JSON line each: walk | masks (instead of "
-                 "--masks)")
-      ->delimiter(',')->check(CLI::IsMember({"walk", "masks"}));
+                 "--masks) | twophase (the walk's tests, then its pairs in one loop)")
+      ->delimiter(',')->check(CLI::IsMember({"walk", "masks", "twophase"}));
   app.add_flag("--masks", masks, "the rates pass reads hit masks built at each sort (SphConfig::hitMasks)");
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::warn);
@@ -139,7 +139,7 @@ int main(int argc, char** argv) {
       }
     if (variants.empty()) variants.push_back(masks ? "masks" : "walk");
     for (const std::string& variant : variants) {
-      sim.engine().setHitMasks(variant == "masks");
+      sim.engine().setRatePasses(variant == "masks", variant == "twophase");
       if (Status s = sim.runSteps(warmup); !s.isOk()) {
         std::fprintf(stderr, "%s\n", s.message().c_str());
         return 3;

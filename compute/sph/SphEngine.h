@@ -34,6 +34,7 @@ struct SphSetup {
   CellGrid grid;
   double skin = 0;  // [m]
   bool hitMasks = false;  // SphConfig::hitMasks
+  bool twoPhaseWalk = false;  // RatePass::kTwoPhase (no scene key: for timing)
   int threads = 0;
   // Neighbours summed in global-id order (SortCellByGid): forces independent of the rows' order, so a
   // distributed run equals one process with this set, bit for bit. Distributed runs always set it.
@@ -109,9 +110,9 @@ class SphEngine : public DistributedRows {
   virtual SphProbeState probe(Index i) const = 0;
   virtual std::size_t deviceBytes() const = 0;
   virtual void fence() const = 0;
-  // Hit masks (SphSetup::hitMasks, marked at the next sort) or the walk from the next rates pass on
-  // (pflow-sph-bench --variants: both timed from the same flow).
-  virtual void setHitMasks(bool on) = 0;
+  // The rates pass from the next one on (pflow-sph-bench --variants: timed one after another from the same flow):
+  // hit masks (SphSetup::hitMasks, marked at the next sort), or the walk in two phases (SphSetup::twoPhaseWalk).
+  virtual void setRatePasses(bool hitMasks, bool twoPhaseWalk) = 0;
 };
 
 std::unique_ptr<SphEngine> makeCpuSphEngine(SphSetup setup, bool singlePrecision);

@@ -152,6 +152,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
       using P = kernels::RatePass;
       if (k.markMasks) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kMark>{k});
       else if (k.masks) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kMasks>{k});
+      else if (m_setup.twoPhaseWalk && m_setup.grid.reach <= 2) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kTwoPhase>{k});
       else m_exec.forEach(m_owned, kernels::InteractPass<R, P::kWalk>{k});
       if (mirror) m_exec.forEach(m_owned, kernels::MirrorImages<R>{k, f, m_setup.mirror});
       return;
@@ -163,8 +164,9 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     if (mirror) m_exec.forEach(count, compute::kernels::OverList<kernels::MirrorImages<R>>{kernels::MirrorImages<R>{k, f, m_setup.mirror}, list});
   }
 
-  void setHitMasks(bool on) override {
-    m_setup.hitMasks = on;
+  void setRatePasses(bool hitMasks, bool twoPhaseWalk) override {
+    m_setup.hitMasks = hitMasks;
+    m_setup.twoPhaseWalk = twoPhaseWalk;
     m_masksStale = true;
   }
 

@@ -85,11 +85,12 @@ TEST(SphConservation, MassIsConservedExactly) {
 // The rates pass over hit masks (SphConfig::hitMasks) runs the dam break exactly as the walk of the cells:
 // the same pairs in the same order, so the same positions bit for bit after 0.3 s and several hundred sorts.
 // Runs `c` to `t` with the walk and with hit masks (CPU) and expects the same positions bit for bit.
-void expectSameRunWithHitMasks(RunConfig c, double t) {
+void expectSameRunWithHitMasks(RunConfig c, double t, bool twoPhaseInstead = false) {
   auto walk = SphSimulation::create(c, cpu());
-  c.sph.hitMasks = true;
+  c.sph.hitMasks = !twoPhaseInstead;
   auto masks = SphSimulation::create(c, cpu());
   ASSERT_TRUE(walk.isOk() && masks.isOk());
+  if (twoPhaseInstead) masks.value()->engine().setRatePasses(false, true);
   ASSERT_TRUE(walk.value()->runUntil(t).isOk());
   ASSERT_TRUE(masks.value()->runUntil(t).isOk());
   EXPECT_EQ(walk.value()->stepCount(), masks.value()->stepCount());
@@ -107,6 +108,13 @@ TEST(SphHitMasks, SameRunAsTheWalk3DFloat) {
   RunConfig c = test::damBreak3D(0.02, 0.1);
   c.sim.precision = Precision::kFloat;
   expectSameRunWithHitMasks(c, 0.1);
+}
+
+// So does the walk in two phases (RatePass::kTwoPhase; 3D, float).
+TEST(SphTwoPhaseWalk, SameRunAsTheWalk3DFloat) {
+  RunConfig c = test::damBreak3D(0.02, 0.1);
+  c.sim.precision = Precision::kFloat;
+  expectSameRunWithHitMasks(c, 0.1, true);
 }
 
 // Without gravity or walls, a blob with a shear flow conserves its linear momentum: every pair term is

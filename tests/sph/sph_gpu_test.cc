@@ -127,4 +127,26 @@ TEST(SphCudaVsCpu, HitMasksAgreeWithTheWalk) {
   }
 }
 
+// The walk in two phases (RatePass::kTwoPhase: every candidate tested, then the pairs in one loop) on the GPU
+// takes the GPU walk's pairs in its order: the same run exactly, in 2D and 3D.
+TEST(SphCudaVsCpu, TwoPhaseWalkAgreesWithTheWalk) {
+  SKIP_WITHOUT_GPU();
+  for (RunConfig c : {test::damBreak2D(0.01, 0.1), test::damBreak3D(0.02, 0.1)}) {
+    auto walk = make(c, ExecutorKind::kCuda);
+    auto gpu = make(c, ExecutorKind::kCuda);
+    ASSERT_TRUE(walk && gpu);
+    gpu->engine().setRatePasses(false, true);
+    ASSERT_TRUE(walk->runUntil(0.1).isOk());
+    ASSERT_TRUE(gpu->runUntil(0.1).isOk());
+    EXPECT_EQ(walk->stepCount(), gpu->stepCount());
+    const auto w = positions(walk->snapshot()), b = positions(gpu->snapshot());
+    ASSERT_EQ(w.size(), b.size());
+    double fromWalk = 0;
+    for (const auto& [id, x] : w) fromWalk = std::max(fromWalk, b.count(id) ? norm(x - b.at(id)) : 1e300);
+    std::printf("two-phase walk, %d-D, after %lld steps: largest position difference from the GPU's walk %.3g m\n",
+                c.sph.dimension, (long long)gpu->stepCount(), fromWalk);
+    EXPECT_EQ(fromWalk, 0.0);
+  }
+}
+
 }  // namespace
