@@ -11,11 +11,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <regex>
-#include <sstream>
 #include <vector>
 
 #include "bench/BenchMpi.h"
@@ -23,7 +20,7 @@
 #include "common/Log.h"
 #include "compute/mpi/MpiDomain.h"
 #include "compute/sph/SphSimulation.h"
-#include "frontend/SceneLoader.h"
+#include "bench/SphSceneAt.h"
 
 using namespace pflow;
 
@@ -76,27 +73,15 @@ int main(int argc, char** argv) {
   app.add_flag("--masks", masks, "the rates pass reads hit masks built at each sort (SphConfig::hitMasks)");
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::warn);
-  std::ifstream in(scene);
-  if (!in) {
-    std::fprintf(stderr, "cannot read %s\n", scene.c_str());
-    return 1;
-  }
-  std::stringstream text;
-  text << in.rdbuf();
   const compute::NodeRanks node = compute::nodeRanks(MPI_COMM_WORLD);
   const int gpus = executor == "cuda" ? compute::cudaDeviceCount() : 0;
   for (double dp : spacings) {
-    char value[64];
-    std::snprintf(value, sizeof value, "spacing: %.9g", dp);
-    const std::string yaml = std::regex_replace(text.str(), std::regex("spacing: [0-9.eE+-]+"), value);
-    frontend::LoadOptions lo;
-    lo.baseDir = ".";
-    auto loaded = frontend::loadSceneFromString(yaml, scene, lo);
+    auto loaded = bench::loadSphSceneAt(scene, dp);
     if (!loaded) {
       std::fprintf(stderr, "%s\n", loaded.status().message().c_str());
       return 1;
     }
-    compute::RunConfig cfg = loaded.value().config;
+    compute::RunConfig cfg = loaded.value();
     cfg.sim.precision = precision == "float" ? compute::Precision::kFloat : compute::Precision::kDouble;
     cfg.sim.threads = threads;
     if (integrator != "scene")

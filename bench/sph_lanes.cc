@@ -14,16 +14,13 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <numeric>
-#include <regex>
-#include <sstream>
 #include <vector>
 
 #include "compute/sph/SphKernels.h"
 #include "compute/sph/SphSimulation.h"
-#include "frontend/SceneLoader.h"
+#include "bench/SphSceneAt.h"
 
 using namespace pflow;
 using namespace pflow::compute;
@@ -164,25 +161,13 @@ int main(int argc, char** argv) {
   app.add_option("--pair-cost", pairCosts, "instructions of a pair per instruction of a candidate test")->delimiter(',');
   app.add_option("--threads", threads, "OpenMP threads of the advance (0: all)");
   CLI11_PARSE(app, argc, argv);
-  std::ifstream in(scene);
-  if (!in) {
-    std::fprintf(stderr, "cannot read %s\n", scene.c_str());
-    return 1;
-  }
-  std::stringstream text;
-  text << in.rdbuf();
   for (double dp : spacings) {
-    char value[64];
-    std::snprintf(value, sizeof value, "spacing: %.9g", dp);
-    const std::string yaml = std::regex_replace(text.str(), std::regex("spacing: [0-9.eE+-]+"), value);
-    frontend::LoadOptions lo;
-    lo.baseDir = ".";
-    auto loaded = frontend::loadSceneFromString(yaml, scene, lo);
+    auto loaded = bench::loadSphSceneAt(scene, dp);
     if (!loaded) {
       std::fprintf(stderr, "%s\n", loaded.status().message().c_str());
       return 1;
     }
-    RunConfig cfg = loaded.value().config;
+    RunConfig cfg = loaded.value();
     cfg.sim.precision = Precision::kFloat;
     cfg.sim.threads = threads;
     auto setup = sph::prepareSphSetup(cfg);

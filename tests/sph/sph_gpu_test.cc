@@ -34,6 +34,14 @@ std::map<Gid, Vec3d> positions(const ParticleSnapshot& s) {
   return out;
 }
 
+// The largest distance between a particle's positions in two snapshots (by id; 1e300 for a particle missing in b).
+double largestDifference(const std::map<Gid, Vec3d>& a, const std::map<Gid, Vec3d>& b) {
+  EXPECT_EQ(a.size(), b.size());
+  double worst = 0;
+  for (const auto& [id, x] : a) worst = std::max(worst, b.count(id) ? norm(x - b.at(id)) : 1e300);
+  return worst;
+}
+
 // Runs `c` to 0.1 s on both executors and returns the largest distance between a particle's CPU and GPU
 // positions (and expects the same step count).
 double largestCpuGpuDifference(const RunConfig& c, const char* label) {
@@ -44,10 +52,7 @@ double largestCpuGpuDifference(const RunConfig& c, const char* label) {
   EXPECT_TRUE(cpu->runUntil(0.1).isOk());
   EXPECT_TRUE(gpu->runUntil(0.1).isOk());
   EXPECT_EQ(cpu->stepCount(), gpu->stepCount());
-  const auto a = positions(cpu->snapshot()), b = positions(gpu->snapshot());
-  EXPECT_EQ(a.size(), b.size());
-  double worst = 0;
-  for (const auto& [id, x] : a) worst = std::max(worst, b.count(id) ? norm(x - b.at(id)) : 1e300);
+  const double worst = largestDifference(positions(cpu->snapshot()), positions(gpu->snapshot()));
   std::printf("%slargest CPU-GPU position difference after %lld steps: %.3g m\n", label, (long long)cpu->stepCount(), worst);
   return worst;
 }
@@ -114,12 +119,8 @@ TEST(SphCudaVsCpu, HitMasksAgreeWithTheWalk) {
     ASSERT_TRUE(gpu->runUntil(0.1).isOk());
     EXPECT_EQ(cpu->stepCount(), gpu->stepCount());
     EXPECT_EQ(walk->stepCount(), gpu->stepCount());
-    const auto a = positions(cpu->snapshot()), w = positions(walk->snapshot()), b = positions(gpu->snapshot());
-    ASSERT_EQ(a.size(), b.size());
-    ASSERT_EQ(w.size(), b.size());
-    double worst = 0, fromWalk = 0;
-    for (const auto& [id, x] : a) worst = std::max(worst, b.count(id) ? norm(x - b.at(id)) : 1e300);
-    for (const auto& [id, x] : w) fromWalk = std::max(fromWalk, b.count(id) ? norm(x - b.at(id)) : 1e300);
+    const auto b = positions(gpu->snapshot());
+    const double worst = largestDifference(positions(cpu->snapshot()), b), fromWalk = largestDifference(positions(walk->snapshot()), b);
     std::printf("hit masks, %d-D, after %lld steps: largest position difference from the CPU %.3g m, from the GPU's walk %.3g m\n",
                 c.sph.dimension, (long long)cpu->stepCount(), worst, fromWalk);
     EXPECT_LT(worst, 1e-6);
@@ -139,10 +140,7 @@ TEST(SphCudaVsCpu, TwoPhaseWalkAgreesWithTheWalk) {
     ASSERT_TRUE(walk->runUntil(0.1).isOk());
     ASSERT_TRUE(gpu->runUntil(0.1).isOk());
     EXPECT_EQ(walk->stepCount(), gpu->stepCount());
-    const auto w = positions(walk->snapshot()), b = positions(gpu->snapshot());
-    ASSERT_EQ(w.size(), b.size());
-    double fromWalk = 0;
-    for (const auto& [id, x] : w) fromWalk = std::max(fromWalk, b.count(id) ? norm(x - b.at(id)) : 1e300);
+    const double fromWalk = largestDifference(positions(walk->snapshot()), positions(gpu->snapshot()));
     std::printf("two-phase walk, %d-D, after %lld steps: largest position difference from the GPU's walk %.3g m\n",
                 c.sph.dimension, (long long)gpu->stepCount(), fromWalk);
     EXPECT_EQ(fromWalk, 0.0);
