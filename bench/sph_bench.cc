@@ -67,8 +67,8 @@ int main(int argc, char** argv) {
                  "after the timed steps, this many more one at a time: the rates pass's time in the steps that sorted "
                  "(and marked hit masks) apart from the others")->capture_default_str();
   app.add_option("--variants", variants,
-                 "rates passes timed one after another from the same flow, a JSON line each: walk | masks (instead of "
-                 "--masks) | twophase (the walk's tests, then its pairs in one loop)")
+                 "rates passes timed one after another from the same flow, a JSON line each: walk (in one phase) | masks "
+                 "(instead of --masks) | twophase (the walk's tests, then its pairs in one loop: the GPU's default in float)")
       ->delimiter(',')->check(CLI::IsMember({"walk", "masks", "twophase"}));
   app.add_flag("--masks", masks, "the rates pass reads hit masks built at each sort (SphConfig::hitMasks)");
   CLI11_PARSE(app, argc, argv);

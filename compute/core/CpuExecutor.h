@@ -15,6 +15,7 @@ class CpuExecutor {
   static constexpr bool kColumnMajorLists = false;  // each core walks its own candidate rows
   static constexpr bool kSlotMajor = false;         // and its particles' history slots (SlotLayout)
   static constexpr bool kPairsOnce = true;          // forEachTwoColours: each contact evaluated once (ComputePairsOnce)
+  static constexpr bool kLockstepLanes = false;     // a core runs its own branches (the SPH walk in one phase)
   explicit CpuExecutor(int threads = 0);
   // Below this many iterations a loop runs on the calling thread: waking a team costs more.
   static constexpr Index kMinParallel = 512;

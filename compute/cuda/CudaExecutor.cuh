@@ -128,6 +128,7 @@ class CudaExecutor {
  public:
   static constexpr const char* kName = "cuda";
   static constexpr bool kColumnMajorLists = true;  // a warp reads 32 consecutive candidate words
+  static constexpr bool kLockstepLanes = true;     // a warp's lanes wait through each other's branches (the SPH walk in two phases)
   static constexpr bool kSlotMajor = true;         // and 32 consecutive values of a history slot (SlotLayout)
   static constexpr bool kPairsOnce = false;        // each thread writes only its own particle: no atomics, one order
   // `threads` is the OpenMP setting of the CPU executor; the CUDA executor runs on the current device.

@@ -3,6 +3,7 @@
 // machinery: FieldStore/FieldRows (reorder, snapshots), the cell hash and sort, the executors' primitives.
 #pragma once
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -34,7 +35,10 @@ struct SphSetup {
   CellGrid grid;
   double skin = 0;  // [m]
   bool hitMasks = false;  // SphConfig::hitMasks
-  bool twoPhaseWalk = false;  // RatePass::kTwoPhase (no scene key: for timing)
+  // The walk in two phases (RatePass::kTwoPhase) or in one; unset: two on the GPU in float (0.94-0.97 of the one
+  // phase's time on SPHERIC at 4.8e6 on an H100; 1.25 in double), one on the CPU. No scene key (the same sums
+  // either way): for timing.
+  std::optional<bool> twoPhaseWalk;
   int threads = 0;
   // Neighbours summed in global-id order (SortCellByGid): forces independent of the rows' order, so a
   // distributed run equals one process with this set, bit for bit. Distributed runs always set it.
@@ -111,7 +115,7 @@ class SphEngine : public DistributedRows {
   virtual std::size_t deviceBytes() const = 0;
   virtual void fence() const = 0;
   // The rates pass from the next one on (pflow-sph-bench --variants: timed one after another from the same flow):
-  // hit masks (SphSetup::hitMasks, marked at the next sort), or the walk in two phases (SphSetup::twoPhaseWalk).
+  // hit masks (SphSetup::hitMasks, marked at the next sort), or the walk in two phases or in one (SphSetup::twoPhaseWalk).
   virtual void setRatePasses(bool hitMasks, bool twoPhaseWalk) = 0;
 };
 

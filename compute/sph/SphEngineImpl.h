@@ -153,7 +153,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
       using P = kernels::RatePass;
       if (k.markMasks) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kMark>{k});
       else if (k.masks) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kMasks>{k});
-      else if (m_setup.twoPhaseWalk && m_setup.grid.reach <= 2) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kTwoPhase>{k});
+      else if (m_setup.twoPhaseWalk.value_or(Exec::kLockstepLanes && sizeof(R) == 4) && m_setup.grid.reach <= 2) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kTwoPhase>{k});
       else m_exec.forEach(m_owned, kernels::InteractPass<R, P::kWalk>{k});
       if (mirror) m_exec.forEach(m_owned, kernels::MirrorImages<R>{k, f, m_setup.mirror});
       return;

@@ -136,6 +136,7 @@ TEST(SphCudaVsCpu, TwoPhaseWalkAgreesWithTheWalk) {
     auto walk = make(c, ExecutorKind::kCuda);
     auto gpu = make(c, ExecutorKind::kCuda);
     ASSERT_TRUE(walk && gpu);
+    walk->engine().setRatePasses(false, false);  // the GPU's default is the two-phase walk
     gpu->engine().setRatePasses(false, true);
     ASSERT_TRUE(walk->runUntil(0.1).isOk());
     ASSERT_TRUE(gpu->runUntil(0.1).isOk());
