@@ -1,0 +1,62 @@
+// The angle of repose of a heap of glass beads (docs/accuracy.md, "Angle of repose"): beads settle in a cylinder
+// standing on a plate, the cylinder is lifted, and the heap they leave is measured: its surface height against the
+// distance from the axis, fitted by a line between the apex and the foot, in four quadrants. The reference pair is
+// Sunday et al. (2020, MNRAS 498, 1062): 1 mm glass beads, measured 25.2 +- 0.8 degrees, and their DEM (Chrono)
+// 25.3 degrees with the same constant-torque rolling resistance at mu_r = 0.09. Used by pflow-repose
+// (bench/repose.cc) and repose_test (label gpu).
+#pragma once
+#include <array>
+#include <string>
+#include <vector>
+
+#include "compute/core/ExecutorKind.h"
+#include "compute/particles/ParticleSnapshot.h"
+
+namespace pflow::bench {
+
+struct ReposeOptions {
+  // Beads: Sunday et al.'s glass (their Table 2 as quoted in docs/accuracy.md): diameters 0.8-1.2 mm (uniform),
+  // 2500 kg/m^3, E 70 MPa, nu 0.24; bead-bead e 0.97, mu 0.16, mu_r 0.09; bead-wall e 0.82, mu 0.45.
+  double rMin = 0.0004, rMax = 0.0006, spacing = 0.0013;
+  double youngs = 7e7, poisson = 0.24, density = 2500;
+  double restitution = 0.97, friction = 0.16, rolling = 0.09;
+  double wallRestitution = 0.82, wallFriction = 0.45, wallRolling = 0.09;
+  std::size_t particles = 58040;  // as in Sunday et al.'s pile
+  double cylinderRadius = 0.02;   // [m]
+  double settle = 0.4;            // [s] in the cylinder
+  double liftSpeed = 0.05;        // [m/s]
+  double lift = 0.06;             // how far the cylinder rises [m] (above the settled bed)
+  double rest = 0.5;              // [s] after the lift, for the heap to come to rest
+  std::string precision = "double";
+  std::uint64_t seed = 1;
+};
+
+// The surface of the heap: the highest bead top (z + r) in rings of width `bin` about the axis.
+struct ReposeProfile {
+  double bin = 0;
+  std::vector<double> radius, height;  // ring middles [m], tops [m] (rings with no bead: NaN)
+};
+
+struct ReposeResult {
+  double angle = 0;                    // [deg], the fit over all azimuths
+  std::array<double, 4> quadrant{};    // [deg], the same in the four quadrants (+x, +y, -x, -y)
+  double spread = 0;                   // largest minus smallest quadrant [deg]
+  double heapRadius = 0, heapHeight = 0, fitFrom = 0, fitTo = 0;  // [m]
+  double kineticEnergy = 0;            // at the end [J]
+  ReposeProfile profile;
+  std::size_t particles = 0;
+  double wall = 0;                     // [s]
+  std::string error;
+};
+
+// The heap's surface from a snapshot (position, radius), all azimuths or one quadrant (0..3; -1: all).
+ReposeProfile reposeProfile(const compute::ParticleSnapshot& s, double bin, int quadrant = -1);
+// The slope angle of a profile [deg]: a least-squares line through the rings between 25 % and 75 % of the heap's
+// radius (where the surface first falls below 1.5 mean diameters), away from the rounded apex and the foot's tail.
+// Sets from/to (the fitted range) and radius/height (the heap's).
+double reposeAngle(const ReposeProfile& p, double meanDiameter, double* from = nullptr, double* to = nullptr,
+                   double* heapRadius = nullptr, double* heapHeight = nullptr);
+
+ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind);
+
+}  // namespace pflow::bench

@@ -1,0 +1,65 @@
+// The angle of repose's measurement (bench/ReposeHeap.h), on heaps built by hand: beads stacked on cones of known
+// slope (with a flattened apex and a one-layer foot that the fit must leave out) give back the cone's angle, over all
+// azimuths and in each quadrant.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <numbers>
+#include <random>
+
+#include "bench/ReposeHeap.h"
+
+namespace {
+
+using pflow::compute::ParticleSnapshot;
+using pflow::compute::SnapshotArray;
+
+SnapshotArray f64(const std::string& name, int components, const std::vector<double>& v) {
+  SnapshotArray a;
+  a.name = name, a.type = pflow::compute::ScalarType::kF64, a.components = components;
+  a.data.resize(v.size() * sizeof(double));
+  std::memcpy(a.data.data(), v.data(), a.data.size());
+  return a;
+}
+
+// Beads of radius r filling a cone of the given slope and base radius R (columns of a jittered lattice, each topped
+// by a bead touching the surface), its top flattened within `apex` of the axis and a foot one layer thick to 1.3 R.
+ParticleSnapshot cone(double degrees, double R, double r, double apex) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> jit(-0.2 * r, 0.2 * r);
+  const double t = std::tan(degrees * std::numbers::pi / 180), H = R * t, s = 2 * r;
+  std::vector<double> x, rad;
+  for (double px = -1.3 * R; px <= 1.3 * R; px += s)
+    for (double py = -1.3 * R; py <= 1.3 * R; py += s) {
+      const double rho = std::hypot(px, py);
+      if (rho > 1.3 * R) continue;
+      double top = rho < R ? H - t * rho : 2 * r;  // the foot: one layer
+      if (rho < apex) top = H - t * apex;          // the apex: flat
+      for (double pz = r; pz + r <= std::max(top, 2 * r) - s + 1e-12; pz += s) {
+        x.insert(x.end(), {px + jit(rng), py + jit(rng), pz});
+        rad.push_back(r);
+      }
+      x.insert(x.end(), {px + jit(rng), py + jit(rng), std::max(top, 2 * r) - r});  // the column's top on the surface
+      rad.push_back(r);
+    }
+  ParticleSnapshot snap;
+  snap.n = rad.size();
+  snap.arrays = {f64("position", 3, x), f64("radius", 1, rad)};
+  return snap;
+}
+
+TEST(ReposeMeasure, ConesGiveBackTheirSlope) {
+  for (double deg : {20.0, 25.0, 32.0}) {
+    const double r = 0.0005, d = 2 * r;
+    const ParticleSnapshot s = cone(deg, 0.05, r, 0.008);
+    double from = 0, to = 0, radius = 0, height = 0;
+    const double angle = pflow::bench::reposeAngle(pflow::bench::reposeProfile(s, 2 * d), d, &from, &to, &radius, &height);
+    // The highest top in a ring two diameters wide is its inner edge's: the line is shifted, its slope is the cone's.
+    EXPECT_NEAR(angle, deg, 0.5) << "heap radius " << radius << " m, fitted over " << from << "-" << to << " m";
+    EXPECT_NEAR(radius, 0.05, 0.006);
+    for (int q = 0; q < 4; ++q) EXPECT_NEAR(pflow::bench::reposeAngle(pflow::bench::reposeProfile(s, 2 * d, q), d), deg, 0.8) << q;
+  }
+}
+
+}  // namespace
