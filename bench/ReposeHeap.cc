@@ -21,7 +21,7 @@ void fillCylinder(const ReposeOptions& o, compute::ParticleInit& p) {
   std::uniform_real_distribution<double> rad(o.rMin, o.rMax), jit(-0.04 * o.spacing, 0.04 * o.spacing);
   const double rIn = o.cylinderRadius - o.rMax - 0.0005;
   const int n = int(2 * rIn / o.spacing);
-  for (double z = o.rMax + 0.0002; p.size() < o.particles; z += o.spacing)
+  for (double z = o.roughness + o.rMax + 0.0002; p.size() < o.particles; z += o.spacing)
     for (int i = 0; i <= n && p.size() < o.particles; ++i)
       for (int j = 0; j <= n && p.size() < o.particles; ++j) {
         const double x = -rIn + i * o.spacing, y = -rIn + j * o.spacing;
@@ -96,10 +96,25 @@ ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind) {
   compute::MeshConfig floor;
   floor.name = "plate";
   floor.material = 1;
-  const double L = 6 * o.cylinderRadius;
-  floor.vertices = {{-L, -L, 0}, {L, -L, 0}, {L, L, 0}, {-L, L, 0}};
-  floor.triangles = {{0, 1, 2}, {0, 2, 3}};  // counter-clockwise seen from above
-  floor.surface = {0, 0};
+  const double L = 3.5 * o.cylinderRadius;
+  if (o.roughness <= 0) {
+    floor.vertices = {{-L, -L, 0}, {L, -L, 0}, {L, L, 0}, {-L, L, 0}};
+    floor.triangles = {{0, 1, 2}, {0, 2, 3}};  // counter-clockwise seen from above
+  } else {  // a height field on a grid of 1.5 mean diameters, its heights in [0, roughness]
+    std::mt19937_64 rng(o.seed + 1);
+    std::uniform_real_distribution<double> bump(0, o.roughness);
+    const int m = int(std::ceil(2 * L / (1.5 * (o.rMin + o.rMax))));
+    const double g = 2 * L / m;
+    for (int j = 0; j <= m; ++j)
+      for (int i = 0; i <= m; ++i) floor.vertices.push_back({-L + i * g, -L + j * g, bump(rng)});
+    for (int j = 0; j < m; ++j)
+      for (int i = 0; i < m; ++i) {
+        const std::uint32_t a = std::uint32_t(j * (m + 1) + i), b = a + 1, c = a + std::uint32_t(m + 1), d = c + 1;
+        floor.triangles.push_back({a, b, d});
+        floor.triangles.push_back({a, d, c});
+      }
+  }
+  floor.surface.assign(floor.triangles.size(), 0);
   compute::MeshConfig side;
   side.name = "cylinder";
   side.material = 1;

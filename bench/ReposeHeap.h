@@ -23,6 +23,9 @@ struct ReposeOptions {
   double wallRestitution = 0.82, wallFriction = 0.45, wallRolling = 0.09;
   std::size_t particles = 58040;  // as in Sunday et al.'s pile
   double cylinderRadius = 0.02;   // [m]
+  // The plate: flat (0), or rough as Sunday et al.'s (roughened with fixed beads): a triangulated height field on a
+  // grid of 1.5 mean diameters with heights uniform in [0, roughness] [m].
+  double roughness = 0.0005;
   double settle = 0.4;            // [s] in the cylinder
   double liftSpeed = 0.05;        // [m/s]
   double lift = 0.06;             // how far the cylinder rises [m] (above the settled bed)

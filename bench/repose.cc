@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   app.add_option("--precision", o.precision, "double or float")->check(CLI::IsMember({"double", "float"}))->capture_default_str();
   app.add_option("--particles", o.particles, "beads")->capture_default_str();
   app.add_option("--friction", o.friction, "bead-bead sliding friction")->capture_default_str();
+  app.add_option("--roughness", o.roughness, "the plate's bumps [m] (0: flat)")->capture_default_str();
   app.add_option("--settle", o.settle, "in the cylinder before the lift [s]")->capture_default_str();
   app.add_option("--lift-speed", o.liftSpeed, "[m/s]")->capture_default_str();
   app.add_option("--rest", o.rest, "after the lift [s]")->capture_default_str();
