@@ -96,7 +96,7 @@ ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind) {
   compute::MeshConfig floor;
   floor.name = "plate";
   floor.material = 1;
-  const double L = 3.5 * o.cylinderRadius;
+  const double L = 6 * o.cylinderRadius;  // the collapse spreads to about 3 cylinder radii (docs/accuracy.md)
   if (o.roughness <= 0) {
     floor.vertices = {{-L, -L, 0}, {L, -L, 0}, {L, L, 0}, {-L, L, 0}};
     floor.triangles = {{0, 1, 2}, {0, 2, 3}};  // counter-clockwise seen from above
