@@ -8,6 +8,7 @@
 #include <random>
 
 #include "compute/dem/Simulation.h"
+#include "frontend/SceneLoader.h"
 
 namespace pflow::bench {
 
@@ -75,32 +76,18 @@ double reposeAngle(const ReposeProfile& p, double meanDiameter, double* from, do
   return std::atan(-slope) * 180 / kPi;
 }
 
-ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind) {
-  ReposeResult res;
-  compute::RunConfig c;
-  compute::MaterialConfig bead;
-  bead.name = "glass";
-  bead.youngsModulus = o.youngs, bead.poissonRatio = o.poisson, bead.density = o.density;
-  bead.restitution = o.restitution, bead.friction = o.friction, bead.rollingFriction = o.rolling;
-  compute::MaterialConfig plate = bead;
-  plate.name = "plate", plate.youngsModulus = 2e8, plate.poissonRatio = 0.3, plate.density = 7800;
-  c.materials = {bead, plate};
-  compute::MaterialPairConfig wall;
-  wall.a = 0, wall.b = 1, wall.restitution = o.wallRestitution, wall.friction = o.wallFriction, wall.rollingFriction = o.wallRolling;
-  c.pairs = {wall};
-  fillCylinder(o, c.particles);
-  res.particles = c.particles.size();
-  double top = 0;
-  for (const Vec3d& x : c.particles.position) top = std::max(top, x.z);
-  // The plate (surface 0), wide enough for the heap's foot; the cylinder (surface 1), lifted after the settling.
+namespace {
+
+// The plate (surface `surface`): flat, or a height field on a grid of 1.5 mean diameters with heights in
+// [0, roughness]; a square of half-width L.
+compute::MeshConfig plate(const ReposeOptions& o, double L, int material, int surface) {
   compute::MeshConfig floor;
   floor.name = "plate";
-  floor.material = 1;
-  const double L = 6 * o.cylinderRadius;  // the collapse spreads to about 3 cylinder radii (docs/accuracy.md)
+  floor.material = material;
   if (o.roughness <= 0) {
     floor.vertices = {{-L, -L, 0}, {L, -L, 0}, {L, L, 0}, {-L, L, 0}};
     floor.triangles = {{0, 1, 2}, {0, 2, 3}};  // counter-clockwise seen from above
-  } else {  // a height field on a grid of 1.5 mean diameters, its heights in [0, roughness]
+  } else {
     std::mt19937_64 rng(o.seed + 1);
     std::uniform_real_distribution<double> bump(0, o.roughness);
     const int m = int(std::ceil(2 * L / (1.5 * (o.rMin + o.rMax))));
@@ -114,7 +101,72 @@ ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind) {
         floor.triangles.push_back({a, d, c});
       }
   }
-  floor.surface.assign(floor.triangles.size(), 0);
+  floor.surface.assign(floor.triangles.size(), surface);
+  return floor;
+}
+
+// The poured pile's scene: the beads on a lattice in a funnel (a cone from the orifice up, then a cylinder of the
+// lifted cylinder's radius), its orifice closed by a gate that slides away after the settling; the plate below.
+Result<compute::RunConfig> pourScene(const ReposeOptions& o) {
+  const double R = o.cylinderRadius, rIn = R - o.rMax - 0.0005, cone = R - o.orifice / 2, z0 = o.pourHeight;
+  const double perLayer = kPi * rIn * rIn / (o.spacing * o.spacing), fill = double(o.particles) / perLayer * o.spacing;
+  const double D = o.orifice;
+  char buf[4096];
+  std::snprintf(buf, sizeof buf, R"(materials:
+  - {name: glass, youngs_modulus: %.6g, poisson_ratio: %.6g, density: %.6g, restitution: %.6g, friction: %.6g, rolling_friction: %.6g}
+  - {name: plate, youngs_modulus: 2.0e8, poisson_ratio: 0.3, density: 7800, restitution: %.6g, friction: %.6g, rolling_friction: %.6g}
+pairs:
+  - {materials: [glass, plate], restitution: %.6g, friction: %.6g, rolling_friction: %.6g}
+particles:
+  - name: beads
+    material: glass
+    method: lattice
+    region: {cylinder: {base: [0, 0, %.6g], axis: [0, 0, 1], radius: %.6g, height: %.6g}}
+    size: {distribution: uniform, min: %.6g, max: %.6g}
+    lattice: {spacing: %.6g, jitter: 0.04}
+geometry:
+  - name: funnel
+    material: plate
+    hopper: {orifice: [0, 0, %.6g], axis: [0, 0, 1], orifice_radius: %.6g, top_radius: %.6g, cone_height: %.6g,
+             cylinder_height: %.6g}
+  - name: gate
+    material: plate
+    box: {min: [%.6g, %.6g, %.6g], max: [%.6g, %.6g, %.6g], side: outside}
+    motion: {velocity: [0.5, 0, 0], start_time: %.6g}
+simulation:
+  duration: %.6g
+  precision: %s
+)",
+                o.youngs, o.poisson, o.density, o.restitution, o.friction, o.rolling, o.wallRestitution, o.wallFriction,
+                o.wallRolling, o.wallRestitution, o.wallFriction, o.wallRolling, z0 + cone + 0.001, rIn, fill, o.rMin, o.rMax,
+                o.spacing, z0, D / 2, R, cone, fill + 0.01, -D, -D, z0 - 0.004, D, D, z0 - 0.0001, o.settle,
+                o.settle + o.pour + o.rest + 0.01, o.precision.c_str());
+  auto loaded = frontend::loadSceneFromString(buf, "repose-pour");
+  if (!loaded) return loaded.status();
+  compute::RunConfig c = loaded->config;
+  const int surface = int(c.surfaceNames.size());
+  c.surfaceNames.push_back("plate");
+  c.meshes.push_back(plate(o, 6 * R, 1, surface));
+  return c;
+}
+
+// The lifted cylinder's scene: the beads on a lattice in a cylinder standing on the plate, lifted after the
+// settling at liftSpeed by `lift`.
+compute::RunConfig liftScene(const ReposeOptions& o) {
+  compute::RunConfig c;
+  compute::MaterialConfig bead;
+  bead.name = "glass";
+  bead.youngsModulus = o.youngs, bead.poissonRatio = o.poisson, bead.density = o.density;
+  bead.restitution = o.restitution, bead.friction = o.friction, bead.rollingFriction = o.rolling;
+  compute::MaterialConfig steel = bead;
+  steel.name = "plate", steel.youngsModulus = 2e8, steel.poissonRatio = 0.3, steel.density = 7800;
+  c.materials = {bead, steel};
+  compute::MaterialPairConfig wall;
+  wall.a = 0, wall.b = 1, wall.restitution = o.wallRestitution, wall.friction = o.wallFriction, wall.rollingFriction = o.wallRolling;
+  c.pairs = {wall};
+  fillCylinder(o, c.particles);
+  double top = 0;
+  for (const Vec3d& x : c.particles.position) top = std::max(top, x.z);
   compute::MeshConfig side;
   side.name = "cylinder";
   side.material = 1;
@@ -134,11 +186,31 @@ ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind) {
   side.motion.startTime = o.settle;
   side.motion.profile = {{0.0, {0, 0, o.liftSpeed}}, {tLift, {0, 0, o.liftSpeed}}, {tLift + 1e-4, {0, 0, 0}}};
   c.surfaceNames = {"plate", "cylinder"};
-  c.meshes = {floor, side};
+  // The collapse spreads to about 3 cylinder radii (docs/accuracy.md, "Angle of repose").
+  c.meshes = {plate(o, 6 * o.cylinderRadius, 1, 0), side};
   c.sim.gravity = {0, 0, -9.81};
   c.sim.duration = o.settle + tLift + o.rest + 0.01;
   c.sim.precision = o.precision == "float" ? compute::Precision::kFloat : compute::Precision::kDouble;
   c.sim.precisionGiven = true;
+  return c;
+}
+
+}  // namespace
+
+ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind) {
+  ReposeResult res;
+  compute::RunConfig c;
+  if (o.method == "pour") {
+    auto scene = pourScene(o);
+    if (!scene) {
+      res.error = scene.status().toString();
+      return res;
+    }
+    c = std::move(scene.value());
+  } else {
+    c = liftScene(o);
+  }
+  res.particles = c.particles.size();
   compute::SimulationOptions so;
   so.executor = kind;
   auto created = compute::Simulation::create(c, so);
@@ -148,7 +220,8 @@ ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind) {
   }
   compute::Simulation& sim = *created.value();
   const auto t0 = std::chrono::steady_clock::now();
-  if (auto s = sim.runUntil(o.settle + tLift + o.rest); !s.isOk()) {
+  const double end = o.method == "pour" ? o.settle + o.pour + o.rest : o.settle + o.lift / o.liftSpeed + o.rest;
+  if (auto s = sim.runUntil(end); !s.isOk()) {
     res.error = s.toString();
     return res;
   }

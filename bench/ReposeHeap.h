@@ -26,7 +26,14 @@ struct ReposeOptions {
   // The plate: flat (0), or rough as Sunday et al.'s (roughened with fixed beads): a triangulated height field on a
   // grid of 1.5 mean diameters with heights uniform in [0, roughness] [m].
   double roughness = 0.0005;
-  double settle = 0.4;            // [s] in the cylinder
+  // How the heap is made: "lift" (the beads settle in a cylinder standing on the plate, which is then lifted) or
+  // "pour" (they settle in a funnel whose orifice, `pourHeight` above the plate, a gate opens; the pile builds
+  // under it, bead by bead, as a pile poured in the laboratory does).
+  std::string method = "lift";
+  double orifice = 0.012;     // the funnel's orifice diameter [m]
+  double pourHeight = 0.04;   // the orifice above the plate [m]
+  double pour = 3.0;          // [s] from the gate's opening to the end of the pouring
+  double settle = 0.4;            // [s] in the cylinder (or the funnel)
   double liftSpeed = 0.05;        // [m/s]
   double lift = 0.06;             // how far the cylinder rises [m] (above the settled bed)
   double rest = 0.5;              // [s] after the lift, for the heap to come to rest

@@ -25,6 +25,11 @@ int main(int argc, char** argv) {
   app.add_option("--precision", o.precision, "double or float")->check(CLI::IsMember({"double", "float"}))->capture_default_str();
   app.add_option("--particles", o.particles, "beads")->capture_default_str();
   app.add_option("--friction", o.friction, "bead-bead sliding friction")->capture_default_str();
+  app.add_option("--method", o.method, "lift (a cylinder lifted off the beads) or pour (a funnel discharging onto the plate)")
+      ->check(CLI::IsMember({"lift", "pour"}))->capture_default_str();
+  app.add_option("--orifice", o.orifice, "pour: the funnel's orifice diameter [m]")->capture_default_str();
+  app.add_option("--pour-height", o.pourHeight, "pour: the orifice above the plate [m]")->capture_default_str();
+  app.add_option("--pour", o.pour, "pour: seconds from the gate's opening to the end of the pouring")->capture_default_str();
   app.add_option("--roughness", o.roughness, "the plate's bumps [m] (0: flat)")->capture_default_str();
   app.add_option("--settle", o.settle, "in the cylinder before the lift [s]")->capture_default_str();
   app.add_option("--lift-speed", o.liftSpeed, "[m/s]")->capture_default_str();
@@ -51,7 +56,7 @@ int main(int argc, char** argv) {
     nlohmann::json j{{"rolling", mr}, {"friction", o.friction}, {"angle_deg", r.angle}, {"quadrants_deg", r.quadrant},
                      {"spread_deg", r.spread}, {"heap_radius_m", r.heapRadius}, {"heap_height_m", r.heapHeight},
                      {"kinetic_energy_J", r.kineticEnergy}, {"particles", r.particles}, {"wall_s", r.wall},
-                     {"executor", executor}, {"precision", o.precision}};
+                     {"executor", executor}, {"precision", o.precision}, {"method", o.method}};
     if (!r.error.empty()) j["error"] = r.error, ++failed;
     std::printf("%s\n", j.dump().c_str());
     std::fflush(stdout);
