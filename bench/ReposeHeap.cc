@@ -221,9 +221,13 @@ ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind) {
   compute::Simulation& sim = *created.value();
   const auto t0 = std::chrono::steady_clock::now();
   const double end = o.method == "pour" ? o.settle + o.pour + o.rest : o.settle + o.lift / o.liftSpeed + o.rest;
-  if (auto s = sim.runUntil(end); !s.isOk()) {
-    res.error = s.toString();
-    return res;
+  for (double t = std::min(0.1, end);; t = std::min(t + 0.1, end)) {
+    if (auto s = sim.runUntil(t); !s.isOk()) {
+      res.error = s.toString();
+      return res;
+    }
+    if (o.onProgress) o.onProgress(sim.time(), sim.stepCount(), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    if (t >= end) break;
   }
   res.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const auto snap = sim.snapshot({"position", "radius", "velocity"});
@@ -242,7 +246,7 @@ ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind) {
     res.quadrant[std::size_t(q)] = reposeAngle(reposeProfile(snap, bin, q), d);
     lo = std::min(lo, res.quadrant[std::size_t(q)]), hi = std::max(hi, res.quadrant[std::size_t(q)]);
   }
-  res.spread = hi - lo;
+  res.spread = hi >= lo ? hi - lo : std::numeric_limits<double>::quiet_NaN();  // NaN where a quadrant has no slope
   return res;
 }
 

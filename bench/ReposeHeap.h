@@ -6,6 +6,8 @@
 // (bench/repose.cc) and repose_test (label gpu).
 #pragma once
 #include <array>
+#include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -39,6 +41,8 @@ struct ReposeOptions {
   double rest = 0.5;              // [s] after the lift, for the heap to come to rest
   std::string precision = "double";
   std::uint64_t seed = 1;
+  // Called every 0.1 s of simulated time (pflow-repose prints it, so that a run cut short says how far it got).
+  std::function<void(double time, std::int64_t steps, double wallSeconds)> onProgress;
 };
 
 // The surface of the heap: the highest bead top (z + r) in rings of width `bin` about the axis.

@@ -39,6 +39,9 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   pflow::log::init("pflow-repose", "warn");
   const auto kind = executor == "cuda" ? pflow::compute::ExecutorKind::kCuda : pflow::compute::ExecutorKind::kCpu;
+  o.onProgress = [](double t, std::int64_t steps, double wall) {
+    std::fprintf(stderr, "t = %.2f s, %lld steps, %.1f s\n", t, (long long)steps, wall);
+  };
   std::ofstream rows, surf;
   if (!csv.empty()) {
     rows.open(csv);
