@@ -1,6 +1,7 @@
 // The angle of repose of a heap of glass beads (docs/accuracy.md, "Angle of repose"): beads settle in a cylinder
-// standing on a plate, the cylinder is lifted, and the heap they leave is measured: its surface height against the
-// distance from the axis, fitted by a line between the apex and the foot, in four quadrants. The reference pair is
+// standing on a plate and the cylinder is lifted, or they pour from a funnel onto the plate; the heap they leave is
+// measured: its surface height against the distance from the axis, fitted by a line between the apex and the foot,
+// over all azimuths and in four quadrants. The reference pair is
 // Sunday et al. (2020, MNRAS 498, 1062): 1 mm glass beads, measured 25.2 +- 0.8 degrees, and their DEM (Chrono)
 // 25.3 degrees with the same constant-torque rolling resistance at mu_r = 0.09. Used by pflow-repose
 // (bench/repose.cc) and repose_test (label gpu).

@@ -1,5 +1,6 @@
 // pflow-repose: the angle of repose of a heap of 1 mm glass beads (docs/accuracy.md, "Angle of repose"). Beads settle
-// in a cylinder on a plate, the cylinder is lifted, and the heap is measured: the highest bead top in rings about the
+// in a cylinder on a plate and the cylinder is lifted (--method lift), or they pour from a funnel (--method pour); the
+// heap is measured: the highest bead top in rings about the
 // axis, a line fitted between 25 % and 75 % of the heap's radius, over all azimuths and in four quadrants. One run per
 // rolling-resistance coefficient given (the reference: Sunday et al. 2020, measured 25.2 +- 0.8 degrees, their DEM
 // 25.3 at mu_r = 0.09); a JSON line each on stdout; --csv writes the rows, --profiles the heaps' surfaces.
