@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <numbers>
 #include <random>
 
+#include "backend/store/CheckpointFile.h"
 #include "compute/dem/Simulation.h"
 #include "frontend/SceneLoader.h"
 
@@ -14,24 +16,6 @@ namespace pflow::bench {
 
 namespace {
 constexpr double kPi = std::numbers::pi;
-constexpr int kSegments = 64;  // around the cylinder
-
-// The beads on a jittered lattice inside the cylinder, lowest layers first, until `count` are placed.
-void fillCylinder(const ReposeOptions& o, compute::ParticleInit& p) {
-  std::mt19937_64 rng(o.seed);
-  std::uniform_real_distribution<double> rad(o.rMin, o.rMax), jit(-0.04 * o.spacing, 0.04 * o.spacing);
-  const double rIn = o.cylinderRadius - o.rMax - 0.0005;
-  const int n = int(2 * rIn / o.spacing);
-  for (double z = o.roughness + o.rMax + 0.0002; p.size() < o.particles; z += o.spacing)
-    for (int i = 0; i <= n && p.size() < o.particles; ++i)
-      for (int j = 0; j <= n && p.size() < o.particles; ++j) {
-        const double x = -rIn + i * o.spacing, y = -rIn + j * o.spacing;
-        if (x * x + y * y > rIn * rIn) continue;
-        p.position.push_back({x + jit(rng), y + jit(rng), z + jit(rng)});
-        p.radius.push_back(rad(rng));
-        p.material.push_back(0);
-      }
-}
 }  // namespace
 
 ReposeProfile reposeProfile(const compute::ParticleSnapshot& s, double bin, int quadrant) {
@@ -109,7 +93,7 @@ compute::MeshConfig plate(const ReposeOptions& o, double L, int material, int su
 // lifted cylinder's radius), its orifice closed by a gate that slides away after the settling; the plate below.
 Result<compute::RunConfig> pourScene(const ReposeOptions& o) {
   const double R = o.cylinderRadius, rIn = R - o.rMax - 0.0005, cone = R - o.orifice / 2, z0 = o.pourHeight;
-  const double perLayer = kPi * rIn * rIn / (o.spacing * o.spacing), fill = double(o.particles) / perLayer * o.spacing;
+  const double perLayer = kPi * rIn * rIn / (o.spacing * o.spacing), fill = 1.15 * double(o.particles) / perLayer * o.spacing + 2 * o.spacing;  // room for `count` beads
   const double D = o.orifice;
   char buf[4096];
   std::snprintf(buf, sizeof buf, R"(materials:
@@ -124,6 +108,7 @@ particles:
     region: {cylinder: {base: [0, 0, %.6g], axis: [0, 0, 1], radius: %.6g, height: %.6g}}
     size: {distribution: uniform, min: %.6g, max: %.6g}
     lattice: {spacing: %.6g, jitter: 0.04}
+    count: %zu
 geometry:
   - name: funnel
     material: plate
@@ -139,59 +124,57 @@ simulation:
 )",
                 o.youngs, o.poisson, o.density, o.restitution, o.friction, o.rolling, o.wallRestitution, o.wallFriction,
                 o.wallRolling, o.wallRestitution, o.wallFriction, o.wallRolling, z0 + cone + 0.001, rIn, fill, o.rMin, o.rMax,
-                o.spacing, z0, D / 2, R, cone, fill + 0.01, -D, -D, z0 - 0.004, D, D, z0 - 0.0001, o.settle,
+                o.spacing, o.particles, z0, D / 2, R, cone, fill + 0.01, -D, -D, z0 - 0.004, D, D, z0 - 0.0001, o.settle,
                 o.settle + o.pour + o.rest + 0.01, o.precision.c_str());
   auto loaded = frontend::loadSceneFromString(buf, "repose-pour");
   if (!loaded) return loaded.status();
   compute::RunConfig c = loaded->config;
   const int surface = int(c.surfaceNames.size());
   c.surfaceNames.push_back("plate");
-  c.meshes.push_back(plate(o, 6 * R, 1, surface));
+  c.meshes.push_back(plate(o, o.plateHalfWidth > 0 ? o.plateHalfWidth : 4 * R, 1, surface));
   return c;
 }
 
-// The lifted cylinder's scene: the beads on a lattice in a cylinder standing on the plate, lifted after the
-// settling at liftSpeed by `lift`.
-compute::RunConfig liftScene(const ReposeOptions& o) {
-  compute::RunConfig c;
-  compute::MaterialConfig bead;
-  bead.name = "glass";
-  bead.youngsModulus = o.youngs, bead.poissonRatio = o.poisson, bead.density = o.density;
-  bead.restitution = o.restitution, bead.friction = o.friction, bead.rollingFriction = o.rolling;
-  compute::MaterialConfig steel = bead;
-  steel.name = "plate", steel.youngsModulus = 2e8, steel.poissonRatio = 0.3, steel.density = 7800;
-  c.materials = {bead, steel};
-  compute::MaterialPairConfig wall;
-  wall.a = 0, wall.b = 1, wall.restitution = o.wallRestitution, wall.friction = o.wallFriction, wall.rollingFriction = o.wallRolling;
-  c.pairs = {wall};
-  fillCylinder(o, c.particles);
-  double top = 0;
-  for (const Vec3d& x : c.particles.position) top = std::max(top, x.z);
-  compute::MeshConfig side;
-  side.name = "cylinder";
-  side.material = 1;
-  const double height = top + o.rMax + 0.005;
-  for (int b = 0; b <= 1; ++b)
-    for (int s = 0; s < kSegments; ++s) {
-      const double a = 2 * kPi * s / kSegments;
-      side.vertices.push_back({o.cylinderRadius * std::cos(a), o.cylinderRadius * std::sin(a), b * height});
-    }
-  for (int s = 0; s < kSegments; ++s) {
-    const std::uint32_t v0 = std::uint32_t(s), v1 = std::uint32_t((s + 1) % kSegments), w0 = v0 + kSegments, w1 = v1 + kSegments;
-    side.triangles.push_back({v0, w1, v1});  // counter-clockwise seen from inside
-    side.triangles.push_back({v0, w0, w1});
-  }
-  side.surface.assign(side.triangles.size(), 1);
-  const double tLift = o.lift / o.liftSpeed;
-  side.motion.startTime = o.settle;
-  side.motion.profile = {{0.0, {0, 0, o.liftSpeed}}, {tLift, {0, 0, o.liftSpeed}}, {tLift + 1e-4, {0, 0, 0}}};
-  c.surfaceNames = {"plate", "cylinder"};
+// The lifted cylinder's scene: the beads on a lattice in a cylinder (open at both ends) standing on the plate,
+// lifted after the settling at liftSpeed by `lift`.
+Result<compute::RunConfig> liftScene(const ReposeOptions& o) {
+  const double R = o.cylinderRadius, rIn = R - o.rMax - 0.0005;
+  const double perLayer = kPi * rIn * rIn / (o.spacing * o.spacing), fill = 1.15 * double(o.particles) / perLayer * o.spacing + 2 * o.spacing;  // room for `count` beads
+  const double base = o.roughness + o.rMax + 0.0002, tLift = o.lift / o.liftSpeed, v = o.liftSpeed;
+  char buf[4096];
+  std::snprintf(buf, sizeof buf, R"(materials:
+  - {name: glass, youngs_modulus: %.6g, poisson_ratio: %.6g, density: %.6g, restitution: %.6g, friction: %.6g, rolling_friction: %.6g}
+  - {name: plate, youngs_modulus: 2.0e8, poisson_ratio: 0.3, density: 7800, restitution: %.6g, friction: %.6g, rolling_friction: %.6g}
+pairs:
+  - {materials: [glass, plate], restitution: %.6g, friction: %.6g, rolling_friction: %.6g}
+particles:
+  - name: beads
+    material: glass
+    method: lattice
+    region: {cylinder: {base: [0, 0, %.6g], axis: [0, 0, 1], radius: %.6g, height: %.6g}}
+    size: {distribution: uniform, min: %.6g, max: %.6g}
+    lattice: {spacing: %.6g, jitter: 0.04}
+    count: %zu
+geometry:
+  - name: cylinder
+    material: plate
+    cylinder: {base: [0, 0, 0], axis: [0, 0, 1], radius: %.6g, height: %.6g, open: [bottom, top], segments: 64}
+    motion: {velocity_profile: [[0, 0, 0, %.6g], [%.6g, 0, 0, %.6g], [%.6g, 0, 0, 0]], start_time: %.6g}
+simulation:
+  duration: %.6g
+  precision: %s
+)",
+                o.youngs, o.poisson, o.density, o.restitution, o.friction, o.rolling, o.wallRestitution, o.wallFriction,
+                o.wallRolling, o.wallRestitution, o.wallFriction, o.wallRolling, base, rIn, fill, o.rMin, o.rMax, o.spacing, o.particles, R,
+                base + fill + o.rMax + 0.005, v, tLift, v, tLift + 1e-4, o.settle, o.settle + tLift + o.rest + 0.01,
+                o.precision.c_str());
+  auto loaded = frontend::loadSceneFromString(buf, "repose-lift");
+  if (!loaded) return loaded.status();
+  compute::RunConfig c = loaded->config;
+  const int surface = int(c.surfaceNames.size());
+  c.surfaceNames.push_back("plate");
   // The collapse spreads to about 3 cylinder radii (docs/accuracy.md, "Angle of repose").
-  c.meshes = {plate(o, 6 * o.cylinderRadius, 1, 0), side};
-  c.sim.gravity = {0, 0, -9.81};
-  c.sim.duration = o.settle + tLift + o.rest + 0.01;
-  c.sim.precision = o.precision == "float" ? compute::Precision::kFloat : compute::Precision::kDouble;
-  c.sim.precisionGiven = true;
+  c.meshes.push_back(plate(o, o.plateHalfWidth > 0 ? o.plateHalfWidth : 6 * R, 1, surface));
   return c;
 }
 
@@ -199,17 +182,12 @@ compute::RunConfig liftScene(const ReposeOptions& o) {
 
 ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind) {
   ReposeResult res;
-  compute::RunConfig c;
-  if (o.method == "pour") {
-    auto scene = pourScene(o);
-    if (!scene) {
-      res.error = scene.status().toString();
-      return res;
-    }
-    c = std::move(scene.value());
-  } else {
-    c = liftScene(o);
+  auto scene = o.method == "pour" ? pourScene(o) : liftScene(o);
+  if (!scene) {
+    res.error = scene.status().toString();
+    return res;
   }
+  const compute::RunConfig& c = scene.value();
   res.particles = c.particles.size();
   compute::SimulationOptions so;
   so.executor = kind;
@@ -219,17 +197,50 @@ ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind) {
     return res;
   }
   compute::Simulation& sim = *created.value();
-  const auto t0 = std::chrono::steady_clock::now();
-  const double end = o.method == "pour" ? o.settle + o.pour + o.rest : o.settle + o.lift / o.liftSpeed + o.rest;
-  for (double t = std::min(0.1, end);; t = std::min(t + 0.1, end)) {
-    if (auto s = sim.runUntil(t); !s.isOk()) {
+  const char* precision = c.sim.precision == compute::Precision::kFloat ? "float" : "double";
+  if (!o.checkpoint.empty() && std::filesystem::exists(o.checkpoint)) {
+    auto data = backend::readCheckpoint(o.checkpoint);
+    if (!data) {
+      res.error = data.status().toString();
+      return res;
+    }
+    if (data->precision != precision || data->state.particles.n != c.particles.size()) {
+      res.error = "the checkpoint '" + o.checkpoint + "' is another run's (its precision or bead count differ)";
+      return res;
+    }
+    if (auto s = sim.resume(data->state); !s.isOk()) {
       res.error = s.toString();
       return res;
     }
-    if (o.onProgress) o.onProgress(sim.time(), sim.stepCount(), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
+  // Past the wall limit, the run stops at the next rebuild (where a state may be taken) and writes it.
+  const auto stopAtRebuild = [&](const compute::Simulation& s) {
+    return o.wallLimit > 0 && elapsed() > o.wallLimit && s.justRebuilt() ? Status(StatusCode::kCancelled, "wall limit")
+                                                                          : Status();
+  };
+  const double end = o.method == "pour" ? o.settle + o.pour + o.rest : o.settle + o.lift / o.liftSpeed + o.rest;
+  for (double t = std::min(std::floor(sim.time() / 0.1 + 1e-9) * 0.1 + 0.1, end);; t = std::min(t + 0.1, end)) {
+    if (auto s = sim.runUntil(t, stopAtRebuild); !s.isOk()) {
+      if (s.code() != StatusCode::kCancelled || o.checkpoint.empty()) {
+        res.error = s.toString();
+        return res;
+      }
+      auto state = sim.state();
+      backend::CheckpointData data;
+      data.solver = "dem", data.precision = precision, data.sceneFile = "pflow-repose";
+      if (state) data.state = std::move(state).value();
+      const Status w = state ? backend::writeCheckpoint(o.checkpoint, data) : state.status();
+      res.error = w.isOk() ? "" : w.toString();
+      res.unfinished = w.isOk(), res.time = sim.time(), res.wall = elapsed(), res.particles = c.particles.size();
+      return res;
+    }
+    if (o.onProgress) o.onProgress(sim.time(), sim.stepCount(), elapsed());
     if (t >= end) break;
   }
-  res.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  res.wall = elapsed();
+  res.time = sim.time();
   const auto snap = sim.snapshot({"position", "radius", "velocity"});
   const Vec3d* v = snap.find("velocity")->as<Vec3d>();
   const double* r = snap.find("radius")->as<double>();
@@ -241,12 +252,16 @@ ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind) {
   const double d = dSum / double(snap.n), bin = 2 * d;
   res.profile = reposeProfile(snap, bin);
   res.angle = reposeAngle(res.profile, d, &res.fitFrom, &res.fitTo, &res.heapRadius, &res.heapHeight);
+  // The spread over the quadrants; NaN when any quadrant has no slope (std::min/max would pass over a NaN).
   double lo = 90, hi = 0;
+  bool all = true;
   for (int q = 0; q < 4; ++q) {
-    res.quadrant[std::size_t(q)] = reposeAngle(reposeProfile(snap, bin, q), d);
-    lo = std::min(lo, res.quadrant[std::size_t(q)]), hi = std::max(hi, res.quadrant[std::size_t(q)]);
+    const double a = reposeAngle(reposeProfile(snap, bin, q), d);
+    res.quadrant[std::size_t(q)] = a;
+    if (std::isnan(a)) all = false;
+    else lo = std::min(lo, a), hi = std::max(hi, a);
   }
-  res.spread = hi >= lo ? hi - lo : std::numeric_limits<double>::quiet_NaN();  // NaN where a quadrant has no slope
+  res.spread = all ? hi - lo : std::numeric_limits<double>::quiet_NaN();
   return res;
 }
 

@@ -29,6 +29,9 @@ struct ReposeOptions {
   // The plate: flat (0), or rough as Sunday et al.'s (roughened with fixed beads): a triangulated height field on a
   // grid of 1.5 mean diameters with heights uniform in [0, roughness] [m].
   double roughness = 0.0005;
+  // The plate's half-width [m]; 0: 4 cylinder radii for a poured pile (58,040 beads heap to a radius of about
+  // 48 mm at 25 degrees), 6 for the lifted cylinder (its collapse spreads to about 3).
+  double plateHalfWidth = 0;
   // How the heap is made: "lift" (the beads settle in a cylinder standing on the plate, which is then lifted) or
   // "pour" (they settle in a funnel whose orifice, `pourHeight` above the plate, a gate opens; the pile builds
   // under it, bead by bead, as a pile poured in the laboratory does).
@@ -42,6 +45,11 @@ struct ReposeOptions {
   double rest = 0.5;              // [s] after the lift, for the heap to come to rest
   std::string precision = "double";
   std::uint64_t seed = 1;
+  // A run longer than one sitting (a device call's limit): after `wallLimit` s of stepping (0: none) the run stops
+  // at its next neighbour rebuild and writes its state to `checkpoint` (a pflow checkpoint file,
+  // backend/store/CheckpointFile.h); a run started with the same options and an existing `checkpoint` goes on from it.
+  std::string checkpoint;
+  double wallLimit = 0;
   // Called every 0.1 s of simulated time (pflow-repose prints it, so that a run cut short says how far it got).
   std::function<void(double time, std::int64_t steps, double wallSeconds)> onProgress;
 };
@@ -62,6 +70,8 @@ struct ReposeResult {
   std::size_t particles = 0;
   double wall = 0;                     // [s]
   std::string error;
+  bool unfinished = false;             // stopped at wallLimit, its state in the checkpoint
+  double time = 0;                     // simulated [s] at the end
 };
 
 // The heap's surface from a snapshot (position, radius), all azimuths or one quadrant (0..3; -1: all).

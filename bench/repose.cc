@@ -5,6 +5,8 @@
 // rolling-resistance coefficient given (the reference: Sunday et al. 2020, measured 25.2 +- 0.8 degrees, their DEM
 // 25.3 at mu_r = 0.09); a JSON line each on stdout; --csv writes the rows, --profiles the heaps' surfaces.
 //   pflow-repose --executor cuda --rolling 0,0.05,0.09,0.15
+// A run longer than one sitting: --checkpoint FILE --wall-limit S stops it after S s (exit 3) and the same command
+// goes on from FILE.
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
@@ -32,13 +34,27 @@ int main(int argc, char** argv) {
   app.add_option("--pour-height", o.pourHeight, "pour: the orifice above the plate [m]")->capture_default_str();
   app.add_option("--pour", o.pour, "pour: seconds from the gate's opening to the end of the pouring")->capture_default_str();
   app.add_option("--roughness", o.roughness, "the plate's bumps [m] (0: flat)")->capture_default_str();
+  app.add_option("--plate", o.plateHalfWidth, "the plate's half-width [m] (0: 4 cylinder radii poured, 6 lifted)")->capture_default_str();
   app.add_option("--settle", o.settle, "in the cylinder before the lift [s]")->capture_default_str();
   app.add_option("--lift-speed", o.liftSpeed, "[m/s]")->capture_default_str();
   app.add_option("--rest", o.rest, "after the lift [s]")->capture_default_str();
+  app.add_option("--checkpoint", o.checkpoint,
+                 "go on from this checkpoint file if it exists; with --wall-limit, write it there when the limit stops the run");
+  app.add_option("--wall-limit", o.wallLimit,
+                 "stop after this many seconds of stepping (at the next neighbour rebuild), writing --checkpoint; exit 3")
+      ->capture_default_str();
   app.add_option("--csv", csv, "write the rows here");
   app.add_option("--profiles", profiles, "write the heaps' surfaces here (rolling, radius, height)");
   CLI11_PARSE(app, argc, argv);
   pflow::log::init("pflow-repose", "warn");
+  if (!o.checkpoint.empty() && rolling.size() != 1) {
+    std::fprintf(stderr, "pflow-repose: --checkpoint holds one run: give one --rolling value\n");
+    return 2;
+  }
+  if (o.wallLimit > 0 && o.checkpoint.empty()) {
+    std::fprintf(stderr, "pflow-repose: --wall-limit needs --checkpoint (where the unfinished run is kept)\n");
+    return 2;
+  }
   const auto kind = executor == "cuda" ? pflow::compute::ExecutorKind::kCuda : pflow::compute::ExecutorKind::kCpu;
   o.onProgress = [](double t, std::int64_t steps, double wall) {
     std::fprintf(stderr, "t = %.2f s, %lld steps, %.1f s\n", t, (long long)steps, wall);
@@ -53,7 +69,7 @@ int main(int argc, char** argv) {
     surf.open(profiles);
     surf << "rolling,radius_m,height_m\n";
   }
-  int failed = 0;
+  int failed = 0, unfinished = 0;
   for (double mr : rolling) {
     o.rolling = mr, o.wallRolling = mr;
     const pflow::bench::ReposeResult r = pflow::bench::runRepose(o, kind);
@@ -62,6 +78,12 @@ int main(int argc, char** argv) {
                      {"kinetic_energy_J", r.kineticEnergy}, {"particles", r.particles}, {"wall_s", r.wall},
                      {"executor", executor}, {"precision", o.precision}, {"method", o.method}};
     if (!r.error.empty()) j["error"] = r.error, ++failed;
+    if (r.unfinished) {  // the heap is not measured: the run goes on from the checkpoint
+      std::printf("%s\n", nlohmann::json{{"unfinished", true}, {"time_s", r.time}, {"wall_s", r.wall}, {"checkpoint", o.checkpoint}}.dump().c_str());
+      ++unfinished;
+      continue;
+    }
+    j["time_s"] = r.time;
     std::printf("%s\n", j.dump().c_str());
     std::fflush(stdout);
     if (rows.is_open() && r.error.empty())
@@ -72,5 +94,5 @@ int main(int argc, char** argv) {
       for (std::size_t k = 0; k < r.profile.height.size(); ++k)
         if (r.profile.height[k] == r.profile.height[k]) surf << mr << "," << r.profile.radius[k] << "," << r.profile.height[k] << "\n";
   }
-  return failed ? 1 : 0;
+  return failed ? 1 : unfinished ? 3 : 0;
 }

@@ -131,8 +131,9 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE Index maskRowEnd(const CellGrid& grid, const 
 // the lane with the most pairs once, not in every piece (pflow-sph-lanes: 30 of 32 lanes busy in that loop against
 // 17 in the walk's, on SPHERIC at 4.8e6). The same pairs in the same order as the walk. The GPU's walk in float
 // (timed on an H100 at 0.94-0.97 of the one-phase walk's pass: the buffer lives in local memory; in double 1.25).
-// A full buffer is added at once by the lanes that filled it, while the warp's other lanes wait: with 8 or 16 words
-// instead of 32 the pass took 3x as long. With 64, the same as 32 (bench/RESULTS.md).
+// A full buffer is added at once by the lanes that filled it, while the warp's other lanes wait: with 8 words instead
+// of 32 a step from rest took 3.3x as long, and with 16 the flow's 0.32 s advance did not finish in 200 s (not
+// timed further). With 64, the same as 32 (bench/RESULTS.md).
 enum class RatePass { kWalk, kMark, kMasks, kTwoPhase };
 inline constexpr int kTwoPhaseWords = 32;  // pieces buffered before their pairs are added (more: added in turns)
 
