@@ -213,6 +213,7 @@ ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind) {
       return res;
     }
   }
+  const std::int64_t step0 = sim.stepCount();
   const auto t0 = std::chrono::steady_clock::now();
   const auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
   // Past the wall limit, the run stops at the next rebuild (where a state may be taken) and writes it.
@@ -234,6 +235,7 @@ ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind) {
       const Status w = state ? backend::writeCheckpoint(o.checkpoint, data) : state.status();
       res.error = w.isOk() ? "" : w.toString();
       res.unfinished = w.isOk(), res.time = sim.time(), res.wall = elapsed(), res.particles = c.particles.size();
+      res.phases = sim.timers().report(), res.steps = sim.stepCount() - step0;
       return res;
     }
     if (o.onProgress) o.onProgress(sim.time(), sim.stepCount(), elapsed());
@@ -241,6 +243,7 @@ ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind) {
   }
   res.wall = elapsed();
   res.time = sim.time();
+  res.phases = sim.timers().report(), res.steps = sim.stepCount() - step0;
   const auto snap = sim.snapshot({"position", "radius", "velocity"});
   const Vec3d* v = snap.find("velocity")->as<Vec3d>();
   const double* r = snap.find("radius")->as<double>();

@@ -72,6 +72,8 @@ struct ReposeResult {
   std::string error;
   bool unfinished = false;             // stopped at wallLimit, its state in the checkpoint
   double time = 0;                     // simulated [s] at the end
+  std::string phases;                  // the step loop's phase timers (PhaseTimers::report)
+  std::int64_t steps = 0;              // taken in this sitting
 };
 
 // The heap's surface from a snapshot (position, radius), all azimuths or one quadrant (0..3; -1: all).

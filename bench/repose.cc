@@ -79,11 +79,11 @@ int main(int argc, char** argv) {
                      {"executor", executor}, {"precision", o.precision}, {"method", o.method}};
     if (!r.error.empty()) j["error"] = r.error, ++failed;
     if (r.unfinished) {  // the heap is not measured: the run goes on from the checkpoint
-      std::printf("%s\n", nlohmann::json{{"unfinished", true}, {"time_s", r.time}, {"wall_s", r.wall}, {"checkpoint", o.checkpoint}}.dump().c_str());
+      std::printf("%s\n", nlohmann::json{{"unfinished", true}, {"time_s", r.time}, {"wall_s", r.wall}, {"steps", r.steps}, {"phases", r.phases}, {"checkpoint", o.checkpoint}}.dump().c_str());
       ++unfinished;
       continue;
     }
-    j["time_s"] = r.time;
+    j["time_s"] = r.time, j["steps"] = r.steps, j["phases"] = r.phases;
     std::printf("%s\n", j.dump().c_str());
     std::fflush(stdout);
     if (rows.is_open() && r.error.empty())
