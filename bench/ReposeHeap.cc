@@ -90,7 +90,8 @@ compute::MeshConfig plate(const ReposeOptions& o, double L, int material, int su
 }
 
 // The poured pile's scene: the beads on a lattice in a funnel (a cone from the orifice up, then a cylinder of the
-// lifted cylinder's radius), its orifice closed by a gate that slides away after the settling; the plate below.
+// lifted cylinder's radius), its orifice closed by a gate that slides away after the settling (100 mm, past the
+// plate's edge, where it stops); the plate below.
 Result<compute::RunConfig> pourScene(const ReposeOptions& o) {
   const double R = o.cylinderRadius, rIn = R - o.rMax - 0.0005, cone = R - o.orifice / 2, z0 = o.pourHeight;
   const double perLayer = kPi * rIn * rIn / (o.spacing * o.spacing), fill = 1.15 * double(o.particles) / perLayer * o.spacing + 2 * o.spacing;  // room for `count` beads
@@ -117,7 +118,7 @@ geometry:
   - name: gate
     material: plate
     box: {min: [%.6g, %.6g, %.6g], max: [%.6g, %.6g, %.6g], side: outside}
-    motion: {velocity: [0.5, 0, 0], start_time: %.6g}
+    motion: {velocity_profile: [[0, 0.5, 0, 0], [0.2, 0.5, 0, 0], [0.2001, 0, 0, 0]], start_time: %.6g}
 simulation:
   duration: %.6g
   precision: %s

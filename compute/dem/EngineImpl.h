@@ -50,12 +50,18 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   void setMeshMotion(int mesh, const MeshMotionParams& motion) override {
     m_anyMeshMoves = true;
     m_mem.copyFromHost(m_meshMotion.as<MeshMotionParams>() + mesh, &motion, sizeof motion);
+    if (!m_meshMoves[std::size_t(mesh)]) m_meshMoves[std::size_t(mesh)] = true, listMovingTriangles();
   }
+  // Only the moving meshes' triangles are moved (a funnel's gate, not the plate under it); a static mesh's stay where
+  // they were made.
   double moveMeshes(double time) override {
-    if (m_numTri == 0 || !m_anyMeshMoves) return 0.0;
-    return m_exec.maxOf(m_numTri, kernels::MoveTriangles{m_triRef.as<Vec3d>(), m_triVerts.as<Vec3d>(),
-                                                         m_triRebuild.as<Vec3d>(), m_triMesh.as<std::int32_t>(),
-                                                         m_meshMotion.as<MeshMotionParams>(), time});
+    if (m_numTri == 0 || !m_anyMeshMoves || m_numMovingTri == 0) return 0.0;
+    kernels::MoveTriangles move{m_triRef.as<Vec3d>(), m_triVerts.as<Vec3d>(), m_triRebuild.as<Vec3d>(),
+                                m_triMesh.as<std::int32_t>(), m_meshMotion.as<MeshMotionParams>(), time};
+    move.which = m_numMovingTri < m_numTri ? m_movingTri.as<Index>() : nullptr;
+    const double moved = m_exec.maxOf(m_numMovingTri, move);
+    m_trianglesMoved = moved > 0;  // since they were binned (a gate that slid away and stopped: no more binning)
+    return moved;
   }
 
   void sortByCell() override {
@@ -111,8 +117,8 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     // is not a field of the table (sortByCell does not reorder it): valid because a sort is always
     // followed by this (Engine.h).
     m_mem.fillBytes(m_moved.data(), 0, m_moved.bytes());
-    // Static meshes are binned once; moving ones at every rebuild, from where they are now.
-    if (m_numTri && (m_anyMeshMoves || !m_binned)) {
+    // Triangles are binned once, and again at a rebuild when any has moved since, from where they are now.
+    if (m_numTri && (m_trianglesMoved || !m_binned)) {
       m_mem.copyWithin(m_triRebuild.data(), m_triVerts.data(), m_triVerts.bytes());
       binTriangles();
       m_binned = true;
@@ -517,6 +523,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   bool m_anyMeshMoves = false;
   bool m_anyWalls = false;  // planes or triangles: the wall-force kernel runs
   bool m_binned = false;
+  bool m_trianglesMoved = false;  // moveMeshes: some vertex is not where the last binning saw it
   Index m_nbrCap = 16;
   bool m_columnMajor = Exec::kColumnMajorLists;
   Index m_wallCap = 4;
@@ -524,6 +531,17 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   Buffer m_nbr{m_mem, 0}, m_nbrSlot{m_mem, 0}, m_nbrCount{m_mem, 0};
   Buffer m_planes{m_mem, 0}, m_triRef{m_mem, 0}, m_triVerts{m_mem, 0}, m_triRebuild{m_mem, 0};
   Buffer m_triMesh{m_mem, 0}, m_triMaterial{m_mem, 0}, m_meshMotion{m_mem, 0};
+  std::vector<bool> m_meshMoves;           // per mesh: has a motion, or a drive has set one
+  Buffer m_movingTri{m_mem, 0};            // their triangles (moveMeshes)
+  Index m_numMovingTri = 0;
+  void listMovingTriangles() {
+    std::vector<Index> t;
+    for (Index k = 0; k < Index(m_setup.triMesh.size()); ++k)
+      if (m_meshMoves[std::size_t(m_setup.triMesh[k])]) t.push_back(k);
+    m_numMovingTri = Index(t.size());
+    m_movingTri.resize(std::max<std::size_t>(1, t.size()) * sizeof(Index));
+    if (!t.empty()) m_mem.copyFromHost(m_movingTri.data(), t.data(), t.size() * sizeof(Index));
+  }
   Buffer m_triSurface{m_mem, 0}, m_planeSurface{m_mem, 0}, m_surfaceLoads{m_mem, 0};
   bool m_recordLoads = false;
   Buffer m_binStart{m_mem, 0}, m_binItems{m_mem, 0}, m_binCount{m_mem, 0};
@@ -594,7 +612,10 @@ void EngineImpl<Exec, R>::init() {
   upload(m_planeSurface, s.planeSurface);
   m_surfaceLoads.resize(std::max<std::size_t>(1, 6 * surfaceCount()) * sizeof(double));
   upload(m_meshMotion, s.meshMotion);
-  for (const auto& m : s.meshMotion) m_anyMeshMoves |= (m.angularSpeed != 0 || norm2(m.velocity) != 0 || (m.omega != 0 && norm2(m.vibration) != 0) || m.profilePoints > 0);
+  for (const auto& m : s.meshMotion)
+    m_meshMoves.push_back(m.angularSpeed != 0 || norm2(m.velocity) != 0 || (m.omega != 0 && norm2(m.vibration) != 0) || m.profilePoints > 0);
+  for (bool moves : m_meshMoves) m_anyMeshMoves |= moves;
+  listMovingTriangles();
   m_anyWalls = s.model.walls;  // deriveModel: off without planes and triangles (on in simulation.model: full)
   m_binStart.resize((std::size_t(s.grid.numCells()) + 1) * sizeof(Index));
   m_binCount.resize(std::size_t(s.grid.numCells()) * sizeof(std::uint32_t));

@@ -108,6 +108,36 @@ struct SlabKey {
 };
 
 // dst[k] = src[perm[k]] for elements of `stride` bytes: one field of the table at a time.
+// Several blocks of rows in one launch (FieldRows::reorder where the rows are few, and a launch per block would cost
+// more than its bytes): back = false gathers block b's row perm[k] to scratch + offset[b] + k stride[b]; back = true
+// copies the scratch's rows to the blocks in place. Offsets 64-byte aligned, strides multiples of 4.
+struct GatherBlocks {
+  static constexpr int kMax = 48;
+  struct Block {
+    unsigned char* data;
+    std::size_t stride, offset;
+  };
+  Block block[kMax];
+  int blocks = 0;
+  unsigned char* scratch;
+  const Index* perm;
+  bool back = false;
+  PFLOW_HOSTDEVICE void operator()(Index k) const {
+    for (int b = 0; b < blocks; ++b) {
+      const Block& x = block[b];
+      const unsigned char* src = back ? scratch + x.offset + std::size_t(k) * x.stride : x.data + std::size_t(perm[k]) * x.stride;
+      unsigned char* dst = back ? x.data + std::size_t(k) * x.stride : scratch + x.offset + std::size_t(k) * x.stride;
+      if (x.stride % 8 == 0 && reinterpret_cast<std::uintptr_t>(x.data) % 8 == 0) {
+        for (std::size_t w = 0; w < x.stride / 8; ++w)
+          reinterpret_cast<std::uint64_t*>(dst)[w] = reinterpret_cast<const std::uint64_t*>(src)[w];
+      } else {
+        for (std::size_t w = 0; w < x.stride / 4; ++w)
+          reinterpret_cast<std::uint32_t*>(dst)[w] = reinterpret_cast<const std::uint32_t*>(src)[w];
+      }
+    }
+  }
+};
+
 struct GatherBytes {
   const unsigned char* src;
   unsigned char* dst;

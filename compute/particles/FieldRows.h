@@ -35,26 +35,50 @@ class FieldRows {
   }
 
   // Every field of the table (all of its slots) reordered so that new row k = old row perm[k], k < count
-  // (perm on the device), through one scratch buffer: slot-major slot fields one column at a time.
+  // (perm on the device), through one scratch buffer: slot-major slot fields one column at a time. Blocks are
+  // batched into launches of up to kBatchBytes (GatherBlocks): with few rows, a launch per block would cost more than
+  // its bytes (58,040 beads with 20 history slots: ~100 launches a rebuild); with many, each block is a batch of its
+  // own, as large as before.
+  static constexpr std::size_t kBatchBytes = std::size_t(8) << 20;
   void reorder(const Index* perm, Index count) {
-    const bool byColumn = m_store.slotMajor();
+    using Block = kernels::GatherBlocks::Block;
+    std::vector<Block> all;
     std::size_t largest = 0;
+    const bool byColumn = m_store.slotMajor();
     for (int k = 0; k < Store::kCount; ++k) {
       const Info& f = Store::kTable[k];
-      largest = std::max(largest, f.elementBytes * (byColumn ? 1 : m_store.valuesPerParticle(f)) * std::size_t(count));
-    }
-    if (m_scratch.bytes() < largest) m_scratch.resize(largest);
-    for (int k = 0; k < Store::kCount; ++k) {
-      const Info& f = Store::kTable[k];
-      Buffer& field = m_store.buffer(f.id);
       const bool columns = byColumn && f.multiplicity != Multiplicity::kOne;
       const std::size_t blocks = columns ? m_store.valuesPerParticle(f) : 1;
       const std::size_t stride = columns ? f.elementBytes : m_store.strideBytes(f);
-      for (std::size_t b = 0; b < blocks; ++b) {
-        unsigned char* data = field.template as<unsigned char>() + b * m_store.columnBytes(f);
-        m_exec.forEach(count, kernels::GatherBytes{data, m_scratch.as<unsigned char>(), perm, stride});
-        m_mem.copyWithin(data, m_scratch.data(), stride * std::size_t(count));
+      for (std::size_t b = 0; b < blocks; ++b)
+        all.push_back({m_store.buffer(f.id).template as<unsigned char>() + b * m_store.columnBytes(f), stride, 0});
+      largest = std::max(largest, stride * std::size_t(count));
+    }
+    const auto rounded = [](std::size_t b) { return (b + 63) / 64 * 64; };
+    std::size_t total = 0;
+    for (const Block& b : all) total += rounded(b.stride * std::size_t(count));
+    const std::size_t cap = std::max(largest, std::min(total, kBatchBytes));
+    if (m_scratch.bytes() < cap) m_scratch.resize(cap);
+    unsigned char* scratch = m_scratch.as<unsigned char>();
+    for (std::size_t first = 0; first < all.size();) {
+      kernels::GatherBlocks g{};
+      g.scratch = scratch, g.perm = perm;
+      std::size_t at = 0, next = first;
+      while (next < all.size() && g.blocks < kernels::GatherBlocks::kMax &&
+             (g.blocks == 0 || at + rounded(all[next].stride * std::size_t(count)) <= cap)) {
+        g.block[g.blocks++] = {all[next].data, all[next].stride, at};
+        at += rounded(all[next].stride * std::size_t(count));
+        ++next;
       }
+      if (g.blocks == 1) {  // one block: the plain gather and a copy back
+        m_exec.forEach(count, kernels::GatherBytes{all[first].data, scratch, perm, all[first].stride});
+        m_mem.copyWithin(all[first].data, scratch, all[first].stride * std::size_t(count));
+      } else {
+        m_exec.forEach(count, g);
+        g.back = true;
+        m_exec.forEach(count, g);
+      }
+      first = next;
     }
   }
 

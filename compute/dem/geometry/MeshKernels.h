@@ -109,7 +109,9 @@ struct MoveTriangles {
   const std::int32_t* triMesh;
   const MeshMotionParams* motion;
   double time;
-  PFLOW_HOSTDEVICE double operator()(Index t) const {
+  const Index* which = nullptr;  // the triangles moved (k-th: which[k]); null: all
+  PFLOW_HOSTDEVICE double operator()(Index k) const {
+    const Index t = which ? which[k] : k;
     const MeshMotionParams& m = motion[triMesh[t]];
     double d2 = 0;
     for (int k = 0; k < 3; ++k) {
