@@ -249,7 +249,9 @@ ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind) {
   const Vec3d* v = snap.find("velocity")->as<Vec3d>();
   const double* r = snap.find("radius")->as<double>();
   double dSum = 0;
+  const Vec3d* x = snap.find("position")->as<Vec3d>();
   for (std::size_t i = 0; i < snap.n; ++i) {
+    if (x[i].z > -0.001) ++res.onPlate;
     res.kineticEnergy += 0.5 * o.density * 4.0 / 3.0 * kPi * r[i] * r[i] * r[i] * norm2(v[i]);
     dSum += 2 * r[i];
   }

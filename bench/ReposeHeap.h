@@ -68,6 +68,7 @@ struct ReposeResult {
   double kineticEnergy = 0;            // at the end [J]
   ReposeProfile profile;
   std::size_t particles = 0;
+  std::size_t onPlate = 0;             // beads at the end above the plate's underside (the rest fell off its edge)
   double wall = 0;                     // [s]
   std::string error;
   bool unfinished = false;             // stopped at wallLimit, its state in the checkpoint

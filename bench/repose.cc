@@ -23,7 +23,13 @@ int main(int argc, char** argv) {
   pflow::bench::ReposeOptions o;
   std::string executor = "cpu", csv, profiles;
   std::vector<double> rolling{o.rolling};
-  app.add_option("--rolling", rolling, "bead-bead and bead-plate rolling-resistance coefficients, one run each")->delimiter(',');
+  app.add_option("--rolling", rolling, "bead-bead (and, without --wall-rolling, bead-plate) rolling-resistance coefficients, one run each")
+      ->delimiter(',');
+  double wallRolling = -1;
+  app.add_option("--wall-rolling", wallRolling,
+                 "bead-plate (and funnel, cylinder) rolling resistance, if not the bead-bead one. pflow's torque is mu_r |Fn| R*: "
+                 "R/2 between equal beads, R against a wall; Chrono's (Schwartz's) is mu_r |Fn| R for both, so Chrono's "
+                 "mu_r = 0.09 is --rolling 0.18 --wall-rolling 0.09 here");
   app.add_option("--executor", executor, "cpu or cuda")->check(CLI::IsMember({"cpu", "cuda"}))->capture_default_str();
   app.add_option("--precision", o.precision, "double or float")->check(CLI::IsMember({"double", "float"}))->capture_default_str();
   app.add_option("--particles", o.particles, "beads")->capture_default_str();
@@ -62,7 +68,7 @@ int main(int argc, char** argv) {
   std::ofstream rows, surf;
   if (!csv.empty()) {
     rows.open(csv);
-    rows << "rolling,friction,angle_deg,q0_deg,q1_deg,q2_deg,q3_deg,spread_deg,heap_radius_m,heap_height_m,fit_from_m,fit_to_m,"
+    rows << "rolling,wall_rolling,friction,angle_deg,q0_deg,q1_deg,q2_deg,q3_deg,spread_deg,heap_radius_m,heap_height_m,fit_from_m,fit_to_m,"
             "kinetic_energy_J,particles,executor,precision,wall_s\n";
   }
   if (!profiles.empty()) {
@@ -71,9 +77,9 @@ int main(int argc, char** argv) {
   }
   int failed = 0, unfinished = 0;
   for (double mr : rolling) {
-    o.rolling = mr, o.wallRolling = mr;
+    o.rolling = mr, o.wallRolling = wallRolling >= 0 ? wallRolling : mr;
     const pflow::bench::ReposeResult r = pflow::bench::runRepose(o, kind);
-    nlohmann::json j{{"rolling", mr}, {"friction", o.friction}, {"angle_deg", r.angle}, {"quadrants_deg", r.quadrant},
+    nlohmann::json j{{"rolling", mr}, {"wall_rolling", o.wallRolling}, {"friction", o.friction}, {"on_plate", r.onPlate}, {"angle_deg", r.angle}, {"quadrants_deg", r.quadrant},
                      {"spread_deg", r.spread}, {"heap_radius_m", r.heapRadius}, {"heap_height_m", r.heapHeight},
                      {"kinetic_energy_J", r.kineticEnergy}, {"particles", r.particles}, {"wall_s", r.wall},
                      {"executor", executor}, {"precision", o.precision}, {"method", o.method}};
@@ -87,7 +93,7 @@ int main(int argc, char** argv) {
     std::printf("%s\n", j.dump().c_str());
     std::fflush(stdout);
     if (rows.is_open() && r.error.empty())
-      rows << mr << "," << o.friction << "," << r.angle << "," << r.quadrant[0] << "," << r.quadrant[1] << "," << r.quadrant[2]
+      rows << mr << "," << o.wallRolling << "," << o.friction << "," << r.angle << "," << r.quadrant[0] << "," << r.quadrant[1] << "," << r.quadrant[2]
            << "," << r.quadrant[3] << "," << r.spread << "," << r.heapRadius << "," << r.heapHeight << "," << r.fitFrom << ","
            << r.fitTo << "," << r.kineticEnergy << "," << r.particles << "," << executor << "," << o.precision << "," << r.wall << "\n";
     if (surf.is_open())
