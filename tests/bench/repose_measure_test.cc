@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <numbers>
 #include <random>
@@ -60,6 +61,34 @@ TEST(ReposeMeasure, ConesGiveBackTheirSlope) {
     EXPECT_NEAR(radius, 0.05, 0.006);
     for (int q = 0; q < 4; ++q) EXPECT_NEAR(pflow::bench::reposeAngle(pflow::bench::reposeProfile(s, 2 * d, q), d), deg, 0.8) << q;
   }
+}
+
+
+// A run cut by its wall limit and taken up again from its checkpoint ends where the uncut run ends, to the last digit
+// (pflow-repose --checkpoint --wall-limit: a poured pile takes two device sittings). A few hundred beads, a flat plate,
+// a short lift, on the CPU.
+TEST(ReposeCheckpoint, ACutRunGoesOnAsIfUncut) {
+  pflow::bench::ReposeOptions o;
+  o.particles = 300, o.roughness = 0, o.settle = 0.02, o.lift = 0.01, o.liftSpeed = 0.5, o.rest = 0.01;
+  const auto kind = pflow::compute::ExecutorKind::kCpu;
+  const pflow::bench::ReposeResult whole = pflow::bench::runRepose(o, kind);
+  ASSERT_TRUE(whole.error.empty()) << whole.error;
+  ASSERT_FALSE(whole.unfinished);
+  o.checkpoint = ::testing::TempDir() + "repose_checkpoint_test.h5";
+  std::remove(o.checkpoint.c_str());
+  o.wallLimit = 1e-9;  // stops at the first rebuild
+  const pflow::bench::ReposeResult cut = pflow::bench::runRepose(o, kind);
+  ASSERT_TRUE(cut.error.empty()) << cut.error;
+  ASSERT_TRUE(cut.unfinished);
+  EXPECT_LT(cut.time, whole.time);
+  o.wallLimit = 0;
+  const pflow::bench::ReposeResult rest = pflow::bench::runRepose(o, kind);
+  ASSERT_TRUE(rest.error.empty()) << rest.error;
+  EXPECT_FALSE(rest.unfinished);
+  EXPECT_EQ(rest.time, whole.time);
+  EXPECT_EQ(rest.kineticEnergy, whole.kineticEnergy);
+  EXPECT_EQ(rest.steps + cut.steps, whole.steps);
+  std::remove(o.checkpoint.c_str());
 }
 
 }  // namespace
