@@ -50,7 +50,7 @@ int main(int argc, char** argv) {
                  "stop after this many seconds of stepping (at the next neighbour rebuild), writing --checkpoint; exit 3")
       ->capture_default_str();
   app.add_option("--csv", csv, "write the rows here");
-  app.add_option("--profiles", profiles, "write the heaps' surfaces here (rolling, radius, height)");
+  app.add_option("--profiles", profiles, "write the heaps' surfaces here (rolling, wall_rolling, radius, height)");
   CLI11_PARSE(app, argc, argv);
   pflow::log::init("pflow-repose", "warn");
   if (!o.checkpoint.empty() && rolling.size() != 1) {
@@ -73,7 +73,7 @@ int main(int argc, char** argv) {
   }
   if (!profiles.empty()) {
     surf.open(profiles);
-    surf << "rolling,radius_m,height_m\n";
+    surf << "rolling,wall_rolling,radius_m,height_m\n";
   }
   int failed = 0, unfinished = 0;
   for (double mr : rolling) {
@@ -98,7 +98,7 @@ int main(int argc, char** argv) {
            << r.fitTo << "," << r.kineticEnergy << "," << r.particles << "," << executor << "," << o.precision << "," << r.wall << "\n";
     if (surf.is_open())
       for (std::size_t k = 0; k < r.profile.height.size(); ++k)
-        if (r.profile.height[k] == r.profile.height[k]) surf << mr << "," << r.profile.radius[k] << "," << r.profile.height[k] << "\n";
+        if (r.profile.height[k] == r.profile.height[k]) surf << mr << "," << o.wallRolling << "," << r.profile.radius[k] << "," << r.profile.height[k] << "\n";
   }
   return failed ? 1 : unfinished ? 3 : 0;
 }

@@ -2,8 +2,8 @@
 # The accuracy-speed study in one command (docs/accuracy.md): runs pflow-accuracy, then draws the charts.
 # Builds nothing: the binary comes from $PFLOW_BIN or build/bin/pflow-accuracy.
 #   bench/accuracy/run.sh [--executor cpu|cuda] [--quick] [other pflow-accuracy options]
-# With --executor cuda also the bulk laws of the GPU (pflow-beverloo, pflow-janssen: Beverloo's and Janssen's CSVs
-# and charts). Writes docs/accuracy/{study,stability}.csv and PNGs (--quick: build/accuracy-quick/, so the committed
+# With --executor cuda also the bulk laws of the GPU (pflow-beverloo, pflow-janssen, pflow-repose: Beverloo's,
+# Janssen's and the angle of repose's CSVs and charts). Writes docs/accuracy/{study,stability}.csv and PNGs (--quick: build/accuracy-quick/, so the committed
 # study is not touched). Rows of the other executor already in study.csv are kept.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
@@ -37,6 +37,14 @@ if [[ " $* " == *" cuda "* || " $* " == *"--executor=cuda"* ]] && [[ " $* " != *
       "$bindir/pflow-janssen" --executor cuda --precision "$p" --csv "$out/janssen_cuda_$p.csv"
     fi
   done
+  # The angle of repose (docs/accuracy.md): the poured pile at the paper's mu_r = 0.09 read as pflow's and as Chrono's
+  # (0.18 bead-bead here), float; about 470 s of GPU each.
+  if [[ -x "$bindir/pflow-repose" ]]; then
+    "$bindir/pflow-repose" --executor cuda --method pour --precision float --settle 0.2 --rest 0.3 \
+      --rolling 0.09,0.18 --wall-rolling 0.09 \
+      --csv "$out/repose_poured.csv" --profiles "$out/repose_poured_profiles.csv"
+    /usr/bin/python3 "$root/bench/accuracy/plot_repose.py" "$out/repose_poured.png" "$out/repose_poured.csv" "$out/repose_poured_profiles.csv"
+  fi
   [[ -s "$out/beverloo_cuda_double.csv" ]] && /usr/bin/python3 "$root/bench/accuracy/plot_beverloo.py" "$out/beverloo.png" "$out"/beverloo_cuda_*.csv
   [[ -s "$out/janssen_cuda_double.csv" ]] && /usr/bin/python3 "$root/bench/accuracy/plot_janssen.py" "$out/janssen.png" "$out"/janssen_cuda_*.csv
 fi
