@@ -110,7 +110,8 @@ struct SlabKey {
 // dst[k] = src[perm[k]] for elements of `stride` bytes: one field of the table at a time.
 // Several blocks of rows in one launch (FieldRows::reorder where the rows are few, and a launch per block would cost
 // more than its bytes): back = false gathers block b's row perm[k] to scratch + offset[b] + k stride[b]; back = true
-// copies the scratch's rows to the blocks in place. Offsets 64-byte aligned, strides multiples of 4.
+// copies the scratch's rows to the blocks in place (FieldRows::pack: the gather alone, into packed blocks). Strides
+// multiples of 4; 8-byte words where the stride and both bases allow.
 struct GatherBlocks {
   static constexpr int kMax = 48;
   struct Block {
@@ -127,7 +128,7 @@ struct GatherBlocks {
       const Block& x = block[b];
       const unsigned char* src = back ? scratch + x.offset + std::size_t(k) * x.stride : x.data + std::size_t(perm[k]) * x.stride;
       unsigned char* dst = back ? x.data + std::size_t(k) * x.stride : scratch + x.offset + std::size_t(k) * x.stride;
-      if (x.stride % 8 == 0 && reinterpret_cast<std::uintptr_t>(x.data) % 8 == 0) {
+      if (x.stride % 8 == 0 && (reinterpret_cast<std::uintptr_t>(x.data) | reinterpret_cast<std::uintptr_t>(scratch + x.offset)) % 8 == 0) {
         for (std::size_t w = 0; w < x.stride / 8; ++w)
           reinterpret_cast<std::uint64_t*>(dst)[w] = reinterpret_cast<const std::uint64_t*>(src)[w];
       } else {

@@ -131,10 +131,16 @@ class FieldRows {
     for (int segment : segments) {
       const Index n = Index(segment);
       if (!n) continue;
+      // The segment's blocks in launches of up to GatherBlocks::kMax (one launch per block cost more than its bytes
+      // where the rows are few: a halo's few hundred).
+      kernels::GatherBlocks g{};
+      g.scratch = m_stage.as<unsigned char>(), g.perm = rows + first;
       forEachBlock(flags, [&](const unsigned char* field, std::size_t stride) {
-        m_exec.forEach(n, kernels::GatherBytes{field, m_stage.as<unsigned char>() + at, rows + first, stride});
+        if (g.blocks == kernels::GatherBlocks::kMax) m_exec.forEach(n, g), g.blocks = 0;
+        g.block[g.blocks++] = {const_cast<unsigned char*>(field), stride, at};
         at += stride * n;
       });
+      if (g.blocks) m_exec.forEach(n, g);
       first += n;
     }
     m_mem.copyToHost(out.data(), m_stage.data(), out.size());
