@@ -48,14 +48,13 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   }
 
   void setMeshMotion(int mesh, const MeshMotionParams& motion) override {
-    m_anyMeshMoves = true;
     m_mem.copyFromHost(m_meshMotion.as<MeshMotionParams>() + mesh, &motion, sizeof motion);
     if (!m_meshMoves[std::size_t(mesh)]) m_meshMoves[std::size_t(mesh)] = true, listMovingTriangles();
   }
   // Only the moving meshes' triangles are moved (a funnel's gate, not the plate under it); a static mesh's stay where
   // they were made.
   double moveMeshes(double time) override {
-    if (m_numTri == 0 || !m_anyMeshMoves || m_numMovingTri == 0) return 0.0;
+    if (m_numMovingTri == 0) return 0.0;
     kernels::MoveTriangles move{m_triRef.as<Vec3d>(), m_triVerts.as<Vec3d>(), m_triRebuild.as<Vec3d>(),
                                 m_triMesh.as<std::int32_t>(), m_meshMotion.as<MeshMotionParams>(), time};
     move.which = m_numMovingTri < m_numTri ? m_movingTri.as<Index>() : nullptr;
@@ -520,7 +519,6 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   Index& m_n = m_rows.n;          // local particles: the owned ones, then ghosts (distributed runs)
   Index& m_owned = m_rows.owned;
   Index m_numTri = 0;
-  bool m_anyMeshMoves = false;
   bool m_anyWalls = false;  // planes or triangles: the wall-force kernel runs
   bool m_binned = false;
   bool m_trianglesMoved = false;  // moveMeshes: some vertex is not where the last binning saw it
@@ -614,7 +612,6 @@ void EngineImpl<Exec, R>::init() {
   upload(m_meshMotion, s.meshMotion);
   for (const auto& m : s.meshMotion)
     m_meshMoves.push_back(m.angularSpeed != 0 || norm2(m.velocity) != 0 || (m.omega != 0 && norm2(m.vibration) != 0) || m.profilePoints > 0);
-  for (bool moves : m_meshMoves) m_anyMeshMoves |= moves;
   listMovingTriangles();
   m_anyWalls = s.model.walls;  // deriveModel: off without planes and triangles (on in simulation.model: full)
   m_binStart.resize((std::size_t(s.grid.numCells()) + 1) * sizeof(Index));

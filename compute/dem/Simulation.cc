@@ -586,8 +586,8 @@ Result<EngineSetup> prepareEngineSetup(const RunConfig& c) {
   }
   // Cells at least one largest diameter plus skin wide; coarser if the grid would be huge: more than 16 cells a
   // particle (64 B a particle for the cell starts, and as much for the triangle bins) in a sparse scene, such as a
-  // pile poured in a wide box. With 4 a particle, a poured pile's cells were 3.1 mm for 1.3 mm beads, 12 times the
-  // candidates (docs/performance.md, "Small and sparse scenes").
+  // pile poured in a wide box. With 4 a particle, a poured pile's cells were 3.1 mm for 1.32 mm contact ranges, 13
+  // times the candidate volume (docs/performance.md, "Small and sparse scenes").
   const Vec3d ext = box.hi - box.lo;
   double cell = std::max(2 * maxR + s.skin, 1e-12);
   const double maxCells = std::max(4096.0, 16.0 * double(n) + double(s.triMesh.size()));

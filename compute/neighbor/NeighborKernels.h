@@ -107,7 +107,6 @@ struct SlabKey {
   }
 };
 
-// dst[k] = src[perm[k]] for elements of `stride` bytes: one field of the table at a time.
 // Several blocks of rows in one launch (FieldRows::reorder where the rows are few, and a launch per block would cost
 // more than its bytes): back = false gathers block b's row perm[k] to scratch + offset[b] + k stride[b]; back = true
 // copies the scratch's rows to the blocks in place (FieldRows::pack: the gather alone, into packed blocks). Strides
@@ -139,6 +138,7 @@ struct GatherBlocks {
   }
 };
 
+// dst[k] = src[perm[k]] for elements of `stride` bytes: one field of the table at a time.
 struct GatherBytes {
   const unsigned char* src;
   unsigned char* dst;
