@@ -89,14 +89,23 @@ compute::MeshConfig plate(const ReposeOptions& o, double L, int material, int su
   return floor;
 }
 
-// The poured pile's scene: the beads on a lattice in a funnel (a cone from the orifice up, then a cylinder of the
-// lifted cylinder's radius), its orifice closed by a gate that slides away after the settling (100 mm, past the
-// plate's edge, where it stops); the plate below.
-Result<compute::RunConfig> pourScene(const ReposeOptions& o) {
-  const double R = o.cylinderRadius, rIn = R - o.rMax - 0.0005, cone = R - o.orifice / 2, z0 = o.pourHeight;
-  const double perLayer = kPi * rIn * rIn / (o.spacing * o.spacing), fill = 1.15 * double(o.particles) / perLayer * o.spacing + 2 * o.spacing;  // room for `count` beads
-  const double D = o.orifice;
-  char buf[4096];
+// A scene and its signature: its YAML with the plate's parameters, which a checkpoint carries (a run refuses one
+// taken with other options).
+struct Scene {
+  compute::RunConfig config;
+  std::string signature;
+};
+
+// The height of a lattice region of radius rIn holding `particles` beads, with room to spare (count: takes them).
+double fillHeight(const ReposeOptions& o, double rIn) {
+  const double perLayer = kPi * rIn * rIn / (o.spacing * o.spacing);
+  return 1.15 * double(o.particles) / perLayer * o.spacing + 2 * o.spacing;
+}
+
+// Both scenes' materials, pair and beads (a lattice cylinder of radius rIn and height `fill` from `base`); the walls
+// are of material `plate`.
+std::string beadsYaml(const ReposeOptions& o, double base, double rIn, double fill) {
+  char buf[2048];
   std::snprintf(buf, sizeof buf, R"(materials:
   - {name: glass, youngs_modulus: %.6g, poisson_ratio: %.6g, density: %.6g, restitution: %.6g, friction: %.6g, rolling_friction: %.6g}
   - {name: plate, youngs_modulus: 2.0e8, poisson_ratio: 0.3, density: 7800, restitution: %.6g, friction: %.6g, rolling_friction: %.6g}
@@ -110,7 +119,35 @@ particles:
     size: {distribution: uniform, min: %.6g, max: %.6g}
     lattice: {spacing: %.6g, jitter: 0.04}
     count: %zu
-geometry:
+)",
+                o.youngs, o.poisson, o.density, o.restitution, o.friction, o.rolling, o.wallRestitution, o.wallFriction,
+                o.wallRolling, o.wallRestitution, o.wallFriction, o.wallRolling, base, rIn, fill, o.rMin, o.rMax, o.spacing,
+                o.particles);
+  return buf;
+}
+
+// The scene loaded from its YAML, with the plate (half-width L) added as the last surface.
+Result<Scene> withPlate(const std::string& yaml, const char* name, const ReposeOptions& o, double L) {
+  auto loaded = frontend::loadSceneFromString(yaml, name);
+  if (!loaded) return loaded.status();
+  Scene s{loaded->config, yaml};
+  const int surface = int(s.config.surfaceNames.size());
+  s.config.surfaceNames.push_back("plate");
+  s.config.meshes.push_back(plate(o, L, 1, surface));
+  char p[160];
+  std::snprintf(p, sizeof p, "plate: {half_width: %.6g, roughness: %.6g, seed: %llu}\n", L, o.roughness, (unsigned long long)o.seed);
+  s.signature += p;
+  return s;
+}
+
+// The poured pile's scene: the beads on a lattice in a funnel (a cone from the orifice up, then a cylinder of the
+// lifted cylinder's radius), its orifice closed by a gate that slides away after the settling (100 mm, past the
+// plate's edge, where it stops); the plate below.
+Result<Scene> pourScene(const ReposeOptions& o) {
+  const double R = o.cylinderRadius, rIn = R - o.rMax - 0.0005, cone = R - o.orifice / 2, z0 = o.pourHeight;
+  const double fill = fillHeight(o, rIn), D = o.orifice;
+  char buf[2048];
+  std::snprintf(buf, sizeof buf, R"(geometry:
   - name: funnel
     material: plate
     hopper: {orifice: [0, 0, %.6g], axis: [0, 0, 1], orifice_radius: %.6g, top_radius: %.6g, cone_height: %.6g,
@@ -123,40 +160,20 @@ simulation:
   duration: %.6g
   precision: %s
 )",
-                o.youngs, o.poisson, o.density, o.restitution, o.friction, o.rolling, o.wallRestitution, o.wallFriction,
-                o.wallRolling, o.wallRestitution, o.wallFriction, o.wallRolling, z0 + cone + 0.001, rIn, fill, o.rMin, o.rMax,
-                o.spacing, o.particles, z0, D / 2, R, cone, fill + 0.01, -D, -D, z0 - 0.004, D, D, z0 - 0.0001, o.settle,
+                z0, D / 2, R, cone, fill + 0.01, -D, -D, z0 - 0.004, D, D, z0 - 0.0001, o.settle,
                 o.settle + o.pour + o.rest + 0.01, o.precision.c_str());
-  auto loaded = frontend::loadSceneFromString(buf, "repose-pour");
-  if (!loaded) return loaded.status();
-  compute::RunConfig c = loaded->config;
-  const int surface = int(c.surfaceNames.size());
-  c.surfaceNames.push_back("plate");
-  c.meshes.push_back(plate(o, o.plateHalfWidth > 0 ? o.plateHalfWidth : 4 * R, 1, surface));
-  return c;
+  return withPlate(beadsYaml(o, z0 + cone + 0.001, rIn, fill) + buf, "repose-pour", o,
+                   o.plateHalfWidth > 0 ? o.plateHalfWidth : 4 * R);
 }
 
 // The lifted cylinder's scene: the beads on a lattice in a cylinder (open at both ends) standing on the plate,
-// lifted after the settling at liftSpeed by `lift`.
-Result<compute::RunConfig> liftScene(const ReposeOptions& o) {
-  const double R = o.cylinderRadius, rIn = R - o.rMax - 0.0005;
-  const double perLayer = kPi * rIn * rIn / (o.spacing * o.spacing), fill = 1.15 * double(o.particles) / perLayer * o.spacing + 2 * o.spacing;  // room for `count` beads
+// lifted after the settling at liftSpeed by `lift`. The collapse spreads to about 3 cylinder radii (docs/accuracy.md,
+// "Angle of repose"): a plate of 6.
+Result<Scene> liftScene(const ReposeOptions& o) {
+  const double R = o.cylinderRadius, rIn = R - o.rMax - 0.0005, fill = fillHeight(o, rIn);
   const double base = o.roughness + o.rMax + 0.0002, tLift = o.lift / o.liftSpeed, v = o.liftSpeed;
-  char buf[4096];
-  std::snprintf(buf, sizeof buf, R"(materials:
-  - {name: glass, youngs_modulus: %.6g, poisson_ratio: %.6g, density: %.6g, restitution: %.6g, friction: %.6g, rolling_friction: %.6g}
-  - {name: plate, youngs_modulus: 2.0e8, poisson_ratio: 0.3, density: 7800, restitution: %.6g, friction: %.6g, rolling_friction: %.6g}
-pairs:
-  - {materials: [glass, plate], restitution: %.6g, friction: %.6g, rolling_friction: %.6g}
-particles:
-  - name: beads
-    material: glass
-    method: lattice
-    region: {cylinder: {base: [0, 0, %.6g], axis: [0, 0, 1], radius: %.6g, height: %.6g}}
-    size: {distribution: uniform, min: %.6g, max: %.6g}
-    lattice: {spacing: %.6g, jitter: 0.04}
-    count: %zu
-geometry:
+  char buf[2048];
+  std::snprintf(buf, sizeof buf, R"(geometry:
   - name: cylinder
     material: plate
     cylinder: {base: [0, 0, 0], axis: [0, 0, 1], radius: %.6g, height: %.6g, open: [bottom, top], segments: 64}
@@ -165,18 +182,9 @@ simulation:
   duration: %.6g
   precision: %s
 )",
-                o.youngs, o.poisson, o.density, o.restitution, o.friction, o.rolling, o.wallRestitution, o.wallFriction,
-                o.wallRolling, o.wallRestitution, o.wallFriction, o.wallRolling, base, rIn, fill, o.rMin, o.rMax, o.spacing, o.particles, R,
-                base + fill + o.rMax + 0.005, v, tLift, v, tLift + 1e-4, o.settle, o.settle + tLift + o.rest + 0.01,
+                R, base + fill + o.rMax + 0.005, v, tLift, v, tLift + 1e-4, o.settle, o.settle + tLift + o.rest + 0.01,
                 o.precision.c_str());
-  auto loaded = frontend::loadSceneFromString(buf, "repose-lift");
-  if (!loaded) return loaded.status();
-  compute::RunConfig c = loaded->config;
-  const int surface = int(c.surfaceNames.size());
-  c.surfaceNames.push_back("plate");
-  // The collapse spreads to about 3 cylinder radii (docs/accuracy.md, "Angle of repose").
-  c.meshes.push_back(plate(o, o.plateHalfWidth > 0 ? o.plateHalfWidth : 6 * R, 1, surface));
-  return c;
+  return withPlate(beadsYaml(o, base, rIn, fill) + buf, "repose-lift", o, o.plateHalfWidth > 0 ? o.plateHalfWidth : 6 * R);
 }
 
 }  // namespace
@@ -188,8 +196,9 @@ ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind) {
     res.error = scene.status().toString();
     return res;
   }
-  const compute::RunConfig& c = scene.value();
+  const compute::RunConfig& c = scene->config;
   res.particles = c.particles.size();
+  for (const compute::MeshConfig& m : c.meshes) res.triangles += m.triangles.size();
   compute::SimulationOptions so;
   so.executor = kind;
   auto created = compute::Simulation::create(c, so);
@@ -205,8 +214,8 @@ ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind) {
       res.error = data.status().toString();
       return res;
     }
-    if (data->precision != precision || data->state.particles.n != c.particles.size()) {
-      res.error = "the checkpoint '" + o.checkpoint + "' is another run's (its precision or bead count differ)";
+    if (data->precision != precision || data->sceneText != scene->signature) {
+      res.error = "the checkpoint '" + o.checkpoint + "' is another run's (its scene, plate or precision differ)";
       return res;
     }
     if (auto s = sim.resume(data->state); !s.isOk()) {
@@ -222,6 +231,12 @@ ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind) {
     return o.wallLimit > 0 && elapsed() > o.wallLimit && s.justRebuilt() ? Status(StatusCode::kCancelled, "wall limit")
                                                                           : Status();
   };
+  // What every sitting reports, finished or not.
+  const auto finish = [&](ReposeResult& r) {
+    r.wall = elapsed(), r.time = sim.time(), r.steps = sim.stepCount() - step0, r.rebuilds = sim.rebuilds();
+    r.phases = sim.timers().report(), r.cellSize = sim.grid().cellSize;
+    r.contactSlots = sim.engine().historySlots(), r.wallSlots = sim.engine().wallHistorySlots();
+  };
   const double end = o.method == "pour" ? o.settle + o.pour + o.rest : o.settle + o.lift / o.liftSpeed + o.rest;
   for (double t = std::min(std::floor(sim.time() / 0.1 + 1e-9) * 0.1 + 0.1, end);; t = std::min(t + 0.1, end)) {
     if (auto s = sim.runUntil(t, stopAtRebuild); !s.isOk()) {
@@ -231,20 +246,18 @@ ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind) {
       }
       auto state = sim.state();
       backend::CheckpointData data;
-      data.solver = "dem", data.precision = precision, data.sceneFile = "pflow-repose";
+      data.solver = "dem", data.precision = precision, data.sceneFile = "pflow-repose", data.sceneText = scene->signature;
       if (state) data.state = std::move(state).value();
       const Status w = state ? backend::writeCheckpoint(o.checkpoint, data) : state.status();
       res.error = w.isOk() ? "" : w.toString();
-      res.unfinished = w.isOk(), res.time = sim.time(), res.wall = elapsed(), res.particles = c.particles.size();
-      res.phases = sim.timers().report(), res.steps = sim.stepCount() - step0;
+      res.unfinished = w.isOk();
+      finish(res);
       return res;
     }
     if (o.onProgress) o.onProgress(sim.time(), sim.stepCount(), elapsed());
     if (t >= end) break;
   }
-  res.wall = elapsed();
-  res.time = sim.time();
-  res.phases = sim.timers().report(), res.steps = sim.stepCount() - step0;
+  finish(res);
   const auto snap = sim.snapshot({"position", "radius", "velocity"});
   const Vec3d* v = snap.find("velocity")->as<Vec3d>();
   const double* r = snap.find("radius")->as<double>();

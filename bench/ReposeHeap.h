@@ -3,8 +3,8 @@
 // measured: its surface height against the distance from the axis, fitted by a line between the apex and the foot,
 // over all azimuths and in four quadrants. The reference pair is
 // Sunday et al. (2020, MNRAS 498, 1062): 1 mm glass beads, measured 25.2 +- 0.8 degrees, and their DEM (Chrono)
-// 25.3 degrees with the same constant-torque rolling resistance at mu_r = 0.09. Used by pflow-repose
-// (bench/repose.cc) and repose_test (label gpu).
+// 25.3 degrees at mu_r = 0.09, whose rolling torque's lever is the bead's radius, not pflow's R* (docs/accuracy.md).
+// Used by pflow-repose (bench/repose.cc); the measurement and the checkpoint by repose_measure_test (label unit).
 #pragma once
 #include <array>
 #include <cstdint>
@@ -75,6 +75,10 @@ struct ReposeResult {
   double time = 0;                     // simulated [s] at the end
   std::string phases;                  // the step loop's phase timers (PhaseTimers::report)
   std::int64_t steps = 0;              // taken in this sitting
+  std::int64_t rebuilds = 0;           // neighbour rebuilds of the run so far
+  std::size_t triangles = 0;           // the walls'
+  double cellSize = 0;                 // the cell grid's [m]
+  int contactSlots = 0, wallSlots = 0; // history slots a particle at the end
 };
 
 // The heap's surface from a snapshot (position, radius), all azimuths or one quadrant (0..3; -1: all).

@@ -85,11 +85,12 @@ int main(int argc, char** argv) {
                      {"executor", executor}, {"precision", o.precision}, {"method", o.method}};
     if (!r.error.empty()) j["error"] = r.error, ++failed;
     if (r.unfinished) {  // the heap is not measured: the run goes on from the checkpoint
-      std::printf("%s\n", nlohmann::json{{"unfinished", true}, {"time_s", r.time}, {"wall_s", r.wall}, {"steps", r.steps}, {"phases", r.phases}, {"checkpoint", o.checkpoint}}.dump().c_str());
+      std::printf("%s\n", nlohmann::json{{"unfinished", true}, {"time_s", r.time}, {"wall_s", r.wall}, {"steps", r.steps}, {"rebuilds", r.rebuilds}, {"phases", r.phases}, {"triangles", r.triangles}, {"cell_m", r.cellSize}, {"contact_slots", r.contactSlots}, {"wall_slots", r.wallSlots}, {"checkpoint", o.checkpoint}}.dump().c_str());
       ++unfinished;
       continue;
     }
-    j["time_s"] = r.time, j["steps"] = r.steps, j["phases"] = r.phases;
+    j["time_s"] = r.time, j["steps"] = r.steps, j["rebuilds"] = r.rebuilds, j["phases"] = r.phases;
+    j["triangles"] = r.triangles, j["cell_m"] = r.cellSize, j["contact_slots"] = r.contactSlots, j["wall_slots"] = r.wallSlots;
     std::printf("%s\n", j.dump().c_str());
     std::fflush(stdout);
     if (rows.is_open() && r.error.empty())

@@ -88,6 +88,10 @@ TEST(ReposeCheckpoint, ACutRunGoesOnAsIfUncut) {
   EXPECT_EQ(rest.time, whole.time);
   EXPECT_EQ(rest.kineticEnergy, whole.kineticEnergy);
   EXPECT_EQ(rest.steps + cut.steps, whole.steps);
+  // A checkpoint is refused by a run of other options.
+  o.rolling = 0.2;
+  const pflow::bench::ReposeResult other = pflow::bench::runRepose(o, kind);
+  EXPECT_NE(other.error.find("another run's"), std::string::npos) << other.error;
   std::remove(o.checkpoint.c_str());
 }
 
