@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Chung & Ooi test 4 against their published curve (docs/accuracy.md, "Micro-slip"): the tangential restitution e_t
 and the spin after impact against the incidence, pflow's wall kernel (micro_slip_test's output) with Chung & Ooi's
-alumina DEM curve and Kharaz et al.'s experiment as digitized from their figure.
+alumina DEM curve and Kharaz et al.'s experiment as digitized from their figure. PFLOW.csv is written by
+PFLOW_CHUNG_OOI_CSV=PFLOW.csv build/tests/micro_slip_test --gtest_filter='*TheirPublishedCurve' (bench/accuracy/run.sh).
 Usage: plot_chung_ooi_test4.py OUT.png PFLOW.csv DIGITIZED.csv"""
 import csv
 import sys

@@ -17,7 +17,12 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <map>
 #include <numbers>
+#include <sstream>
+#include <string>
 
 #include "compute/dem/Simulation.h"
 #include "tests/support/TestScenes.h"
@@ -169,30 +174,42 @@ TEST(MicroSlip, ChungOoiTest4ConstantSpeedAcrossIncidence) {
 
 // Test 4 against Chung & Ooi's own published curve (their alumina DEM series, digitized from the paper's figure; the
 // digitization kept in KratosMultiphysics/Kratos, DEMApplication basic_benchmarks/paper_data/benchmark4_graph1 and
-// graph2.dat; docs/accuracy/chung_ooi_2011_test4_digitized.csv): the centre's tangential restitution e_t = v_t'/v_t and
-// the spin after, at the digitized incidences. pflow's wall kernel at its default step. Tolerances: e_t to 0.02 (the
-// figure's reading, about 0.005 in e_t and 0.1 degree in the angle, which the curve's steepest stretch, 0.05 a degree
-// below 10 degrees, turns into 0.005, plus pflow's step, 0.01 in e_t at 5-10 degrees, and the two codes' different
-// tangential histories); the spin to 4 % of the gross-sliding spin (2.5 mu (1 + e) v_n / R), the same reasoning.
+// graph2.dat; read from docs/accuracy/chung_ooi_2011_test4_digitized.csv): the centre's tangential restitution
+// e_t = v_t'/v_t and the spin after, at the digitized incidences. pflow's wall kernel at its default step. Tolerances:
+// e_t to 0.02 (the figure's reading, about 0.005 in e_t and 0.1 degree in the angle, which the curve's steepest
+// stretch, 0.05 a degree below 10 degrees, turns into 0.005, plus pflow's step, 0.01 in e_t at 5-10 degrees, and the
+// two codes' different tangential histories); the spin to 4 % of the gross-sliding spin (2.5 mu (1 + e) v_n / R), the
+// same reasoning. With PFLOW_CHUNG_OOI_CSV set, the table is written there (bench/accuracy/run.sh draws it).
 TEST(MicroSlip, ChungOoiTest4AgainstTheirPublishedCurve) {
-  struct Point {
-    double deg, et, spin;  // incidence [deg], e_t, |w'| [rad/s]
-  };
-  // e_t and w' were digitized at slightly different angles: w' is interpolated to e_t's (linear, 5-degree spacing).
-  const std::vector<std::pair<double, double>> et = {{5.168, 0.9481}, {10.158, 0.6870}, {14.990, 0.6244}, {20.059, 0.6161},
-                                                     {25.050, 0.6343}, {30.119, 0.6837}, {35.030, 0.7372}, {40.020, 0.7809},
-                                                     {50.000, 0.8451}, {59.980, 0.8929}, {69.960, 0.9316}, {80.020, 0.9662},
-                                                     {85.010, 0.9827}};
-  const std::vector<std::pair<double, double>> w = {{4.951, 19.27}, {10.079, 213.00}, {14.970, 377.83}, {19.941, 510.55},
-                                                    {24.911, 599.39}, {29.961, 616.51}, {34.931, 582.26}, {39.980, 544.80},
-                                                    {50.000, 457.03}, {60.020, 357.49}, {69.961, 246.18}, {80.059, 126.30},
-                                                    {85.030, 63.15}};
-  const auto interp = [](const std::vector<std::pair<double, double>>& c, double x) {
+  using Curve = std::vector<std::pair<double, double>>;
+  std::map<std::string, Curve> curves;  // "quantity/series" -> (incidence [deg], value)
+  std::ifstream in(std::string(PFLOW_SOURCE_DIR) + "/docs/accuracy/chung_ooi_2011_test4_digitized.csv");
+  ASSERT_TRUE(in) << "docs/accuracy/chung_ooi_2011_test4_digitized.csv";
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#' || line.rfind("quantity,", 0) == 0) continue;
+    std::stringstream row(line);
+    std::string quantity, series, deg, value;
+    std::getline(row, quantity, ','), std::getline(row, series, ','), std::getline(row, deg, ','), std::getline(row, value);
+    curves[quantity + "/" + series].push_back({std::stod(deg), std::stod(value)});
+  }
+  const Curve& et = curves["et/Al_oxide_ref"];
+  const Curve& w = curves["spin_rad_per_s/Al_oxide_ref"];  // digitized at other angles: interpolated (linear) to e_t's
+  ASSERT_EQ(et.size(), 13u);
+  ASSERT_EQ(w.size(), 13u);
+  const auto interp = [](const Curve& c, double x) {
     std::size_t k = 1;
     while (k + 1 < c.size() && c[k].first < x) ++k;
     const double t = (x - c[k - 1].first) / (c[k].first - c[k - 1].first);
     return c[k - 1].second + t * (c[k].second - c[k - 1].second);
   };
+  const char* csvPath = std::getenv("PFLOW_CHUNG_OOI_CSV");
+  std::ofstream csv;
+  if (csvPath) {
+    csv.open(csvPath);
+    csv << "# pflow wall kernel at its default step (micro_slip_test, MicroSlip.ChungOoiTest4AgainstTheirPublishedCurve, "
+           "CPU): alumina sphere R 2.5 mm, 3.9 m/s, mu 0.092, e 0.98\n"
+           "incident_angle_deg,et_pflow,et_chung_ooi,spin_rad_per_s_pflow,spin_rad_per_s_chung_ooi_interpolated\n";
+  }
   const Material& m = kAlumina;
   std::printf("Chung & Ooi test 4 against their figure\n  deg    e_t: pflow   theirs |  w' [rad/s]: pflow  theirs\n");
   for (const auto& [deg, theirs] : et) {
@@ -201,6 +218,7 @@ TEST(MicroSlip, ChungOoiTest4AgainstTheirPublishedCurve) {
     const double e_t = r.tangentialRatio + r.spin, spin = r.spin * vt / m.R, theirSpin = interp(w, deg);
     const double slide = 2.5 * m.mu * (1 + m.e) * vn / m.R;
     std::printf("  %5.2f  %8.4f %8.4f | %8.1f %8.1f\n", deg, e_t, theirs, spin, theirSpin);
+    if (csv.is_open()) csv << deg << "," << e_t << "," << theirs << "," << spin << "," << theirSpin << "\n";
     EXPECT_NEAR(e_t, theirs, 0.02) << deg << " degrees";
     EXPECT_NEAR(spin, theirSpin, 0.04 * slide) << deg << " degrees";
   }
