@@ -25,12 +25,12 @@ done
 start=$(date +%s)
 if [[ -n "$given" ]]; then "$bin" "$@"; else "$bin" --out "$out" "$@"; fi
 /usr/bin/python3 "$root/bench/accuracy/plot.py" "$out"
-# Chung & Ooi test 4 against their published curve (docs/accuracy.md, "Micro-slip"): the regression test's table.
+# Chung & Ooi tests 4 and 6 against their published curves (docs/accuracy.md, "Micro-slip"): the regression tests'
+# tables.
 slip="${PFLOW_TESTS:-$root/build/tests}/micro_slip_test"
 if [[ -x "$slip" ]]; then
-  PFLOW_CHUNG_OOI_CSV="$out/chung_ooi_test4_pflow.csv" "$slip" --gtest_filter='*TheirPublishedCurve' > /dev/null
-  /usr/bin/python3 "$root/bench/accuracy/plot_chung_ooi_test4.py" "$out/chung_ooi_test4.png" "$out/chung_ooi_test4_pflow.csv" \
-    "$root/docs/accuracy/chung_ooi_2011_test4_digitized.csv"
+  PFLOW_CHUNG_OOI_DIR="$out" "$slip" --gtest_filter='*TheirPublishedCurve' > /dev/null
+  /usr/bin/python3 "$root/bench/accuracy/plot_chung_ooi.py" "$out" "$root"
 fi
 # The bulk laws on the GPU (docs/accuracy.md, "Beverloo", "Janssen"): with --executor cuda and not --quick, when
 # pflow-beverloo and pflow-janssen were built beside pflow-accuracy.
