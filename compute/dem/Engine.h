@@ -39,6 +39,7 @@ struct EngineSetup {
   // physics
   std::vector<ContactParams> contactTable;  // numMaterials^2
   int numMaterials = 0;
+  std::uint64_t fixedMaterials = 0;  // MaterialConfig::fixed, bit m for material m (the first 64)
   Vec3d gravity{0, 0, 0};
   // neighbour search
   CellGrid grid;

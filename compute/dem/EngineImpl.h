@@ -455,6 +455,8 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     a.checkDomain = m_setup.checkDomain;
     a.domainLo = m_setup.domainLo;
     a.domainHi = m_setup.domainHi;
+    a.material = m_particles.template ptr<Field::Material>();
+    a.fixedMask = m_setup.fixedMaterials;
     return a;
   }
   kernels::ForceArgs<R> forceArgs(double dt, double time, bool storeOnly) {

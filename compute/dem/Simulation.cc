@@ -509,6 +509,8 @@ Result<EngineSetup> prepareEngineSetup(const RunConfig& c) {
   s.maxRadius = maxR;
   s.numMaterials = int(c.materials.size());
   s.contactTable = buildContactTable(c.materials, c.pairs);
+  for (std::size_t m = 0; m < c.materials.size() && m < 64; ++m)
+    if (c.materials[m].fixed) s.fixedMaterials |= std::uint64_t(1) << m;
   s.gravity = c.sim.gravity;
   s.historySlots = c.sim.historySlots;
   s.wallHistorySlots = c.sim.wallHistorySlots;

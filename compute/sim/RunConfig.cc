@@ -100,6 +100,7 @@ void validateMaterials(const RunConfig& c, ErrorList& e) {
     leftOpenInterval(e, p + ".restitution", m.restitution, 0.0, 1.0);
     nonNegative(e, p + ".friction", m.friction);
     nonNegative(e, p + ".rolling_friction", m.rollingFriction);
+    if (m.fixed && i >= 64) e.add(p + ".fixed", "only the first 64 materials may be fixed (this is material " + std::to_string(i + 1) + ")");
   }
 }
 
@@ -379,6 +380,7 @@ void validateParticles(const RunConfig& c, ErrorList& e) {
   Capped badRadius("particles.radius", "particles with radius <= 0");
   Capped badMaterial("particles.material", "particles with an invalid material index");
   Capped outside("particles.position", "particles outside simulation.domain");
+  Capped movingFixed("particles.velocity", "particles of a fixed material given a velocity or a spin");
   std::vector<Capped> behind, overlapping;
   for (const UnitPlane& up : planes) {
     behind.emplace_back("particles.position", "particles behind plane " + planeLabel(c.planes, up.index));
@@ -416,6 +418,12 @@ void validateParticles(const RunConfig& c, ErrorList& e) {
       const auto m = pi.material[i];
       if ((m < 0 || static_cast<std::size_t>(m) >= c.materials.size()) && badMaterial.take()) {
         materialIndex(e, at("particles.material", i), m, c.materials.size());
+      } else if (m >= 0 && static_cast<std::size_t>(m) < c.materials.size() && c.materials[std::size_t(m)].fixed) {
+        const bool moves = (i < pi.velocity.size() && norm2(pi.velocity[i]) > 0) || (i < pi.angularVelocity.size() && norm2(pi.angularVelocity[i]) > 0);
+        if (moves && movingFixed.take()) {
+          e.add(at("particles.velocity", i), "is given, but the particle's material " + c.materials[std::size_t(m)].name +
+                                                 " is fixed: its particles do not move");
+        }
       }
     }
     if (!xOk) continue;
@@ -443,7 +451,7 @@ void validateParticles(const RunConfig& c, ErrorList& e) {
       }
     }
   }
-  for (const Capped* cap : {&badPosition, &badVelocity, &badOmega, &nonFiniteRadius, &badRadius, &badMaterial, &outside}) cap->summarize(e);
+  for (const Capped* cap : {&badPosition, &badVelocity, &badOmega, &nonFiniteRadius, &badRadius, &badMaterial, &outside, &movingFixed}) cap->summarize(e);
   for (std::size_t k = 0; k < planes.size(); ++k) {
     behind[k].summarize(e);
     overlapping[k].summarize(e);

@@ -22,6 +22,9 @@ struct MaterialConfig {
   double restitution = 0.5;      // e [-], in (0, 1]
   double friction = 0.5;         // mu_s [-], >= 0
   double rollingFriction = 0.0;  // mu_r [-], >= 0 (0 disables rolling resistance)
+  // Its particles do not move (beads glued into a rough floor or wall): no velocity, no spin, and a partner's
+  // contact with one is damped as against a wall (the effective mass is the partner's). The first 64 materials.
+  bool fixed = false;
 };
 
 // Optional per-pair overrides (symmetric). Unset members use the pair's mixing rule.

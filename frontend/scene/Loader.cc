@@ -187,6 +187,7 @@ void Loader::parseMaterials(const Fields& top) {
       get(*f, "restitution", m.restitution, true);
       get(*f, "friction", m.friction, true);
       get(*f, "rolling_friction", m.rollingFriction);
+      get(*f, "fixed", m.fixed);
     }
     const int index = static_cast<int>(m_config.materials.size());
     if (!m.name.empty() && m_materialIndex.emplace(m.name, index).second) m_materialNames.push_back(m.name);

@@ -102,6 +102,33 @@ TEST(RunConfigValidate, NeedsAMaterialAndUniqueNames) {
   EXPECT_ERROR(c.validate(), "materials[1].name", "'bench' is already the name of materials[0]");
 }
 
+// Particles of a fixed material do not move: a velocity or a spin given to one is an error naming it; only the first
+// 64 materials may be fixed (a bit each).
+TEST(RunConfigValidate, FixedParticlesAreNotGivenMotion) {
+  RunConfig c = validConfig(3);
+  MaterialConfig glued = benchMaterial();
+  glued.name = "glued";
+  glued.fixed = true;
+  c.materials.push_back(glued);
+  c.particles.material = {1, 1, 0};
+  c.particles.velocity = {{0, 0, 0}, {0, 0, -1}, {0, 0, -1}};
+  c.particles.angularVelocity = {{1, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+  const ErrorList errors = c.validate();
+  EXPECT_ERROR(errors, "particles.velocity[0]", "material glued is fixed");
+  EXPECT_ERROR(errors, "particles.velocity[1]", "material glued is fixed");
+  EXPECT_FALSE(hasError(errors, "particles.velocity[2]", "fixed")) << errors.toString();
+  c.particles.velocity.clear();
+  c.particles.angularVelocity.clear();
+  EXPECT_TRUE(c.validate().empty()) << c.validate().toString();
+  for (int k = 0; k < 64; ++k) {
+    MaterialConfig m = benchMaterial();
+    m.name = "m" + std::to_string(k);
+    c.materials.push_back(m);
+  }
+  c.materials.back().fixed = true;  // the 66th
+  EXPECT_ERROR(c.validate(), "materials[65].fixed", "only the first 64 materials may be fixed");
+}
+
 TEST(RunConfigValidate, PairIndicesAndOverrides) {
   RunConfig c = validConfig();
   MaterialPairConfig p;

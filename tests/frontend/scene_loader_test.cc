@@ -235,6 +235,15 @@ TEST(SceneLoader, DefaultsOfAMinimalScene) {
   EXPECT_EQ(fixed->config.sim.dt, 1.0e-6);
 }
 
+TEST(SceneLoader, AFixedMaterial) {
+  std::string text = minimalScene("  - list:\n      - {position: [0, 0, 0.01], radius: 0.001}\n");
+  text.replace(text.find("    friction: 0.5\n"), 18, "    friction: 0.5\n    fixed: true\n");
+  const auto r = loadSceneFromString(text);
+  ASSERT_TRUE(r.isOk()) << errorText(r);
+  EXPECT_TRUE(r->config.materials[0].fixed);
+  EXPECT_FALSE(loadSceneFromString(minimalScene("  - list:\n      - {position: [0, 0, 0.01], radius: 0.001}\n"))->config.materials[0].fixed);
+}
+
 TEST(SceneLoader, ReadsFilesAndReportsMissingOnes) {
   const std::filesystem::path file = std::filesystem::temp_directory_path() / "pflow_scene_loader_test.yaml";
   {

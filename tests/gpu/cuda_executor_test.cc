@@ -261,6 +261,42 @@ TEST_P(CudaVsCpu, AdhesiveContactsMatchCpu) {
   }
 }
 
+// Beads dropped with spin onto a floor of glued beads (a fixed material): the GPU keeps the glued beads where they
+// are and the free ones' contacts with them damped as against a wall, as the CPU does.
+TEST_P(CudaVsCpu, GluedBeadsMatchCpu) {
+  SKIP_WITHOUT_GPU();
+  const bool single = GetParam() == compute::Precision::kFloat;
+  compute::RunConfig c;
+  c.sim.precision = GetParam();
+  compute::MaterialConfig glass = material("glass", 1e7, 0.3, 2500, 0.5, 0.4, 0.05), glued = glass;
+  glued.name = "glued";
+  glued.fixed = true;
+  c.materials = {glass, glued};
+  const double r = 1e-3;
+  for (int j = 0; j < 6; ++j)
+    for (int i = 0; i < 6; ++i) addParticle(c, {(2 * i + (j % 2)) * r, j * std::sqrt(3.0) * r, 0}, r, 1);
+  for (int k = 0; k < 9; ++k)
+    addParticle(c, {(2 + k % 3) * 2.2 * r, (1 + k / 3) * 2.2 * r, 2.5 * r + 0.3 * r * k}, 0.9 * r, 0, {0.05 * (k % 3 - 1), 0, -0.1},
+                {0, 20.0 * (k % 2), 0});
+  c.sim.gravity = {0, 0, -9.81};
+  c.sim.duration = 1;
+  auto cpu = make(c, ExecutorKind::kCpu);
+  auto gpu = makeUnderTest(c);
+  ASSERT_TRUE(cpu && gpu);
+  ASSERT_TRUE(cpu->runSteps(3000).isOk());
+  ASSERT_TRUE(gpu->runSteps(3000).isOk());
+  const auto vc = byGid(cpu->snapshot(), "velocity"), vg = byGid(gpu->snapshot(), "velocity");
+  const auto xg = byGid(gpu->snapshot(), "position");
+  const auto [d, scale] = maxDiff(vg, vc);
+  std::printf("glued floor: largest velocity difference %.3g of %.3g m/s\n", d, scale);
+  EXPECT_GT(scale, 0.05);  // the free beads move
+  EXPECT_LE(d, (single ? 1e-3 : 1e-9) * scale);
+  for (Gid g = 0; g < 36; ++g) {
+    EXPECT_EQ(norm(vg.at(g)), 0.0) << g;
+    EXPECT_EQ(norm(xg.at(g) - c.particles.position[std::size_t(g)]), 0.0) << g;
+  }
+}
+
 // A press driven with a force limit (motion.drive) comes down on four spheres on the floor: the GPU moves the press
 // as the CPU does (its loads come from the GPU's wall kernel each step) and the spheres with it.
 TEST_P(CudaVsCpu, DrivenPressMatchesCpu) {

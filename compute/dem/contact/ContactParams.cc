@@ -222,7 +222,9 @@ std::vector<ContactParams> buildContactTable(const std::vector<MaterialConfig>& 
       calibrateDashpotForStep(p.restitution, step);
       for (int k = 0; k < 3; ++k) p.dashpotStep[k] = float(step[k]);
       p.tangentialRatio = std::sqrt(4.0 * p.effShear / p.effYoung);
+      p.fixedSide = (ma.fixed ? 1 : 0) | (mb.fixed ? 2 : 0);
       table[a * nm + b] = p;
+      p.fixedSide = (mb.fixed ? 1 : 0) | (ma.fixed ? 2 : 0);
       table[b * nm + a] = p;
     }
   }

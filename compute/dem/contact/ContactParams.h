@@ -1,5 +1,6 @@
 // Per material pair contact parameters, precomputed on the host into a plain struct that kernels read.
 #pragma once
+#include <cstdint>
 #include <vector>
 
 #include "common/Status.h"
@@ -23,6 +24,9 @@ struct ContactParams {
   double rollingFriction = 0;  // mu_r [-]
   // Adhesion (contact::cohesion): 0 none, 1 JKR, 2 constant (DMT). dgamma is the work of adhesion [J/m^2].
   int cohesion = 0;
+  // Which of the pair's particles are fixed (MaterialConfig::fixed): bit 0 the row's material (i), bit 1 the
+  // column's (j). In the padding after `cohesion`: the struct's size is unchanged.
+  std::int32_t fixedSide = 0;
   double workOfAdhesion = 0;
   double jkrB = 0;      // sqrt(2 pi dgamma / E*) [m^1/2]: the JKR overlap is delta = a^2 / R* - jkrB sqrt(a)
   double jkrBreak = 0;  // (3/4) (pi dgamma / E*)^{2/3} [m^2/3]: a JKR contact breaks at delta = -jkrBreak R*^{1/3}

@@ -105,6 +105,21 @@ struct WallContact {
   bool tensile;          // a JKR contact past zero overlap: kept only if it exists already (has its slot)
 };
 
+// A pair with a fixed particle (ContactParams::fixedSide) is damped as the other's contact with a wall: the effective
+// mass and inertia are the moving particle's own (a fixed particle's mass is its material's, for the outputs, but it
+// does not move). Both fixed: left as they are (neither moves).
+template <class R>
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void againstFixed(contact::ContactState<R>& s, int fixedSide, R mi, R Ii, R mj, R rj,
+                                                   bool rollingPair) {
+  if (fixedSide == 2) {  // j fixed
+    s.effMass = mi;
+    if (rollingPair) s.effInertia = Ii;
+  } else if (fixedSide == 1) {  // i fixed
+    s.effMass = mj;
+    if (rollingPair) s.effInertia = R(0.4) * mj * rj * rj;
+  }
+}
+
 // The contact of particle i with partner j as i sees it, for d = x_j - x_i with |d|^2 = d2 < rs^2 (rs = r_i + r_j),
 // shared by the pair kernels. kSpin = false (no friction and no rolling resistance) leaves the spins out:
 // v_rel = v_i - v_j (the spin terms are normal to n, so v_n differs from the full model's by round-off only).
@@ -245,9 +260,10 @@ struct ComputeForces {
       }
       const R mj = mass[j];
       const ContactParams& pp = params[material[j]];
-      const contact::ContactState<R> s = pairState<R, kSpin>(d, d2, rs, vi, wi, ri, mi, Ii, vel[j],
-                                                             kSpin ? omega[j] : zero3<R>(), rj, mj,
-                                                             kRolling && pp.rollingFriction > 0);
+      contact::ContactState<R> s = pairState<R, kSpin>(d, d2, rs, vi, wi, ri, mi, Ii, vel[j],
+                                                       kSpin ? omega[j] : zero3<R>(), rj, mj,
+                                                       kRolling && pp.rollingFriction > 0);
+      if (pp.fixedSide != 0) againstFixed(s, pp.fixedSide, mi, Ii, mj, rj, kRolling && pp.rollingFriction > 0);
       if (s.overlap > R(a.maxOverlap) * (ri < rj ? ri : rj)) {
         flagDeepOverlap(a.cond, i);
         if (kOnce) flagDeepOverlap(a.cond, j);  // as j's own evaluation would

@@ -31,6 +31,10 @@ struct IntegrateArgs {
   // The scene's explicit simulation.domain (checkDomain): a centre outside it is flagged (kLeftDomain).
   bool checkDomain = false;
   Vec3d domainLo{0, 0, 0}, domainHi{0, 0, 0};
+  // Fixed materials (MaterialConfig::fixed), a bit each: their particles keep zero velocity and spin. 0: none (the
+  // material is not read).
+  const std::int32_t* material = nullptr;
+  std::uint64_t fixedMask = 0;
 
   // 2D: no velocity along the axis, spin only about it, so round-off cannot break the plane's symmetry.
   PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void keepPlanar(Vec3<R>& v, Vec3<R>& w) const {
@@ -41,6 +45,10 @@ struct IntegrateArgs {
 
   // Half kick of particle i: v += (F/m + g) dt/2 and w += T/I dt/2, with I = (2/5) m r^2.
   PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void halfKick(Index i, Vec3<R>& v, Vec3<R>& w) const {
+    if (fixedMask != 0 && (fixedMask >> std::uint32_t(material[i]) & 1u)) {
+      v = w = Vec3<R>{R(0), R(0), R(0)};
+      return;
+    }
     const R h = R(0.5 * dt);
     const R invM = R(1) / mass[i];
     const R invI = invM / (R(0.4) * radius[i] * radius[i]);
