@@ -37,11 +37,12 @@ ReposeProfile reposeProfile(const compute::ParticleSnapshot& s, double bin, int 
   return p;
 }
 
-double reposeAngle(const ReposeProfile& p, double meanDiameter, double* from, double* to, double* heapRadius, double* heapHeight) {
-  // The heap's radius: the first ring (from the axis) whose top is below 1.5 diameters.
+double reposeAngle(const ReposeProfile& p, double meanDiameter, double* from, double* to, double* heapRadius, double* heapHeight,
+                   double floorLevel) {
+  // The heap's radius: the first ring (from the axis) whose top is below 1.5 diameters above the floor.
   double radius = 0, height = 0;
   for (std::size_t k = 0; k < p.height.size(); ++k) {
-    if (std::isnan(p.height[k]) || p.height[k] < 1.5 * meanDiameter) break;
+    if (std::isnan(p.height[k]) || p.height[k] < floorLevel + 1.5 * meanDiameter) break;
     radius = p.radius[k] + 0.5 * p.bin;
     height = std::max(height, p.height[k]);
   }
@@ -68,7 +69,7 @@ compute::MeshConfig plate(const ReposeOptions& o, double L, int material, int su
   compute::MeshConfig floor;
   floor.name = "plate";
   floor.material = material;
-  if (o.roughness <= 0) {
+  if (o.roughness <= 0 || o.floor == "beads") {
     floor.vertices = {{-L, -L, 0}, {L, -L, 0}, {L, L, 0}, {-L, L, 0}};
     floor.triangles = {{0, 1, 2}, {0, 2, 3}};  // counter-clockwise seen from above
   } else {
@@ -134,9 +135,34 @@ Result<Scene> withPlate(const std::string& yaml, const char* name, const ReposeO
   const int surface = int(s.config.surfaceNames.size());
   s.config.surfaceNames.push_back("plate");
   s.config.meshes.push_back(plate(o, L, 1, surface));
-  char p[160];
-  std::snprintf(p, sizeof p, "plate: {half_width: %.6g, roughness: %.6g, seed: %llu}\n", L, o.roughness, (unsigned long long)o.seed);
+  char p[200];
+  std::snprintf(p, sizeof p, "plate: {half_width: %.6g, roughness: %.6g, seed: %llu, floor: %s}\n", L, o.roughness,
+                (unsigned long long)o.seed, o.floor.c_str());
   s.signature += p;
+  if (o.floor == "beads") {  // glued beads of the pile's sizes resting on the flat plate, over the inscribed disc
+    compute::MaterialConfig glued = s.config.materials[0];
+    glued.name = "glued";
+    glued.fixed = true;
+    const int material = int(s.config.materials.size());
+    s.config.materials.push_back(glued);
+    compute::ParticleInit& pi = s.config.particles;
+    if (pi.velocity.empty()) pi.velocity.assign(pi.size(), Vec3d{0, 0, 0});
+    if (pi.angularVelocity.empty()) pi.angularVelocity.assign(pi.size(), Vec3d{0, 0, 0});
+    std::mt19937_64 rng(o.seed + 2);
+    std::uniform_real_distribution<double> size(o.rMin, o.rMax);
+    const double a = 2 * o.rMax, row = a * std::sqrt(3.0) / 2, R = L - o.rMax;
+    for (int j = -int(R / row); j <= int(R / row); ++j)
+      for (int i = -int(R / a) - 1; i <= int(R / a) + 1; ++i) {
+        const double x = (i + 0.5 * (j & 1)) * a, y = j * row;
+        if (x * x + y * y > R * R) continue;
+        const double r = size(rng);
+        pi.position.push_back({x, y, r});
+        pi.radius.push_back(r);
+        pi.material.push_back(material);
+        pi.velocity.push_back({0, 0, 0});
+        pi.angularVelocity.push_back({0, 0, 0});
+      }
+  }
   return s;
 }
 
@@ -197,7 +223,8 @@ ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind) {
     return res;
   }
   const compute::RunConfig& c = scene->config;
-  res.particles = c.particles.size();
+  res.particles = o.particles;  // the pile's beads: ids below (glued floor beads follow them)
+  res.floorBeads = c.particles.size() - std::min(c.particles.size(), o.particles);
   for (const compute::MeshConfig& m : c.meshes) res.triangles += m.triangles.size();
   compute::SimulationOptions so;
   so.executor = kind;
@@ -258,24 +285,30 @@ ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind) {
     if (t >= end) break;
   }
   finish(res);
-  const auto snap = sim.snapshot({"position", "radius", "velocity"});
+  const auto snap = sim.snapshot({"position", "radius", "velocity", "id"});
   const Vec3d* v = snap.find("velocity")->as<Vec3d>();
   const double* r = snap.find("radius")->as<double>();
+  const Gid* id = snap.find("id")->as<Gid>();
   double dSum = 0;
   const Vec3d* x = snap.find("position")->as<Vec3d>();
+  std::size_t counted = 0;
   for (std::size_t i = 0; i < snap.n; ++i) {
+    if (std::size_t(id[i]) >= o.particles) continue;  // a glued floor bead (below the pile's surface: not measured)
+    ++counted;
     if (x[i].z > -0.001) ++res.onPlate;
     res.kineticEnergy += 0.5 * o.density * 4.0 / 3.0 * kPi * r[i] * r[i] * r[i] * norm2(v[i]);
     dSum += 2 * r[i];
   }
-  const double d = dSum / double(snap.n), bin = 2 * d;
+  const double d = dSum / double(std::max<std::size_t>(counted, 1)), bin = 2 * d;
   res.profile = reposeProfile(snap, bin);
-  res.angle = reposeAngle(res.profile, d, &res.fitFrom, &res.fitTo, &res.heapRadius, &res.heapHeight);
+  // A bead floor's level: its glued beads' mean top (each rests on the plate: its top is its diameter).
+  const double floorLevel = o.floor == "beads" ? o.rMin + o.rMax : 0.0;
+  res.angle = reposeAngle(res.profile, d, &res.fitFrom, &res.fitTo, &res.heapRadius, &res.heapHeight, floorLevel);
   // The spread over the quadrants; NaN when any quadrant has no slope (std::min/max would pass over a NaN).
   double lo = 90, hi = 0;
   bool all = true;
   for (int q = 0; q < 4; ++q) {
-    const double a = reposeAngle(reposeProfile(snap, bin, q), d);
+    const double a = reposeAngle(reposeProfile(snap, bin, q), d, nullptr, nullptr, nullptr, nullptr, floorLevel);
     res.quadrant[std::size_t(q)] = a;
     if (std::isnan(a)) all = false;
     else lo = std::min(lo, a), hi = std::max(hi, a);

@@ -29,6 +29,11 @@ struct ReposeOptions {
   // The plate: flat (0), or rough as Sunday et al.'s (roughened with fixed beads): a triangulated height field on a
   // grid of 1.5 mean diameters with heights uniform in [0, roughness] [m].
   double roughness = 0.0005;
+  // The plate's roughness: "field" (the height field above) or "beads" (a flat plate under a layer of glued beads,
+  // as Sunday et al. roughened theirs: beads of the pile's sizes, fixed (MaterialConfig::fixed), on a hexagonal grid
+  // of one largest diameter over the disc inscribed in the plate; the glued beads' contacts with the pile's are
+  // bead-bead contacts).
+  std::string floor = "field";
   // The plate's half-width [m]; 0: 4 cylinder radii for a poured pile (58,040 beads heap to a radius of about
   // 48 mm at 25 degrees), 6 for the lifted cylinder (its collapse spreads to about 3).
   double plateHalfWidth = 0;
@@ -68,6 +73,7 @@ struct ReposeResult {
   double kineticEnergy = 0;            // at the end [J]
   ReposeProfile profile;
   std::size_t particles = 0;
+  std::size_t floorBeads = 0;          // glued beads of a bead floor (ReposeOptions::floor)
   std::size_t onPlate = 0;             // beads at the end above the plate's underside (the rest fell off its edge)
   double wall = 0;                     // [s]
   std::string error;
@@ -84,10 +90,11 @@ struct ReposeResult {
 // The heap's surface from a snapshot (position, radius), all azimuths or one quadrant (0..3; -1: all).
 ReposeProfile reposeProfile(const compute::ParticleSnapshot& s, double bin, int quadrant = -1);
 // The slope angle of a profile [deg]: a least-squares line through the rings between 25 % and 75 % of the heap's
-// radius (where the surface first falls below 1.5 mean diameters), away from the rounded apex and the foot's tail.
+// radius (where the surface first falls below 1.5 mean diameters above `floorLevel`, the top of the floor's roughness:
+// 0 on the plate, the glued beads' mean top on a bead floor), away from the rounded apex and the foot's tail.
 // Sets from/to (the fitted range) and radius/height (the heap's).
 double reposeAngle(const ReposeProfile& p, double meanDiameter, double* from = nullptr, double* to = nullptr,
-                   double* heapRadius = nullptr, double* heapHeight = nullptr);
+                   double* heapRadius = nullptr, double* heapHeight = nullptr, double floorLevel = 0);
 
 ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind);
 

@@ -40,6 +40,8 @@ int main(int argc, char** argv) {
   app.add_option("--pour-height", o.pourHeight, "pour: the orifice above the plate [m]")->capture_default_str();
   app.add_option("--pour", o.pour, "pour: seconds from the gate's opening to the end of the pouring")->capture_default_str();
   app.add_option("--roughness", o.roughness, "the plate's bumps [m] (0: flat)")->capture_default_str();
+  app.add_option("--floor", o.floor, "the plate's roughness: field (bumps up to --roughness) or beads (a layer of glued beads)")
+      ->check(CLI::IsMember({"field", "beads"}))->capture_default_str();
   app.add_option("--plate", o.plateHalfWidth, "the plate's half-width [m] (0: 4 cylinder radii poured, 6 lifted)")->capture_default_str();
   app.add_option("--settle", o.settle, "in the cylinder before the lift [s]")->capture_default_str();
   app.add_option("--lift-speed", o.liftSpeed, "[m/s]")->capture_default_str();
@@ -69,11 +71,11 @@ int main(int argc, char** argv) {
   if (!csv.empty()) {
     rows.open(csv);
     rows << "rolling,wall_rolling,friction,angle_deg,q0_deg,q1_deg,q2_deg,q3_deg,spread_deg,heap_radius_m,heap_height_m,fit_from_m,fit_to_m,"
-            "kinetic_energy_J,particles,executor,precision,wall_s\n";
+            "kinetic_energy_J,particles,executor,precision,wall_s,floor\n";
   }
   if (!profiles.empty()) {
     surf.open(profiles);
-    surf << "rolling,wall_rolling,radius_m,height_m\n";
+    surf << "rolling,wall_rolling,radius_m,height_m,floor\n";
   }
   int failed = 0, unfinished = 0;
   for (double mr : rolling) {
@@ -82,7 +84,8 @@ int main(int argc, char** argv) {
     nlohmann::json j{{"rolling", mr}, {"wall_rolling", o.wallRolling}, {"friction", o.friction}, {"on_plate", r.onPlate}, {"angle_deg", r.angle}, {"quadrants_deg", r.quadrant},
                      {"spread_deg", r.spread}, {"heap_radius_m", r.heapRadius}, {"heap_height_m", r.heapHeight},
                      {"kinetic_energy_J", r.kineticEnergy}, {"particles", r.particles}, {"wall_s", r.wall},
-                     {"executor", executor}, {"precision", o.precision}, {"method", o.method}};
+                     {"executor", executor}, {"precision", o.precision}, {"method", o.method},
+                     {"floor", o.floor}, {"floor_beads", r.floorBeads}};
     if (!r.error.empty()) j["error"] = r.error, ++failed;
     if (r.unfinished) {  // the heap is not measured: the run goes on from the checkpoint
       std::printf("%s\n", nlohmann::json{{"unfinished", true}, {"time_s", r.time}, {"wall_s", r.wall}, {"steps", r.steps}, {"rebuilds", r.rebuilds}, {"phases", r.phases}, {"triangles", r.triangles}, {"cell_m", r.cellSize}, {"contact_slots", r.contactSlots}, {"wall_slots", r.wallSlots}, {"checkpoint", o.checkpoint}}.dump().c_str());
@@ -96,10 +99,11 @@ int main(int argc, char** argv) {
     if (rows.is_open() && r.error.empty())
       rows << mr << "," << o.wallRolling << "," << o.friction << "," << r.angle << "," << r.quadrant[0] << "," << r.quadrant[1] << "," << r.quadrant[2]
            << "," << r.quadrant[3] << "," << r.spread << "," << r.heapRadius << "," << r.heapHeight << "," << r.fitFrom << ","
-           << r.fitTo << "," << r.kineticEnergy << "," << r.particles << "," << executor << "," << o.precision << "," << r.wall << "\n";
+           << r.fitTo << "," << r.kineticEnergy << "," << r.particles << "," << executor << "," << o.precision << "," << r.wall << "," << o.floor
+           << "\n";
     if (surf.is_open())
       for (std::size_t k = 0; k < r.profile.height.size(); ++k)
-        if (r.profile.height[k] == r.profile.height[k]) surf << mr << "," << o.wallRolling << "," << r.profile.radius[k] << "," << r.profile.height[k] << "\n";
+        if (r.profile.height[k] == r.profile.height[k]) surf << mr << "," << o.wallRolling << "," << r.profile.radius[k] << "," << r.profile.height[k] << "," << o.floor << "\n";
   }
   return failed ? 1 : unfinished ? 3 : 0;
 }

@@ -21,13 +21,13 @@ def main():
     profiles = list(csv.DictReader(open(profiles_path)))
     fig, ax = plt.subplots(figsize=(6, 3.8))
     for row, colour in zip(rows, ("tab:blue", "tab:orange", "tab:green", "tab:red")):
-        key = (row["rolling"], row.get("wall_rolling", row["rolling"]))
+        key = (row["rolling"], row.get("wall_rolling", row["rolling"]), row.get("floor") or "field")
         pts = [(float(p["radius_m"]), float(p["height_m"])) for p in profiles
-               if (p["rolling"], p.get("wall_rolling", p["rolling"])) == key]
+               if (p["rolling"], p.get("wall_rolling", p["rolling"]), p.get("floor") or "field") == key]
         radius, lo, hi = float(row["heap_radius_m"]), float(row["fit_from_m"]), float(row["fit_to_m"])
         pts = [(r, h) for r, h in pts if r <= 1.3 * radius and h > -0.002]
         ax.plot([r * 1e3 for r, _ in pts], [h * 1e3 for _, h in pts], ".", ms=3, color=colour,
-                label="μr %s / %s: %.1f°" % (key[0], key[1], float(row["angle_deg"])))
+                label="μr %s / %s%s: %.1f°" % (key[0], key[1], ", bead floor" if key[2] == "beads" else "", float(row["angle_deg"])))
         fit = [(r, h) for r, h in pts if lo <= r <= hi]
         n = len(fit)
         sx, sy = sum(r for r, _ in fit), sum(h for _, h in fit)

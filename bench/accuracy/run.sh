@@ -45,7 +45,8 @@ if [[ " $* " == *" cuda "* || " $* " == *"--executor=cuda"* ]] && [[ " $* " != *
     fi
   done
   # The angle of repose (docs/accuracy.md): the poured pile at the paper's mu_r = 0.09 read as pflow's and as Chrono's
-  # (0.18 bead-bead here), and both doubled (0.36 / 0.18), float; about 470 s of GPU each.
+  # (0.18 bead-bead here), both doubled (0.36 / 0.18), and 0.18 / 0.09 on a floor of glued beads; float; about
+  # 470 s of GPU each.
   if [[ -x "$bindir/pflow-repose" ]]; then
     "$bindir/pflow-repose" --executor cuda --method pour --precision float --settle 0.2 --rest 0.3 \
       --rolling 0.09,0.18 --wall-rolling 0.09 \
@@ -53,9 +54,14 @@ if [[ " $* " == *" cuda "* || " $* " == *"--executor=cuda"* ]] && [[ " $* " != *
     "$bindir/pflow-repose" --executor cuda --method pour --precision float --settle 0.2 --rest 0.3 \
       --rolling 0.36 --wall-rolling 0.18 \
       --csv "$out/repose_poured_doubled.csv" --profiles "$out/repose_poured_profiles_doubled.csv"
-    tail -n +2 "$out/repose_poured_doubled.csv" >> "$out/repose_poured.csv"
-    tail -n +2 "$out/repose_poured_profiles_doubled.csv" >> "$out/repose_poured_profiles.csv"
-    rm -f "$out/repose_poured_doubled.csv" "$out/repose_poured_profiles_doubled.csv"
+    "$bindir/pflow-repose" --executor cuda --method pour --precision float --settle 0.2 --rest 0.3 \
+      --rolling 0.18 --wall-rolling 0.09 --floor beads \
+      --csv "$out/repose_poured_beads.csv" --profiles "$out/repose_poured_profiles_beads.csv"
+    for more in doubled beads; do
+      tail -n +2 "$out/repose_poured_$more.csv" >> "$out/repose_poured.csv"
+      tail -n +2 "$out/repose_poured_profiles_$more.csv" >> "$out/repose_poured_profiles.csv"
+      rm -f "$out/repose_poured_$more.csv" "$out/repose_poured_profiles_$more.csv"
+    done
     /usr/bin/python3 "$root/bench/accuracy/plot_repose.py" "$out/repose_poured.png" "$out/repose_poured.csv" "$out/repose_poured_profiles.csv"
   fi
   [[ -s "$out/beverloo_cuda_double.csv" ]] && /usr/bin/python3 "$root/bench/accuracy/plot_beverloo.py" "$out/beverloo.png" "$out"/beverloo_cuda_*.csv
