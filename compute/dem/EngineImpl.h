@@ -307,29 +307,36 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
 
   // The pair kernel, then the wall kernel, over the particles of `set`: every owned one, or one part of
   // the list splitBoundary made (boundary rows first, then interior ones).
+  // Adhesion and fixed materials have pair kernels of their own (kC, kF), so that scenes without them pay nothing.
   void launchForces(double dt, double time, ForceSet set, bool storeOnly) {
-    if (m_setup.model.cohesion) launchForcesWith<true>(dt, time, set, storeOnly);  // adhesion: kernels of their own
-    else launchForcesWith<false>(dt, time, set, storeOnly);
+    const bool fixed = m_setup.fixedMaterials != 0;
+    if (m_setup.model.cohesion) {
+      if (fixed) launchForcesWith<true, true>(dt, time, set, storeOnly);
+      else launchForcesWith<true, false>(dt, time, set, storeOnly);
+    } else {
+      if (fixed) launchForcesWith<false, true>(dt, time, set, storeOnly);
+      else launchForcesWith<false, false>(dt, time, set, storeOnly);
+    }
   }
-  template <bool kC>
+  template <bool kC, bool kF>
   void launchForcesWith(double dt, double time, ForceSet set, bool storeOnly) {
     const kernels::ForceArgs<R> args = forceArgs(dt, time, storeOnly);
     if (set == ForceSet::kAll || (m_numBoundary == 0 && set == ForceSet::kInterior)) {
       if constexpr (Exec::kPairsOnce) {
         if (m_numSlabs) {
-          m_exec.forEachTwoColours(m_numSlabs, kernels::ComputePairsOnce<R, kC>{{args}, m_slabStart.as<Index>(), m_slabItems.as<Index>(),
+          m_exec.forEachTwoColours(m_numSlabs, kernels::ComputePairsOnce<R, kC, kF>{{args}, m_slabStart.as<Index>(), m_slabItems.as<Index>(),
                                                                             m_owned1.as<std::uint32_t>(), m_numSlabs});
           if (m_anyWalls) m_exec.forEach(m_owned, kernels::ComputeWallForces<R, kC>{args});
           return;
         }
       }
-      m_exec.forEach(m_owned, kernels::ComputeForces<R, kC>{args});
+      m_exec.forEach(m_owned, kernels::ComputeForces<R, kC, kF>{args});
       if (m_anyWalls) m_exec.forEach(m_owned, kernels::ComputeWallForces<R, kC>{args});
       return;
     }
     const Index* list = m_split.as<Index>() + (set == ForceSet::kBoundary ? 0 : m_numBoundary);
     const Index count = set == ForceSet::kBoundary ? m_numBoundary : m_owned - m_numBoundary;
-    m_exec.forEach(count, kernels::OverList<kernels::ComputeForces<R, kC>>{{args}, list});
+    m_exec.forEach(count, kernels::OverList<kernels::ComputeForces<R, kC, kF>>{{args}, list});
     if (m_anyWalls) m_exec.forEach(count, kernels::OverList<kernels::ComputeWallForces<R, kC>>{{args}, list});
   }
   // After the candidate lists, where each pair is evaluated once (EngineSetup::pairsOnce): the particles by

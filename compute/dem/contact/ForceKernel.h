@@ -105,29 +105,16 @@ struct WallContact {
   bool tensile;          // a JKR contact past zero overlap: kept only if it exists already (has its slot)
 };
 
-// A pair with a fixed particle (ContactParams::fixedSide) is damped as the other's contact with a wall: the effective
-// mass and inertia are the moving particle's own (a fixed particle's mass is its material's, for the outputs, but it
-// does not move). Both fixed: left as they are (neither moves).
-template <class R>
-PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void againstFixed(contact::ContactState<R>& s, int fixedSide, R mi, R Ii, R mj, R rj,
-                                                   bool rollingPair) {
-  if (fixedSide == 2) {  // j fixed
-    s.effMass = mi;
-    if (rollingPair) s.effInertia = Ii;
-  } else if (fixedSide == 1) {  // i fixed
-    s.effMass = mj;
-    if (rollingPair) s.effInertia = R(0.4) * mj * rj * rj;
-  }
-}
-
 // The contact of particle i with partner j as i sees it, for d = x_j - x_i with |d|^2 = d2 < rs^2 (rs = r_i + r_j),
 // shared by the pair kernels. kSpin = false (no friction and no rolling resistance) leaves the spins out:
 // v_rel = v_i - v_j (the spin terms are normal to n, so v_n differs from the full model's by round-off only).
-// `rollingPair`: this pair has rolling resistance (its effective inertia is needed).
+// `rollingPair`: this pair has rolling resistance (its effective inertia is needed). `fixedSide`
+// (ContactParams::fixedSide, 0 unless a material is fixed): a pair with one fixed particle is damped as the other's
+// contact with a wall, its effective mass and inertia the moving particle's own (both fixed: neither moves).
 template <class R, bool kSpin>
 PFLOW_HOSTDEVICE PFLOW_FORCEINLINE contact::ContactState<R> pairState(Vec3d d, double d2, double rs, Vec3<R> vi, Vec3<R> wi,
                                                                     R ri, R mi, R Ii, Vec3<R> vj, Vec3<R> wj, R rj, R mj,
-                                                                    bool rollingPair) {
+                                                                    bool rollingPair, int fixedSide = 0) {
   const double dist = std::sqrt(d2);
   const Vec3<R> n = vcast<R>((1.0 / dist) * d);
   const R overlap = R(rs - dist);
@@ -135,7 +122,8 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE contact::ContactState<R> pairState(Vec3d d, d
   s.n = n;
   s.overlap = overlap;
   s.effRadius = ri * rj / (ri + rj);
-  s.effMass = mi * mj / (mi + mj);
+  const R pairMass = mi * mj / (mi + mj);
+  s.effMass = fixedSide == 2 ? mi : fixedSide == 1 ? mj : pairMass;
   if constexpr (kSpin) {
     const R li = ri - R(0.5) * overlap, lj = rj - R(0.5) * overlap;
     s.vRel = (vi + cross(wi, li * n)) - (vj + cross(wj, -lj * n));
@@ -143,7 +131,8 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE contact::ContactState<R> pairState(Vec3d d, d
     s.leverArm = li;
     if (rollingPair) {
       const R Ij = R(0.4) * mj * rj * rj;
-      s.effInertia = Ii * (Ij / (Ii + Ij));  // not Ii*Ij/(Ii+Ij): that product underflows in float below ~10 um
+      const R pairInertia = Ii * (Ij / (Ii + Ij));  // not Ii*Ij/(Ii+Ij): that product underflows in float below ~10 um
+      s.effInertia = fixedSide == 2 ? Ii : fixedSide == 1 ? Ij : pairInertia;
     } else {
       s.effInertia = R(0);  // unused without rolling resistance
     }
@@ -161,8 +150,9 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE contact::ContactState<R> pairState(Vec3d d, d
 // (operator(), the GPU's way: each thread writes only its own particle, no atomics), or, on the CPU, by
 // its owner only (kOnce, from ComputePairsOnce), which then also adds the reaction to the partner.
 // kCohesion: the loop with adhesion (ModelFlags::cohesion), a kernel of its own so that its registers do not
-// weigh on scenes without it.
-template <class R, bool kCohesion = false>
+// weigh on scenes without it. kFixed: a scene with fixed materials (ContactParams::fixedSide read per pair, pairState);
+// a kernel of its own too (the select cost the float forces phase 6 % on an H100 when every scene carried it).
+template <class R, bool kCohesion = false, bool kFixed = false>
 struct ComputeForces {
   static constexpr bool kVariableCost = true;  // work per particle varies (CpuExecutor::forEach)
   // Double: held to 128 registers a thread (16 resident warps an SM); the compiler's 130-136 left 14 and cost the
@@ -260,10 +250,9 @@ struct ComputeForces {
       }
       const R mj = mass[j];
       const ContactParams& pp = params[material[j]];
-      contact::ContactState<R> s = pairState<R, kSpin>(d, d2, rs, vi, wi, ri, mi, Ii, vel[j],
-                                                       kSpin ? omega[j] : zero3<R>(), rj, mj,
-                                                       kRolling && pp.rollingFriction > 0);
-      if (pp.fixedSide != 0) againstFixed(s, pp.fixedSide, mi, Ii, mj, rj, kRolling && pp.rollingFriction > 0);
+      const contact::ContactState<R> s = pairState<R, kSpin>(d, d2, rs, vi, wi, ri, mi, Ii, vel[j],
+                                                             kSpin ? omega[j] : zero3<R>(), rj, mj,
+                                                             kRolling && pp.rollingFriction > 0, kFixed ? pp.fixedSide : 0);
       if (s.overlap > R(a.maxOverlap) * (ri < rj ? ri : rj)) {
         flagDeepOverlap(a.cond, i);
         if (kOnce) flagDeepOverlap(a.cond, j);  // as j's own evaluation would
@@ -339,9 +328,9 @@ struct ComputeForces {
 // run in two colours (even ones, then odd ones), one slab per task, its particles in ascending order:
 // the sums are the same whatever the number of threads. An even slab's task zeroes its own and the next
 // slab's forces and torques first (only it writes into the next slab in that colour). Host only.
-template <class R, bool kCohesion = false>
+template <class R, bool kCohesion = false, bool kFixed = false>
 struct ComputePairsOnce {
-  ComputeForces<R, kCohesion> pairs;
+  ComputeForces<R, kCohesion, kFixed> pairs;
   const Index* slabStart;        // [numSlabs + 1]
   const Index* slabItems;        // particles by slab, ascending within each
   const std::uint32_t* owned;    // [particle]: how many candidates at the head of its row it owns (OwnedFirst)
