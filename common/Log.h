@@ -17,6 +17,9 @@ void init(const std::string& role, const std::string& level = "info");
 std::string escaped(std::string_view text, std::size_t max = 200);
 // True when every byte is printable ASCII (0x20..0x7e).
 bool isPrintable(std::string_view text);
+// Text for a protobuf string field (which must be UTF-8) from untrusted input: valid UTF-8 sequences kept as they
+// are (a scene's names may be in any script), every byte of an ill-formed one as \xNN, backslashes as \x5c.
+std::string utf8Escaped(std::string_view text);
 
 // At most `lines` log lines per `seconds` for each key (a client: its certificate's name or its address); the lines
 // beyond are counted, and the first line of the next window says how many were left out. So one client cannot

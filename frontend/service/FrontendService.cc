@@ -80,10 +80,10 @@ void errorsToProto(const Status& s, google::protobuf::RepeatedPtrField<common::v
     }
     const auto colon = line.find(": ");
     if (colon != std::string::npos && line.find(' ') >= colon) {
-      e->set_path(line.substr(0, colon));
-      e->set_message(line.substr(colon + 2));
+      e->set_path(log::utf8Escaped(line.substr(0, colon)));
+      e->set_message(log::utf8Escaped(line.substr(colon + 2)));
     } else {
-      e->set_message(line);
+      e->set_message(log::utf8Escaped(line));
     }
   }
 }
@@ -112,6 +112,12 @@ Status loadRequest(ModelStore& store, const std::string& yaml, const std::string
   options.confineFiles = true;  // the scene's own upload, nothing else on this host
   options.maxFileBytes = kMaxSceneBytes;
   out.scene = loadSceneFromString(yaml, name.empty() ? "scene.yaml" : name, options);
+  if (!out.scene) {  // the files as the client named them, not by this host's staging directory
+    std::string m = out.scene.status().message();
+    const std::string staging = out.stagingDir + "/";
+    for (std::size_t at; (at = m.find(staging)) != std::string::npos;) m.erase(at, staging.size());
+    out.scene = Status(out.scene.status().code(), std::move(m));
+  }
   return Status::ok();
 }
 

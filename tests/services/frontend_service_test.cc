@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "backend/store/SnapshotFile.h"
+#include "common/Log.h"
 #include "common/rpc/Rpc.h"
 #include "frontend/service/FrontendService.h"
 
@@ -63,6 +64,31 @@ TEST_F(FrontendServiceTest, ValidateReportsErrorsWithPathsAndLines) {
   }
   EXPECT_TRUE(typo);
   EXPECT_TRUE(modulus);
+}
+
+// An attached file's errors name it as the client did ('meshes/funnel.stl'), not by the server's staging directory;
+// error text is valid UTF-8 whatever bytes it quotes (protobuf string fields must be: ill-formed bytes as \xNN).
+TEST_F(FrontendServiceTest, FileErrorsNameTheClientsPathInValidUtf8) {
+  const fs::path examples = fs::path(PFLOW_SOURCE_DIR) / "examples";
+  v1::ValidateSceneRequest req;
+  req.set_scene_name("stl_funnel.yaml");
+  req.set_scene_yaml(readFile(examples / "stl_funnel.yaml"));
+  auto* f = req.add_files();
+  f->set_path("meshes/funnel.stl");
+  f->set_content("solid x\n  facet normal \xff\xfe 0 0\n    outer loop\n");
+  v1::ValidateSceneResponse resp;
+  auto ctx = rpc::contextWithDeadline();
+  ASSERT_TRUE(stub->ValidateScene(ctx.get(), req, &resp).ok());
+  EXPECT_FALSE(resp.valid());
+  ASSERT_EQ(resp.errors_size(), 1);
+  const std::string& m = resp.errors(0).message();
+  EXPECT_EQ(m.rfind("'meshes/funnel.stl' line 2:", 0), 0u) << m;
+  EXPECT_EQ(m.find(root.string()), std::string::npos) << m;
+  EXPECT_EQ(log::utf8Escaped("a\\b"), "a\\x5cb");
+  EXPECT_EQ(log::utf8Escaped("\xff\xfe"), "\\xff\\xfe");
+  EXPECT_EQ(log::utf8Escaped("\xed\xa0\x80"), "\\xed\\xa0\\x80");  // a surrogate
+  EXPECT_EQ(log::utf8Escaped("\xc3("), "\\xc3(");                 // a sequence cut short
+  EXPECT_EQ(log::utf8Escaped("\xe2\x82\xac d\xc3\xa9bit \xf0\x9f\x98\x80"), "\xe2\x82\xac d\xc3\xa9bit \xf0\x9f\x98\x80");  // kept
 }
 
 TEST_F(FrontendServiceTest, ValidateSummarisesAValidSceneWithAttachedFiles) {
