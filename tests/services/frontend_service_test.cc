@@ -23,6 +23,17 @@ std::string readFile(const fs::path& p) {
   return s.str();
 }
 
+// examples/stl_funnel.yaml with `stl` attached as its meshes/funnel.stl.
+v1::ValidateSceneRequest funnelRequest(const std::string& stl) {
+  v1::ValidateSceneRequest req;
+  req.set_scene_name("stl_funnel.yaml");
+  req.set_scene_yaml(readFile(fs::path(PFLOW_SOURCE_DIR) / "examples" / "stl_funnel.yaml"));
+  auto* f = req.add_files();
+  f->set_path("meshes/funnel.stl");
+  f->set_content(stl);
+  return req;
+}
+
 class FrontendServiceTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -66,16 +77,11 @@ TEST_F(FrontendServiceTest, ValidateReportsErrorsWithPathsAndLines) {
   EXPECT_TRUE(modulus);
 }
 
-// An attached file's errors name it as the client did ('meshes/funnel.stl'), not by the server's staging directory;
-// error text is valid UTF-8 whatever bytes it quotes (protobuf string fields must be: ill-formed bytes as \xNN).
+// An attached file's errors name it as the client did ('meshes/funnel.stl'), not by the server's staging directory.
+// FieldError text goes through log::utf8Escaped (protobuf string fields must be UTF-8): checked on the function,
+// since the mesh readers already print a bad token's bytes as '?' and no scene error reached here quotes raw bytes.
 TEST_F(FrontendServiceTest, FileErrorsNameTheClientsPathInValidUtf8) {
-  const fs::path examples = fs::path(PFLOW_SOURCE_DIR) / "examples";
-  v1::ValidateSceneRequest req;
-  req.set_scene_name("stl_funnel.yaml");
-  req.set_scene_yaml(readFile(examples / "stl_funnel.yaml"));
-  auto* f = req.add_files();
-  f->set_path("meshes/funnel.stl");
-  f->set_content("solid x\n  facet normal \xff\xfe 0 0\n    outer loop\n");
+  const v1::ValidateSceneRequest req = funnelRequest("solid x\n  facet normal \xff\xfe 0 0\n    outer loop\n");
   v1::ValidateSceneResponse resp;
   auto ctx = rpc::contextWithDeadline();
   ASSERT_TRUE(stub->ValidateScene(ctx.get(), req, &resp).ok());
@@ -88,17 +94,12 @@ TEST_F(FrontendServiceTest, FileErrorsNameTheClientsPathInValidUtf8) {
   EXPECT_EQ(log::utf8Escaped("\xff\xfe"), "\\xff\\xfe");
   EXPECT_EQ(log::utf8Escaped("\xed\xa0\x80"), "\\xed\\xa0\\x80");  // a surrogate
   EXPECT_EQ(log::utf8Escaped("\xc3("), "\\xc3(");                 // a sequence cut short
-  EXPECT_EQ(log::utf8Escaped("\xe2\x82\xac d\xc3\xa9bit \xf0\x9f\x98\x80"), "\xe2\x82\xac d\xc3\xa9bit \xf0\x9f\x98\x80");  // kept
+  EXPECT_EQ(log::utf8Escaped("\xe2\x82\xac d\xc3\xa9" "bit \xf0\x9f\x98\x80"), "\xe2\x82\xac d\xc3\xa9" "bit \xf0\x9f\x98\x80");  // kept
 }
 
 TEST_F(FrontendServiceTest, ValidateSummarisesAValidSceneWithAttachedFiles) {
   const fs::path examples = fs::path(PFLOW_SOURCE_DIR) / "examples";
-  v1::ValidateSceneRequest req;
-  req.set_scene_name("stl_funnel.yaml");
-  req.set_scene_yaml(readFile(examples / "stl_funnel.yaml"));
-  auto* f = req.add_files();
-  f->set_path("meshes/funnel.stl");
-  f->set_content(readFile(examples / "meshes/funnel.stl"));
+  v1::ValidateSceneRequest req = funnelRequest(readFile(examples / "meshes/funnel.stl"));
   v1::ValidateSceneResponse resp;
   auto ctx = rpc::contextWithDeadline(60);
   ASSERT_TRUE(stub->ValidateScene(ctx.get(), req, &resp).ok());
