@@ -62,6 +62,13 @@ int main(int argc, char** argv) {
                  "and resettle those for --resettle-steps (0: settle every size itself)");
   app.add_option("--resettle-steps", resettleSteps, "steps a tiled bed settles before timing")->capture_default_str();
   std::string baseCache;
+  int historySlots = 0, wallHistorySlots = 0;
+  app.add_option("--wall-history-slots", wallHistorySlots,
+                 "initial wall-contact slots per particle (simulation.wall_history_slots; 0: the default, 1)");
+  app.add_option("--history-slots", historySlots,
+                 "initial tangential-history slots per particle (simulation.history_slots; 0: the bed's 8, 16 "
+                 "polydisperse). The slots grow on demand, and a growth holds the old and the new slot fields at once: "
+                 "for the largest bed a card holds, start at the count the bed ends with");
   app.add_option("--base-cache", baseCache,
                  "with --tile-from: keep the settled small bed in this directory (a snapshot file named after the bed, "
                  "the settle steps and the settling executor) and reuse it when a later run asks for the same");
@@ -152,6 +159,8 @@ int main(int argc, char** argv) {
       spec.threads = threads;
       cfg = pflow::bench::bedScene(spec);
     }
+    if (historySlots > 0) cfg.sim.historySlots = historySlots;
+    if (wallHistorySlots > 0) cfg.sim.wallHistorySlots = wallHistorySlots;
     std::unique_ptr<pflow::compute::Simulation> last;
     std::vector<std::pair<std::string, double>> rates;
     for (const std::string& precision : precisions) {
@@ -203,6 +212,7 @@ int main(int argc, char** argv) {
                      {"history_slots", s.engine().historySlots()},
                      {"wall_history_slots", s.engine().wallHistorySlots()},
                      {"device_bytes_per_particle", double(s.deviceBytes()) / double(s.numParticles())},
+                     {"device_peak_bytes_per_particle", double(s.devicePeakBytes()) / double(s.numParticles())},
                      {"device", where}, {"commit", commit}, {"command", cmdline.str()}};
     std::printf("%s\n", j.dump().c_str());
     std::fflush(stdout);

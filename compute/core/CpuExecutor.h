@@ -76,6 +76,11 @@ class CpuExecutor {
   // Stable counting sort of [0, n) by key < numKeys: perm[k] = old index of the k-th sorted item,
   // keyStart[c] = first sorted position with key c (numKeys + 1 entries).
   void sortByKey(const std::uint32_t* keys, Index n, std::uint32_t numKeys, Index* perm, Index* keyStart) const;
+  // The CUDA executor's variant that sorts in lent memory: the counting sort needs none.
+  void sortByKeyLent(std::uint32_t* keys, Index n, std::uint32_t numKeys, Index* perm, Index* keyStart, void*,
+                     std::size_t) const {
+    sortByKey(keys, n, numKeys, perm, keyStart);
+  }
 
   // out[i] = sum of in[0..i), returns the total.
   std::uint64_t exclusiveScan(const std::uint32_t* in, std::uint32_t* out, Index n) const;

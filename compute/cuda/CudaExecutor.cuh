@@ -193,6 +193,11 @@ class CudaExecutor {
   void sortByKey(const std::uint32_t* keys, Index n, std::uint32_t numKeys, Index* perm, Index* keyStart) const {
     m_algorithms->sortByKey(keys, n, numKeys, perm, keyStart);
   }
+  // The same sort, `keys` overwritten, in lent memory (DeviceAlgorithms::sortByKeyLent).
+  void sortByKeyLent(std::uint32_t* keys, Index n, std::uint32_t numKeys, Index* perm, Index* keyStart, void* lent,
+                     std::size_t lentBytes) const {
+    m_algorithms->sortByKeyLent(keys, n, numKeys, perm, keyStart, lent, lentBytes);
+  }
   std::uint64_t exclusiveScan(const std::uint32_t* in, std::uint32_t* out, Index n) const {
     return m_algorithms->exclusiveScan(in, out, n);
   }

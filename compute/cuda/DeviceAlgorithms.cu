@@ -58,6 +58,29 @@ void DeviceAlgorithms::sortByKey(const std::uint32_t* keys, Index n, std::uint32
   PFLOW_CUDA_CHECK(cudaGetLastError());
 }
 
+void DeviceAlgorithms::sortByKeyLent(std::uint32_t* keys, Index n, std::uint32_t numKeys, Index* perm, Index* keyStart,
+                                     void* lent, std::size_t lentBytes) {
+  if (n == 0 || lentBytes < lentBytesFor(n)) {
+    sortByKey(keys, n, numKeys, perm, keyStart);
+    return;
+  }
+  auto* keysAlt = static_cast<std::uint32_t*>(lent);
+  auto* permAlt = reinterpret_cast<Index*>(keysAlt + alignedItems(n));
+  iotaKernel<<<blocksFor(n, 256), 256>>>(n, perm);
+  PFLOW_CUDA_CHECK(cudaGetLastError());
+  const int endBit = bitsFor(numKeys);
+  cub::DoubleBuffer<std::uint32_t> k(keys, keysAlt);
+  cub::DoubleBuffer<Index> v(perm, permAlt);
+  std::size_t bytes = 0;
+  PFLOW_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, bytes, k, v, n, 0, endBit));
+  void* t = temp(bytes);
+  PFLOW_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(t, bytes, k, v, n, 0, endBit));
+  if (v.Current() != perm)
+    PFLOW_CUDA_CHECK(cudaMemcpyAsync(perm, v.Current(), std::size_t(n) * sizeof(Index), cudaMemcpyDeviceToDevice));
+  keyStartKernel<<<blocksFor(std::uint64_t(numKeys) + 1, 256), 256>>>(k.Current(), n, numKeys, keyStart);
+  PFLOW_CUDA_CHECK(cudaGetLastError());
+}
+
 std::uint64_t DeviceAlgorithms::exclusiveScan(const std::uint32_t* in, std::uint32_t* out, Index n) {
   if (n == 0) return 0;
   std::size_t bytes = 0;

@@ -18,11 +18,18 @@ class DeviceAlgorithms {
   // perm[k] = old index of the k-th sorted item; keyStart[c] = first sorted position with key c
   // (numKeys + 1 entries). The same permutation as the OpenMP executor's stable counting sort.
   void sortByKey(const std::uint32_t* keys, Index n, std::uint32_t numKeys, Index* perm, Index* keyStart);
+  // The same sort in the caller's memory: `keys` is overwritten, and `lent` (lentBytes of memory that is free
+  // until the sort returns, at least lentBytesFor(n)) holds the radix sort's second buffers, so that the sort keeps
+  // only CUB's histograms of its own between calls, not 16 bytes an item. Less lent memory: sortByKey.
+  void sortByKeyLent(std::uint32_t* keys, Index n, std::uint32_t numKeys, Index* perm, Index* keyStart, void* lent,
+                     std::size_t lentBytes);
+  static std::size_t lentBytesFor(Index n) { return alignedItems(n) * sizeof(std::uint32_t) + std::size_t(n) * sizeof(Index); }
 
   // out[i] = sum of in[0..i); returns the total (read back to the host).
   std::uint64_t exclusiveScan(const std::uint32_t* in, std::uint32_t* out, Index n);
 
  private:
+  static std::size_t alignedItems(Index n) { return (std::size_t(n) + 63) / 64 * 64; }  // 256-byte aligned halves
   void* temp(std::size_t bytes) {
     if (m_temp.bytes() < bytes) m_temp.resize(bytes + bytes / 4);
     return m_temp.data();

@@ -128,8 +128,10 @@ class Engine : public DistributedRows {
   // A mesh's motion from now on (a driven wall's, each step: WallDrives); the mesh then counts as moving.
   virtual void setMeshMotion(int mesh, const MeshMotionParams& motion) = 0;
   // A rebuild is sortByCell then buildContacts, always both: buildContacts restarts the skin reference,
-  // which the sort does not carry through the reorder.
-  virtual void sortByCell() = 0;
+  // which the sort does not carry through the reorder. Nor does it carry the forces and torques (kRecomputed: the
+  // forces that follow overwrite them) unless `keepForces` (a resumed run: the next step's first half kick reads
+  // the checkpoint's).
+  virtual void sortByCell(bool keepForces = false) = 0;
   virtual Status buildContacts() = 0;
   // Forces of every owned particle (kAll), or, between rebuilds of a distributed run, in two passes so the
   // halo can be in flight during the first: kInterior (particles with no ghost among their candidates; only
@@ -164,6 +166,7 @@ class Engine : public DistributedRows {
   // The owned particle with the largest kinetic energy (host copies: error path only); gid kNoGid when none.
   virtual ParticleProbe fastestParticle() const = 0;
   virtual std::size_t deviceBytes() const = 0;
+  virtual std::size_t devicePeakBytes() const = 0;  // the most deviceBytes() has been (growth transients included)
 
   // Every neighbour candidate pair (i, j) as global ids, sorted (diagnostics and executor comparisons).
   virtual std::vector<std::pair<Gid, Gid>> candidatePairs() const = 0;

@@ -42,6 +42,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   int historySlots() const override { return m_particles.contactSlots(); }
   int wallHistorySlots() const override { return m_particles.wallSlots(); }
   std::size_t deviceBytes() const override { return m_mem.bytesInUse(); }
+  std::size_t devicePeakBytes() const override { return m_mem.peakBytes(); }
 
   double integrateFirstHalf(double dt) override {
     return m_exec.maxOf(m_owned, kernels::IntegrateFirstHalf<R>{integrateArgs(dt)});
@@ -63,14 +64,17 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     return moved;
   }
 
-  void sortByCell() override {
+  void sortByCell(bool keepForces) override {
     // Ghosts are dropped before a rebuild (Engine.h): only owned particles are sorted.
     const CellGrid& g = m_setup.grid;
     m_n = m_owned;
     m_particles.resize(m_n);
     m_exec.forEach(m_n, kernels::CellKey{g, m_particles.template ptr<Field::Position>(), m_cellKey.as<std::uint32_t>()});
-    m_exec.sortByKey(m_cellKey.as<std::uint32_t>(), m_n, g.numCells(), m_perm.as<Index>(), m_cellStart.as<Index>());
-    m_rows.reorder(m_perm.as<Index>(), m_n);
+    // The sort's second buffers, then the reorder's scratch, are the forces' memory (kRecomputed) unless they are kept.
+    Buffer& lent = m_particles.buffer(Field::Force);
+    m_exec.sortByKeyLent(m_cellKey.as<std::uint32_t>(), m_n, g.numCells(), m_perm.as<Index>(), m_cellStart.as<Index>(),
+                         keepForces ? nullptr : lent.data(), keepForces ? 0 : lent.bytes());
+    m_rows.reorder(m_perm.as<Index>(), m_n, keepForces);
   }
 
   // ---- distributed runs (DistributedRows): LocalRows's operations (ForwardDistributedRows), and these ----
@@ -192,7 +196,9 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
         m_particles.resizeSlots(Multiplicity::kContactSlots, grown);
       }
       if (c.flags & kWallHistoryOverflow) {
-        const int grown = std::max<int>(m_particles.wallSlots() + 1, int(c.neededWallHistory) + 1);
+        // No spare: most particles never touch a wall, and the few that touch several (a box's edges and corners)
+        // are there from the start; growth is one more store-only pass.
+        const int grown = std::max<int>(m_particles.wallSlots() + 1, int(c.neededWallHistory));
         if (grown > 32)
           return Status(StatusCode::kResourceExhausted, "a particle has " + std::to_string(c.neededWallHistory) +
                                                             " simultaneous wall contacts, above the 32-slot limit");

@@ -17,8 +17,8 @@ namespace pflow::compute {
   X(Position,        "position",           Vec3d,         kOne,          "m",     kSnapshot | kMigrate | kGhost | kRefresh) \
   X(Velocity,        "velocity",           Real3,         kOne,          "m/s",   kSnapshot | kMigrate | kGhost | kRefresh) \
   X(AngularVelocity, "angular_velocity",   Real3,         kOne,          "rad/s", kSnapshot | kMigrate | kGhost | kRefresh) \
-  X(Force,           "force",              Real3,         kOne,          "N",     kSnapshot | kCheckpoint)              \
-  X(Torque,          "torque",             Real3,         kOne,          "N m",   kSnapshot | kOnRequest | kCheckpoint) \
+  X(Force,           "force",              Real3,         kOne,          "N",     kSnapshot | kCheckpoint | kRecomputed) \
+  X(Torque,          "torque",             Real3,         kOne,          "N m",   kSnapshot | kOnRequest | kCheckpoint | kRecomputed) \
   X(Radius,          "radius",             Real,          kOne,          "m",     kSnapshot | kMigrate | kGhost)        \
   X(Mass,            "mass",               Real,          kOne,          "kg",    kMigrate | kGhost)                    \
   X(Material,        "material",           std::int32_t,  kOne,          "",      kSnapshot | kMigrate | kGhost)        \

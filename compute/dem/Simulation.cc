@@ -73,11 +73,12 @@ void Simulation::driveWalls(double tNext, double dt) {
 }
 
 // Neighbour rebuild: particles to the ranks that own them, sort by cell (reordering every field), the
-// ghosts, then candidate lists. One process: the sort and the lists.
-Status Simulation::rebuild() {
+// ghosts, then candidate lists. One process: the sort and the lists. The sort drops the forces (the step's own
+// follow) unless keepForces.
+Status Simulation::rebuild(bool keepForces) {
   const double cost = m_timers.seconds(Phase::kContacts) + m_timers.seconds(Phase::kForces);
   { auto t = m_timers.time(Phase::kMigrate);  PFLOW_TRY(m_domain->migrate(*m_engine, cost - m_costMark)); }
-  { auto t = m_timers.time(Phase::kSort);     m_engine->sortByCell(); }
+  { auto t = m_timers.time(Phase::kSort);     m_engine->sortByCell(keepForces); }
   { auto t = m_timers.time(Phase::kHalo);     PFLOW_TRY(m_domain->exchangeGhosts(*m_engine)); }
   { auto t = m_timers.time(Phase::kContacts); PFLOW_TRY(m_engine->buildContacts()); }
   m_costMark = m_timers.seconds(Phase::kContacts) + m_timers.seconds(Phase::kForces);
@@ -338,7 +339,7 @@ Status Simulation::resume(const SimulationState& state) {
     m_reductions = s.reductions;
     PFLOW_RETURN_IF_ERROR(m_drives.restore(s.wallDrive, s.time, *m_engine));
     m_engine->moveMeshes(s.time);
-    PFLOW_RETURN_IF_ERROR(rebuild());
+    PFLOW_RETURN_IF_ERROR(rebuild(/*keepForces=*/true));
   } catch (...) {
     return withStep(fromException());
   }

@@ -104,6 +104,7 @@ class Simulation {
   std::string executorDescription() const { return m_engine->executorDescription(); }
   ExecutorKind executorKind() const { return m_executor; }
   std::size_t deviceBytes() const { return m_engine->deviceBytes(); }
+  std::size_t devicePeakBytes() const { return m_engine->devicePeakBytes(); }
   Engine& engine() { return *m_engine; }
   const Engine& engine() const { return *m_engine; }
   // Distributed runs: overlap the halo with the interior forces (SimulationOptions::overlapHalo).
@@ -113,7 +114,7 @@ class Simulation {
   Simulation(const EngineSetup& setup, TimeStepInfo ts, std::unique_ptr<Engine> engine);
   Status stepPhases();  // the step loop itself (Simulation.cc, top of the file)
   Status initialise();
-  Status rebuild();
+  Status rebuild(bool keepForces = false);
   Status haloAndForces(double dt, double time);
   void driveWalls(double tNext, double dt);
   Status withStep(Status s) const;

@@ -18,6 +18,9 @@ enum FieldFlags : std::uint32_t {
   kRefresh = 1u << 3,   // refreshed in the ghosts every step between rebuilds
   kCheckpoint = 1u << 4,  // in a checkpoint besides the kMigrate fields (what the step after it reads unrecomputed)
   kOnRequest = 1u << 5,   // a kSnapshot field written only when output.fields names it (not by default)
+  // Written before it is read again after a cell sort (DEM's force and torque: the sort falls between the step's
+  // two half kicks, before the forces): the sort does not reorder it, and lends its memory to the sort as scratch.
+  kRecomputed = 1u << 6,
 };
 
 enum class Multiplicity : std::uint8_t { kOne, kContactSlots, kWallSlots };

@@ -35,25 +35,41 @@ class FieldRows {
   }
 
   // Every field of the table (all of its slots) reordered so that new row k = old row perm[k], k < count
-  // (perm on the device), through one scratch buffer: slot-major slot fields one column at a time. Blocks are
-  // batched into launches of up to kBatchBytes (GatherBlocks): with few rows, a launch per block would cost more than
-  // its bytes (DEM on the GPU: 9 fields plus 2 per contact slot and 2 per wall slot, 39 blocks with the settled bed's
-  // 11 and 4, two launches each); with many, each block is a batch of its own, as large as before.
+  // (perm on the device), through scratch: slot-major slot fields one column at a time. Fields flagged
+  // kRecomputed are left out (their values are written before they are read again) unless `recomputedToo` (a
+  // resumed run's sort keeps the checkpoint's forces), and their memory is the scratch of a large table: a block
+  // too large for one of them is gathered in row ranges, one into each, and copied back once all are gathered
+  // (DEM in float: the 24-byte positions into the force's and the torque's 12 bytes a row), so the sort needs no
+  // buffer of its own on the GPU. Otherwise one scratch buffer, where blocks are batched into launches of up to kBatchBytes
+  // (GatherBlocks): with few rows, a launch per block would cost more than its bytes (DEM on the GPU: 7 fields plus
+  // 2 per contact slot and 2 per wall slot, 37 blocks with the settled bed's 11 and 4, two launches each); with
+  // many, each block is a batch of its own.
   static constexpr std::size_t kBatchBytes = std::size_t(8) << 20;
-  void reorder(const Index* perm, Index count) {
+  void reorder(const Index* perm, Index count, bool recomputedToo = false) {
     using Block = kernels::GatherBlocks::Block;
     std::vector<Block>& all = m_blocks;  // kept: no allocation at each rebuild
     all.clear();
-    std::size_t largest = 0;
+    m_lent.clear();
+    std::size_t largest = 0, lent = 0;
     const bool byColumn = m_store.slotMajor();
     for (int k = 0; k < Store::kCount; ++k) {
       const Info& f = Store::kTable[k];
+      Buffer& field = m_store.buffer(f.id);
+      if ((f.flags & kRecomputed) && !recomputedToo) {
+        if (field.bytes()) m_lent.push_back({field.template as<unsigned char>(), field.bytes()});
+        lent += field.bytes();
+        continue;
+      }
       const bool columns = byColumn && f.multiplicity != Multiplicity::kOne;
       const std::size_t blocks = columns ? m_store.valuesPerParticle(f) : 1;
       const std::size_t stride = columns ? f.elementBytes : m_store.strideBytes(f);
       for (std::size_t b = 0; b < blocks; ++b)
-        all.push_back({m_store.buffer(f.id).template as<unsigned char>() + b * m_store.columnBytes(f), stride, 0});
+        all.push_back({field.template as<unsigned char>() + b * m_store.columnBytes(f), stride, 0});
       largest = std::max(largest, stride * std::size_t(count));
+    }
+    if (largest > kBatchBytes && lent > 0) {
+      reorderIntoLent(perm, count);
+      return;
     }
     const auto rounded = [](std::size_t b) { return (b + 63) / 64 * 64; };
     std::size_t total = 0;
@@ -233,8 +249,43 @@ class FieldRows {
   Store& m_store;
 
  private:
+  struct Lent {
+    unsigned char* data;
+    std::size_t bytes;
+  };
+  // reorder of a large table through the kRecomputed fields' memory: each block in row ranges, one range a lent
+  // buffer, all gathered before any is copied back. The rows the lent buffers do not hold go through the scratch
+  // buffer: a row at most with DEM's fields slot-major (the GPU's layout); particle-major (the CPU's), a slot field's
+  // rows are wider than the lent memory and the rest of them go there.
+  void reorderIntoLent(const Index* perm, Index count) {
+    for (const auto& b : m_blocks) {
+      std::size_t ranges = 0;
+      Index done = 0;
+      for (const Lent& l : m_lent) {
+        if (done == count) break;
+        const Index rows = std::min<Index>(count - done, Index(l.bytes / b.stride));
+        m_exec.forEach(rows, kernels::GatherBytes{b.data, l.data, perm + done, b.stride});
+        done += rows;
+        ++ranges;
+      }
+      if (done < count) {
+        const std::size_t rest = b.stride * std::size_t(count - done);
+        if (m_scratch.bytes() < rest) m_scratch.resize(rest);
+        m_exec.forEach(count - done, kernels::GatherBytes{b.data, m_scratch.as<unsigned char>(), perm + done, b.stride});
+      }
+      done = 0;
+      for (std::size_t r = 0; r < ranges; ++r) {
+        const Index rows = std::min<Index>(count - done, Index(m_lent[r].bytes / b.stride));
+        m_mem.copyWithin(b.data + b.stride * std::size_t(done), m_lent[r].data, b.stride * std::size_t(rows));
+        done += rows;
+      }
+      if (done < count) m_mem.copyWithin(b.data + b.stride * std::size_t(done), m_scratch.as<unsigned char>(), b.stride * std::size_t(count - done));
+    }
+  }
+
   Buffer m_scratch{m_mem, 0};
   std::vector<kernels::GatherBlocks::Block> m_blocks;  // reorder's list of blocks
+  std::vector<Lent> m_lent;                            // the kRecomputed fields' memory, reorder's scratch
   mutable Buffer m_stage{m_mem, 0};  // pack/copyIn staging
 };
 
@@ -273,7 +324,7 @@ class LocalRows : public FieldRows<Exec, Store> {
     const Index count = Index(keep.size());
     if (m_rowsBuf.bytes() < std::max<std::size_t>(1, count) * sizeof(Index)) m_rowsBuf.resize(std::max<std::size_t>(1, count) * sizeof(Index));
     m_mem.copyFromHost(m_rowsBuf.data(), keep.data(), count * sizeof(Index));
-    Base::reorder(m_rowsBuf.template as<Index>(), count);
+    Base::reorder(m_rowsBuf.template as<Index>(), count, /*recomputedToo=*/true);  // as a resumed run's sort
     owned = n = count;
     m_store.resize(n);
   }

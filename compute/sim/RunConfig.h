@@ -147,7 +147,7 @@ struct SimulationSettings {
   std::optional<AccuracyTarget> accuracy;
   DecompositionKind decomposition = DecompositionKind::kSfc;  // used when the run has more than one rank
   int historySlots = 8;              // initial tangential-history slots per particle (grown on demand)
-  int wallHistorySlots = 4;          // initial wall-contact slots per particle (grown on demand)
+  int wallHistorySlots = 1;          // initial wall-contact slots per particle (grown on demand, exactly)
   int threads = 0;                   // OpenMP threads; 0 = all
   // Overlap limit, a fraction of the smaller radius, in (0, 1]: overlaps this deep mean the integration has
   // failed (dt too large for the speeds, or a material far too soft); the run stops (excessive overlap).
