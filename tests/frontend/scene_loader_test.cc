@@ -224,7 +224,7 @@ TEST(SceneLoader, DefaultsOfAMinimalScene) {
   EXPECT_LT(c.sim.skin, 0);
   EXPECT_EQ(c.sim.gravity.z, -9.81);
   EXPECT_EQ(c.sim.historySlots, 8);
-  EXPECT_EQ(c.sim.wallHistorySlots, 4);
+  EXPECT_EQ(c.sim.wallHistorySlots, 1);
   EXPECT_EQ(c.sim.precision, compute::Precision::kDouble);
   EXPECT_EQ(c.sim.decomposition, compute::DecompositionKind::kSfc);
   EXPECT_EQ(c.sim.seed, 1u);

@@ -7,8 +7,10 @@ import { JobView } from './jobview.js';
 const main = document.getElementById('main');
 const who = document.getElementById('who');
 let jobs = null, view = null, timer = null;
+let routed = 0;  // counts stops: a route that awaited its first poll goes on only if nothing stopped it meanwhile
 
 function stop() {
+  ++routed;
   if (timer) clearInterval(timer);
   timer = null;
   if (jobs) jobs.close();
@@ -49,6 +51,7 @@ function onAuthError(e) {
 
 async function route() {
   stop();
+  const mine = routed;
   if (!token.get()) return showLogin();
   header();
   const hash = location.hash || '#jobs';
@@ -63,15 +66,17 @@ async function route() {
     main.replaceChildren(error, box);
     const poll = () => renderNodes(box).then(() => (error.textContent = '')).catch((e) => { error.textContent = `nodes: ${e.message}`; onAuthError(e); });
     await poll();
-    timer = setInterval(poll, 5000);
+    if (mine === routed) timer = setInterval(poll, 5000);
     return;
   }
   const box = el('div', { id: 'jobs' });
   main.replaceChildren(box);
-  jobs = new JobsTable(box, { onOpen: (id) => { location.hash = `#job/${encodeURIComponent(id)}`; } });
-  const poll = () => jobs.refresh().catch(onAuthError);
+  // The poll holds its own table: a later route (a click while the first poll is in flight) stops this one's.
+  const table = new JobsTable(box, { onOpen: (id) => { location.hash = `#job/${encodeURIComponent(id)}`; } });
+  jobs = table;
+  const poll = () => table.refresh().catch(onAuthError);
   await poll();
-  timer = setInterval(poll, 3000);
+  if (mine === routed) timer = setInterval(poll, 3000);
 }
 
 window.addEventListener('hashchange', route);
