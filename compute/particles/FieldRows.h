@@ -50,14 +50,13 @@ class FieldRows {
     std::vector<Block>& all = m_blocks;  // kept: no allocation at each rebuild
     all.clear();
     m_lent.clear();
-    std::size_t largest = 0, lent = 0;
+    std::size_t largest = 0;
     const bool byColumn = m_store.slotMajor();
     for (int k = 0; k < Store::kCount; ++k) {
       const Info& f = Store::kTable[k];
       Buffer& field = m_store.buffer(f.id);
       if ((f.flags & kRecomputed) && !recomputedToo) {
         if (field.bytes()) m_lent.push_back({field.template as<unsigned char>(), field.bytes()});
-        lent += field.bytes();
         continue;
       }
       const bool columns = byColumn && f.multiplicity != Multiplicity::kOne;
@@ -67,7 +66,7 @@ class FieldRows {
         all.push_back({field.template as<unsigned char>() + b * m_store.columnBytes(f), stride, 0});
       largest = std::max(largest, stride * std::size_t(count));
     }
-    if (largest > kBatchBytes && lent > 0) {
+    if (largest > kBatchBytes && !m_lent.empty()) {
       reorderIntoLent(perm, count);
       return;
     }
@@ -259,27 +258,22 @@ class FieldRows {
   // rows are wider than the lent memory and the rest of them go there.
   void reorderIntoLent(const Index* perm, Index count) {
     for (const auto& b : m_blocks) {
+      // Rows [first[r], first[r + 1]) go through lent buffer r, the rest (from first[ranges]) through m_scratch.
       std::size_t ranges = 0;
-      Index done = 0;
+      Index first[Store::kCount + 1] = {0};
       for (const Lent& l : m_lent) {
-        if (done == count) break;
-        const Index rows = std::min<Index>(count - done, Index(l.bytes / b.stride));
-        m_exec.forEach(rows, kernels::GatherBytes{b.data, l.data, perm + done, b.stride});
-        done += rows;
+        if (first[ranges] == count) break;
+        first[ranges + 1] = first[ranges] + std::min<Index>(count - first[ranges], Index(l.bytes / b.stride));
         ++ranges;
       }
-      if (done < count) {
-        const std::size_t rest = b.stride * std::size_t(count - done);
-        if (m_scratch.bytes() < rest) m_scratch.resize(rest);
-        m_exec.forEach(count - done, kernels::GatherBytes{b.data, m_scratch.as<unsigned char>(), perm + done, b.stride});
-      }
-      done = 0;
-      for (std::size_t r = 0; r < ranges; ++r) {
-        const Index rows = std::min<Index>(count - done, Index(m_lent[r].bytes / b.stride));
-        m_mem.copyWithin(b.data + b.stride * std::size_t(done), m_lent[r].data, b.stride * std::size_t(rows));
-        done += rows;
-      }
-      if (done < count) m_mem.copyWithin(b.data + b.stride * std::size_t(done), m_scratch.as<unsigned char>(), b.stride * std::size_t(count - done));
+      const Index rest = count - first[ranges];
+      if (rest > 0 && m_scratch.bytes() < b.stride * std::size_t(rest)) m_scratch.resize(b.stride * std::size_t(rest));
+      auto into = [&](std::size_t r) { return r < ranges ? m_lent[r].data : m_scratch.as<unsigned char>(); };
+      auto rowsOf = [&](std::size_t r) { return r < ranges ? first[r + 1] - first[r] : rest; };
+      for (std::size_t r = 0; r <= ranges; ++r)
+        if (rowsOf(r) > 0) m_exec.forEach(rowsOf(r), kernels::GatherBytes{b.data, into(r), perm + first[r], b.stride});
+      for (std::size_t r = 0; r <= ranges; ++r)
+        if (rowsOf(r) > 0) m_mem.copyWithin(b.data + b.stride * std::size_t(first[r]), into(r), b.stride * std::size_t(rowsOf(r)));
     }
   }
 
@@ -324,7 +318,9 @@ class LocalRows : public FieldRows<Exec, Store> {
     const Index count = Index(keep.size());
     if (m_rowsBuf.bytes() < std::max<std::size_t>(1, count) * sizeof(Index)) m_rowsBuf.resize(std::max<std::size_t>(1, count) * sizeof(Index));
     m_mem.copyFromHost(m_rowsBuf.data(), keep.data(), count * sizeof(Index));
-    Base::reorder(m_rowsBuf.template as<Index>(), count, /*recomputedToo=*/true);  // as a resumed run's sort
+    // Migration falls inside a rebuild, where the kRecomputed fields are dead (the forces follow), and they do not
+    // travel with a particle either: a resumed run has every particle on its own rank, and then no row leaves.
+    Base::reorder(m_rowsBuf.template as<Index>(), count);
     owned = n = count;
     m_store.resize(n);
   }
