@@ -64,6 +64,9 @@ void DeviceAlgorithms::sortByKeyLent(std::uint32_t* keys, Index n, std::uint32_t
     sortByKey(keys, n, numKeys, perm, keyStart);
     return;
   }
+  // The buffers of sortByKey (16 bytes an item), from a sort that could not borrow (a resumed run's first), go.
+  m_keysOut.resize(0);
+  m_iota.resize(0);
   auto* keysAlt = static_cast<std::uint32_t*>(lent);
   auto* permAlt = reinterpret_cast<Index*>(keysAlt + alignedItems(n));
   iotaKernel<<<blocksFor(n, 256), 256>>>(n, perm);

@@ -257,6 +257,15 @@ class FieldRows {
   // buffer: a row at most with DEM's fields slot-major (the GPU's layout); particle-major (the CPU's), a slot field's
   // rows are wider than the lent memory and the rest of them go there.
   void reorderIntoLent(const Index* perm, Index count) {
+    // A scratch column left by an earlier reorder that carried the kRecomputed fields (a resumed run's first sort)
+    // is released: the lent reorders after it need only their left-over rows.
+    std::size_t need = 0;
+    for (const auto& b : m_blocks) {
+      std::size_t held = 0;
+      for (const Lent& l : m_lent) held += std::min<std::size_t>(count, l.bytes / b.stride);
+      need = std::max(need, b.stride * (std::size_t(count) - std::min<std::size_t>(count, held)));
+    }
+    if (m_scratch.bytes() > need + kBatchBytes) m_scratch.resize(need);
     for (const auto& b : m_blocks) {
       // Rows [first[r], first[r + 1]) go through lent buffer r, the rest (from first[ranges]) through m_scratch.
       std::size_t ranges = 0;

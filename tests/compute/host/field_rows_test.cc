@@ -100,6 +100,25 @@ TEST(FieldRowsReorder, RecomputedFieldsMoveWhenAsked) {
   EXPECT_EQ(t.misplaced(perm, true), 0u);
 }
 
+// After a resumed run's first sort (the forces carried, through a scratch column of the widest field), the next
+// sort lends the forces' memory again and the column is released (docs/performance.md: a resumed run held ~40 B a
+// particle more for the rest of the run).
+TEST(FieldRowsReorder, ScratchColumnReleasedWhenTheForcesLendAgain) {
+  const Index n = 400001;
+  Table t(n, 2, true);
+  const std::size_t table = t.exec.memory().bytesInUse();
+  const std::vector<Index> first = shuffled(n, 5);
+  t.rows.reorder(first.data(), n, /*recomputedToo=*/true);
+  EXPECT_GE(t.exec.memory().bytesInUse() - table, 24u * n);  // the positions' column
+  std::vector<Index> second = shuffled(n, 6);
+  t.rows.reorder(second.data(), n);
+  EXPECT_LE(t.exec.memory().bytesInUse() - table, 64u);
+  // Both moves composed: row r holds what was row first[second[r]].
+  std::vector<Index> composed(n);
+  for (Index r = 0; r < n; ++r) composed[r] = first[second[r]];
+  EXPECT_EQ(t.misplaced(composed, false), 0u);
+}
+
 // A small table: batched gathers through one scratch buffer of at most the batch size.
 TEST(FieldRowsReorder, SmallTableMovesEveryField) {
   for (bool slotMajor : {true, false}) {
