@@ -1,3 +1,4 @@
+#!/usr/bin/env bash
 # A/B of pflow-bench builds on the CPU executor, all the host's cores, in one device call (same host, same settled
 # bed: settled once on the GPU and shared through --base-cache): the 10^6 settled bed (CPU_AB_N), both precisions in
 # round 1 with LAMMPS once (after the last binary), double only in round 2. JSON lines and logs to $OUT.
@@ -10,19 +11,20 @@ source "$(dirname "$0")/setup.sh"
 mkdir -p /tmp/beds
 cores=$(nproc)
 cpu_only=" ${CPU_AB_CPU_ONLY:-} "
+bed=(--base-cache /tmp/beds --tile-from 200000 --settle-steps 30000)  # the settled base bed every run starts from
 run() { # binary precisions round [extra options]
   local bin=$1 prec=$2 round=$3 settle=cuda
   shift 3
   [[ $cpu_only == *" $bin "* ]] && settle=cpu
-  timeout "${CPU_AB_TIMEOUT:-280}" "$B/$bin" --base-cache /tmp/beds --executor cpu --settle-executor $settle -n "${CPU_AB_N:-1000000}" \
-    --tile-from 200000 --settle-steps 30000 --resettle-steps "${CPU_AB_RESETTLE:-1000}" --steps 300 --threads "$cores" --precision "$prec" "$@" \
+  timeout "${CPU_AB_TIMEOUT:-280}" "$B/$bin" "${bed[@]}" --executor cpu --settle-executor $settle -n "${CPU_AB_N:-1000000}" \
+    --resettle-steps "${CPU_AB_RESETTLE:-1000}" --steps 300 --threads "$cores" --precision "$prec" "$@" \
     --device "$(lscpu | sed -n 's/^Model name: *//p' | head -1), $cores cores" --commit "$commit:$bin" 2>> "$OUT/cpuab.log" \
     | grep '^{' | sed "s/^{/{\"round\":$round,/" >> "$OUT/cpuab.jsonl"
 }
 last=${!#}
 if [[ -n ${CPU_AB_CPU_ONLY:-} ]]; then  # settle the bed on the GPU first, then name it for the CPU-only builds
-  "$B/$last" --base-cache /tmp/beds --executor cpu --settle-executor cuda -n 200000 --tile-from 200000 --settle-steps 30000 \
-    --resettle-steps 0 --steps 1 --threads "$cores" --precision double --no-lammps > /dev/null 2>> "$OUT/cpuab.log"
+  "$B/$last" "${bed[@]}" --executor cpu --settle-executor cuda -n 200000 --resettle-steps 0 --steps 1 --threads "$cores" \
+    --precision double --no-lammps > /dev/null 2>> "$OUT/cpuab.log"
   for f in /tmp/beds/*-cuda.h5; do ln -sf "$f" "${f%-cuda.h5}-cpu.h5"; done
 fi
 precisions=double,float

@@ -257,26 +257,18 @@ class FieldRows {
   // buffer: a row at most with DEM's fields slot-major (the GPU's layout); particle-major (the CPU's), a slot field's
   // rows are wider than the lent memory and the rest of them go there.
   void reorderIntoLent(const Index* perm, Index count) {
-    // A scratch column left by an earlier reorder that carried the kRecomputed fields (a resumed run's first sort)
-    // is released: the lent reorders after it need only their left-over rows.
+    // The scratch is sized once for the widest left-over rows; a column left by a reorder that carried the
+    // kRecomputed fields (a resumed run's first sort) is released here.
+    Index first[Store::kCount + 1];
     std::size_t need = 0;
     for (const auto& b : m_blocks) {
-      std::size_t held = 0;
-      for (const Lent& l : m_lent) held += std::min<std::size_t>(count, l.bytes / b.stride);
-      need = std::max(need, b.stride * (std::size_t(count) - std::min<std::size_t>(count, held)));
+      const std::size_t ranges = splitRows(b.stride, count, first);
+      need = std::max(need, b.stride * std::size_t(count - first[ranges]));
     }
-    if (m_scratch.bytes() > need + kBatchBytes) m_scratch.resize(need);
+    if (m_scratch.bytes() < need || m_scratch.bytes() > need + kBatchBytes) m_scratch.resize(need);
     for (const auto& b : m_blocks) {
-      // Rows [first[r], first[r + 1]) go through lent buffer r, the rest (from first[ranges]) through m_scratch.
-      std::size_t ranges = 0;
-      Index first[Store::kCount + 1] = {0};
-      for (const Lent& l : m_lent) {
-        if (first[ranges] == count) break;
-        first[ranges + 1] = first[ranges] + std::min<Index>(count - first[ranges], Index(l.bytes / b.stride));
-        ++ranges;
-      }
+      const std::size_t ranges = splitRows(b.stride, count, first);
       const Index rest = count - first[ranges];
-      if (rest > 0 && m_scratch.bytes() < b.stride * std::size_t(rest)) m_scratch.resize(b.stride * std::size_t(rest));
       auto into = [&](std::size_t r) { return r < ranges ? m_lent[r].data : m_scratch.as<unsigned char>(); };
       auto rowsOf = [&](std::size_t r) { return r < ranges ? first[r + 1] - first[r] : rest; };
       for (std::size_t r = 0; r <= ranges; ++r)
@@ -284,6 +276,18 @@ class FieldRows {
       for (std::size_t r = 0; r <= ranges; ++r)
         if (rowsOf(r) > 0) m_mem.copyWithin(b.data + b.stride * std::size_t(first[r]), into(r), b.stride * std::size_t(rowsOf(r)));
     }
+  }
+  // Rows [first[r], first[r + 1]) of a block of `stride`-byte rows go through lent buffer r; returns the number of
+  // ranges, and the rows from first[ranges] on go through m_scratch.
+  std::size_t splitRows(std::size_t stride, Index count, Index* first) const {
+    std::size_t ranges = 0;
+    first[0] = 0;
+    for (const Lent& l : m_lent) {
+      if (first[ranges] == count) break;
+      first[ranges + 1] = first[ranges] + std::min<Index>(count - first[ranges], Index(l.bytes / stride));
+      ++ranges;
+    }
+    return ranges;
   }
 
   Buffer m_scratch{m_mem, 0};

@@ -11,7 +11,7 @@ namespace {
 TEST(SettledBed, PolydisperseBedComesToRest) {
   bench::BedSpec spec;
   spec.nx = 50;
-  spec.ny = 20;  // the bed's height (nz) sets its time to rest; 50 x 20 is wide enough for the bulk and half the cost of 50 x 40
+  spec.ny = 20;  // the height (nz) sets the time to rest: 50 x 20 (was 50 x 40) halves the test's cost
   spec.nz = 10;
   spec.polydisperse = true;
   spec.dt = 5e-6;  // 0.23 of the Rayleigh time of the smallest sphere (d/4)

@@ -110,7 +110,7 @@ TEST(FieldRowsReorder, ScratchColumnReleasedWhenTheForcesLendAgain) {
   const std::vector<Index> first = shuffled(n, 5);
   t.rows.reorder(first.data(), n, /*recomputedToo=*/true);
   EXPECT_GE(t.exec.memory().bytesInUse() - table, 24u * n);  // the positions' column
-  std::vector<Index> second = shuffled(n, 6);
+  const std::vector<Index> second = shuffled(n, 6);
   t.rows.reorder(second.data(), n);
   EXPECT_LE(t.exec.memory().bytesInUse() - table, 64u);
   // Both moves composed: row r holds what was row first[second[r]].
