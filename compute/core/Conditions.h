@@ -8,7 +8,7 @@
 namespace pflow::compute {
 
 enum ConditionBits : std::uint32_t {
-  kNeighborOverflow = 1u << 0,      // a particle has more candidates than the neighbour-list stride
+  kNeighborMismatch = 1u << 0,      // the candidate walk's filling pass found another count than its counting pass
   kHistoryOverflow = 1u << 1,       // a particle has more contacts than history slots
   kWallHistoryOverflow = 1u << 2,   // a particle has more wall contacts than wall slots
   kWallCandidateOverflow = 1u << 3, // a particle has more candidate triangles than the stride
@@ -22,7 +22,6 @@ enum ConditionBits : std::uint32_t {
 
 struct Conditions {
   std::uint32_t flags = 0;
-  std::uint32_t neededNeighbors = 0;     // largest candidate count seen
   std::uint32_t neededHistory = 0;       // largest contact count seen
   std::uint32_t neededWallHistory = 0;   // largest wall-contact count seen
   std::uint32_t neededWallCandidates = 0;

@@ -21,10 +21,7 @@ typename EngineImpl<Exec, R>::HostView EngineImpl<Exec, R>::hostView() const {
   m_mem.copyToHost(h.mass.data(), m_particles.template ptr<Field::Mass>(), m_n * sizeof(R));
   m_mem.copyToHost(h.mat.data(), m_particles.template ptr<Field::Material>(), m_n * sizeof(std::int32_t));
   m_mem.copyToHost(h.gid.data(), m_particles.template ptr<Field::Gid>(), m_n * sizeof(Gid));
-  h.nbr.resize(std::size_t(m_owned) * m_nbrCap);
-  h.nbrCount.resize(m_owned);
-  m_mem.copyToHost(h.nbr.data(), m_nbr.data(), h.nbr.size() * sizeof(Index));
-  m_mem.copyToHost(h.nbrCount.data(), m_nbrCount.data(), m_owned * sizeof(std::uint32_t));
+  h.rows = hostRows();
   // Without wall phases (ModelFlags::walls) the candidate rows are never written: no candidates.
   h.wallCandCount.assign(m_owned, 0);
   if (m_anyWalls) {
@@ -41,8 +38,8 @@ template <class Exec, class R>
 typename EngineImpl<Exec, R>::Deepest EngineImpl<Exec, R>::deepestContact(const HostView& h, Index i) const {
   Deepest best;
   const double ri = double(h.rad[i]);
-  for (std::uint32_t e = 0; e < std::min<std::uint32_t>(h.nbrCount[i], m_nbrCap); ++e) {
-    const Index j = h.nbr[nbrLayout().at(i, e)];
+  for (std::uint32_t e = 0; e < h.rows.count[i]; ++e) {
+    const Index j = h.rows.at(i, e);
     const double ov = ri + double(h.rad[j]) - norm(h.pos[j] - h.pos[i]);
     if (ov > best.overlap) {
       best = {"particle " + std::to_string(h.gid[j]), h.gid[j], ov, ov / std::min(ri, double(h.rad[j]))};
@@ -170,8 +167,8 @@ Status EngineImpl<Exec, R>::slotOverflowError(double dt) const {
   std::uint32_t most = 0;
   for (Index i = 0; i < m_owned; ++i) {
     std::uint32_t contacts = 0;
-    for (std::uint32_t e = 0; e < std::min<std::uint32_t>(h.nbrCount[i], m_nbrCap); ++e) {
-      const Index j = h.nbr[nbrLayout().at(i, e)];
+    for (std::uint32_t e = 0; e < h.rows.count[i]; ++e) {
+      const Index j = h.rows.at(i, e);
       contacts += norm(h.pos[j] - h.pos[i]) < double(h.rad[i]) + double(h.rad[j]);
     }
     if (contacts > most) {
@@ -196,8 +193,8 @@ double EngineImpl<Exec, R>::elasticEnergy() const {
   double u = 0;
   for (Index i = 0; i < m_owned; ++i) {
     const double ri = double(h.rad[i]);
-    for (std::uint32_t e = 0; e < std::min<std::uint32_t>(h.nbrCount[i], m_nbrCap); ++e) {
-      const Index j = h.nbr[nbrLayout().at(i, e)];
+    for (std::uint32_t e = 0; e < h.rows.count[i]; ++e) {
+      const Index j = h.rows.at(i, e);
       const double rj = double(h.rad[j]), ov = ri + rj - norm(h.pos[j] - h.pos[i]);
       if (ov > 0) u += 0.5 * hertz(table(h.mat[i], h.mat[j]), ri * rj / (ri + rj), ov);  // half: j counts the other
     }
@@ -261,15 +258,12 @@ ContactStats EngineImpl<Exec, R>::contactStats() const {
   std::vector<Vec3d> pos(m_n);
   std::vector<V> vel(m_n), om(m_n);
   std::vector<R> rad(m_n), mass(m_n);
-  std::vector<Index> nbr(std::size_t(n) * m_nbrCap);
-  std::vector<std::uint32_t> cnt(n);
+  const HostRows rows = hostRows();
   m_mem.copyToHost(pos.data(), m_particles.template ptr<Field::Position>(), m_n * sizeof(Vec3d));
   m_mem.copyToHost(vel.data(), m_particles.template ptr<Field::Velocity>(), m_n * sizeof(V));
   m_mem.copyToHost(om.data(), m_particles.template ptr<Field::AngularVelocity>(), m_n * sizeof(V));
   m_mem.copyToHost(rad.data(), m_particles.template ptr<Field::Radius>(), m_n * sizeof(R));
   m_mem.copyToHost(mass.data(), m_particles.template ptr<Field::Mass>(), m_n * sizeof(R));
-  m_mem.copyToHost(nbr.data(), m_nbr.data(), nbr.size() * sizeof(Index));
-  m_mem.copyToHost(cnt.data(), m_nbrCount.data(), n * sizeof(std::uint32_t));
   // Mesh walls: each particle's candidate triangles (as of the last rebuild) and the triangles' vertices now.
   std::vector<Index> wallCand;
   std::vector<std::uint32_t> wallCnt;
@@ -283,13 +277,13 @@ ContactStats EngineImpl<Exec, R>::contactStats() const {
     m_mem.copyToHost(triVerts.data(), m_triVerts.data(), triVerts.size() * sizeof(Vec3d));
   }
   ContactStats st;
-  for (Index i = 0; i < n; ++i) st.candidatesPerParticle += double(cnt[i]) / std::max<Index>(n, 1);
+  for (Index i = 0; i < n; ++i) st.candidatesPerParticle += double(rows.count[i]) / std::max<Index>(n, 1);
   for (Index i = 0; i < n; ++i) {
     st.translationalEnergy += 0.5 * mass[i] * norm2(vel[i]);
     st.kineticEnergy += 0.5 * mass[i] * norm2(vel[i]) + 0.5 * 0.4 * mass[i] * rad[i] * rad[i] * norm2(om[i]);
     st.maxSpeed = std::max(st.maxSpeed, double(norm(vel[i])));
-    for (std::uint32_t e = 0; e < std::min<std::uint32_t>(cnt[i], m_nbrCap); ++e) {
-      const Index j = nbr[nbrLayout().at(i, e)];
+    for (std::uint32_t e = 0; e < rows.count[i]; ++e) {
+      const Index j = rows.at(i, e);
       if (j < i) continue;
       const double ov = double(rad[i]) + double(rad[j]) - norm(pos[j] - pos[i]);
       if (ov <= 0) continue;

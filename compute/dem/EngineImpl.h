@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -126,23 +127,30 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
       binTriangles();
       m_binned = true;
     }
+    // The candidate rows: counted, laid out from the counts, then filled by the same walk.
+    resetConditions();
+    kernels::BuildNeighbors<R> build{m_setup.grid, m_cellStart.as<Index>(),
+                                     m_particles.template ptr<Field::Position>(), m_particles.template ptr<Field::Radius>(),
+                                     m_particles.template ptr<Field::Gid>(),
+                                     m_particles.template ptr<Field::HistoryPartner>(),
+                                     m_particles.contactSlots(),
+                                     m_particles.layout(Multiplicity::kContactSlots), m_setup.skin, {},
+                                     nullptr, nullptr, m_nbrCount.as<std::uint32_t>(), m_cond.as<Conditions>()};
+    build.canonicalOrder = m_setup.canonicalOrder;
+    if (m_n > m_owned) {
+      build.ghostCellStart = m_rows.ghostCellStart();
+      build.ghostItems = m_rows.ghostItems();
+      build.ghostBase = m_owned;
+    }
+    build.countOnly = true;
+    m_exec.forEach(m_owned, build);
+    if (Status st = layOutRows(); !st.ok()) return st;
+    build.countOnly = false;
+    build.layout = nbrLayout();
+    build.nbr = m_nbr.as<Index>();
+    build.nbrSlot = m_nbrSlot.as<std::int8_t>();
+    m_exec.forEach(m_owned, build);
     for (;;) {
-      resetConditions();
-      kernels::BuildNeighbors<R> build{m_setup.grid, m_cellStart.as<Index>(),
-                                                  m_particles.template ptr<Field::Position>(), m_particles.template ptr<Field::Radius>(),
-                                                  m_particles.template ptr<Field::Gid>(),
-                                                  m_particles.template ptr<Field::HistoryPartner>(),
-                                                  m_particles.contactSlots(),
-                                                  m_particles.layout(Multiplicity::kContactSlots), m_setup.skin, m_nbrCap,
-                                                  nbrLayout(), m_nbr.as<Index>(), m_nbrSlot.as<std::int8_t>(),
-                                                  m_nbrCount.as<std::uint32_t>(), m_cond.as<Conditions>()};
-      build.canonicalOrder = m_setup.canonicalOrder;
-      if (m_n > m_owned) {
-        build.ghostCellStart = m_rows.ghostCellStart();
-        build.ghostItems = m_rows.ghostItems();
-        build.ghostBase = m_owned;
-      }
-      m_exec.forEach(m_owned, build);
       if (m_anyWalls)  // no wall phases (ModelFlags::walls): no candidates to find
         m_exec.forEach(m_owned, kernels::WallCandidates<R>{m_setup.grid, m_planes.as<PlaneParams>(), int(m_setup.planes.size()),
                                                   m_numTri ? m_binStart.as<Index>() : nullptr, m_binItems.as<Index>(),
@@ -153,15 +161,12 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
                                                   m_particles.wallSlots(), m_particles.layout(Multiplicity::kWallSlots),
                                                   m_cond.as<Conditions>()});
       const Conditions c = readConditions();
-      if (!(c.flags & (kNeighborOverflow | kWallCandidateOverflow))) break;
-      if (c.flags & kNeighborOverflow) {
-        m_nbrCap = std::max<Index>(c.neededNeighbors + c.neededNeighbors / 4, m_nbrCap + 4);
-        allocNeighbors();
-      }
-      if (c.flags & kWallCandidateOverflow) {
-        m_wallCap = std::max<Index>(c.neededWallCandidates + c.neededWallCandidates / 4, m_wallCap + 4);
-        allocWallCandidates();
-      }
+      if (c.flags & kNeighborMismatch)
+        return Status(StatusCode::kInternal, "the candidate walk found other counts when filling its rows than when counting them");
+      if (!(c.flags & kWallCandidateOverflow)) break;
+      m_wallCap = std::max<Index>(c.neededWallCandidates + c.neededWallCandidates / 4, m_wallCap + 4);
+      allocWallCandidates();
+      resetConditions();
     }
     splitBoundary();
     return buildSlabs();
@@ -276,16 +281,12 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   ParticleProbe fastestParticle() const override;
 
   std::vector<std::pair<Gid, Gid>> candidatePairs() const override {
-    std::vector<Index> nbr(std::size_t(m_owned) * m_nbrCap);
-    std::vector<std::uint32_t> cnt(m_owned);
+    const HostRows rows = hostRows();
     std::vector<Gid> gid(m_n);
-    m_mem.copyToHost(nbr.data(), m_nbr.data(), nbr.size() * sizeof(Index));
-    m_mem.copyToHost(cnt.data(), m_nbrCount.data(), cnt.size() * sizeof(std::uint32_t));
     m_mem.copyToHost(gid.data(), m_particles.template ptr<Field::Gid>(), gid.size() * sizeof(Gid));
     std::vector<std::pair<Gid, Gid>> pairs;
     for (Index i = 0; i < m_owned; ++i)
-      for (std::uint32_t e = 0; e < std::min<std::uint32_t>(cnt[i], m_nbrCap); ++e)
-        pairs.emplace_back(gid[i], gid[nbr[nbrLayout().at(i, e)]]);
+      for (std::uint32_t e = 0; e < rows.count[i]; ++e) pairs.emplace_back(gid[i], gid[rows.at(i, e)]);
     std::sort(pairs.begin(), pairs.end());
     return pairs;
   }
@@ -301,14 +302,58 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   const Rows& rows() const override { return m_rows; }
   void localRowsChanged() override { sizeLocalBuffers(); }
   void init();
-  void allocNeighbors() {
-    m_nbr.resize(std::max<std::size_t>(1, std::size_t(m_owned) * m_nbrCap) * sizeof(Index));
+  // Lays the candidate rows out from the counting pass's counts (RowSlices): each slice as wide as its longest row.
+  // The rows' buffers grow to fit, with a sixteenth to spare (a bed's counts drift from one rebuild to the next),
+  // and shrink when they hold more than twice that.
+  Status layOutRows() {
+    const Index slices = m_owned == 0 ? 0 : ((m_owned - 1) >> m_nbrShift) + 1;
+    if (m_nbrStart.bytes() < std::max<Index>(1, slices) * sizeof(std::uint32_t))
+      m_nbrStart.resize(std::max<Index>(1, slices) * sizeof(std::uint32_t));
+    const std::uint32_t* width = m_nbrCount.as<std::uint32_t>();  // slices of one row: the counts
+    if (m_nbrShift > 0 && slices > 0) {
+      if (m_nbrWidth.bytes() < slices * sizeof(std::uint32_t)) m_nbrWidth.resize(slices * sizeof(std::uint32_t));
+      m_exec.forEach(slices, kernels::SliceWidths{m_nbrCount.as<std::uint32_t>(), m_owned, m_nbrShift, m_nbrWidth.as<std::uint32_t>()});
+      width = m_nbrWidth.as<std::uint32_t>();
+    }
+    const std::uint64_t units = slices ? m_exec.exclusiveScan(width, m_nbrStart.as<std::uint32_t>(), slices) : 0;
+    if (units > std::numeric_limits<std::uint32_t>::max())
+      return Status(StatusCode::kResourceExhausted, "the candidate rows need " + std::to_string(units << m_nbrShift) +
+                                                        " entries, more than the 2^32 their starts can address: run on more ranks");
+    m_nbrEntries = std::size_t(units) << m_nbrShift;
+    m_nbrRows = m_owned;
+    auto fit = [](Buffer& b, std::size_t bytes) {
+      const std::size_t want = std::max<std::size_t>(1, bytes + bytes / 16);
+      if (b.bytes() < bytes || b.bytes() > 2 * want) b.resize(want);
+    };
+    fit(m_nbr, m_nbrEntries * sizeof(Index));
     // Without tangential history there are no slots to resolve: one byte stands in for the rows.
-    m_nbrSlot.resize(m_setup.model.tangential ? std::max<std::size_t>(1, std::size_t(m_owned) * m_nbrCap) * sizeof(std::int8_t) : 1);
+    fit(m_nbrSlot, m_setup.model.tangential ? m_nbrEntries * sizeof(std::int8_t) : 0);
+    return Status::ok();
   }
-  // Candidate rows: the executor's preferred layout (PFLOW_LIST_LAYOUT=row|column overrides it, for
-  // measurements).
-  ListLayout nbrLayout() const { return m_columnMajor ? ListLayout::columnMajor(m_owned) : ListLayout::rowMajor(m_nbrCap); }
+  // Candidate rows in slices of 32 on a GPU, compressed rows on a CPU (RowSlices; PFLOW_LIST_LAYOUT=row|column
+  // overrides the executor's choice, for measurements).
+  RowSlices nbrLayout() const { return {m_nbrStart.as<std::uint32_t>(), m_nbrShift}; }
+  // Host copies of the candidate rows (diagnostics and tests; never on the step path).
+  struct HostRows {
+    std::vector<Index> nbr;
+    std::vector<std::uint32_t> count, start;
+    std::uint32_t shift = 0;
+    Index at(Index i, std::uint32_t e) const { return nbr[RowSlices{start.data(), shift}.at(i, e)]; }
+  };
+  // Rows not laid out for the owned particles of now (before the first rebuild, or between a migration and the
+  // rebuild after it) read as empty.
+  HostRows hostRows() const {
+    HostRows h;
+    h.shift = m_nbrShift;
+    h.count.assign(m_owned, 0);
+    if (m_nbrRows != m_owned || m_owned == 0) return h;
+    h.nbr.resize(m_nbrEntries);
+    h.start.resize(((m_owned - 1) >> m_nbrShift) + 1);
+    m_mem.copyToHost(h.nbr.data(), m_nbr.data(), h.nbr.size() * sizeof(Index));
+    m_mem.copyToHost(h.count.data(), m_nbrCount.data(), h.count.size() * sizeof(std::uint32_t));
+    m_mem.copyToHost(h.start.data(), m_nbrStart.data(), h.start.size() * sizeof(std::uint32_t));
+    return h;
+  }
   void allocWallCandidates() { m_wallCand.resize(std::max<std::size_t>(1, std::size_t(m_owned) * m_wallCap) * sizeof(Index)); }
 
   // The pair kernel, then the wall kernel, over the particles of `set`: every owned one, or one part of
@@ -377,7 +422,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
       const bool slots = m_setup.model.tangential;
       m_exec.forEach(m_owned, kernels::OwnedFirst{m_slabOf.as<std::uint32_t>(), m_nbr.as<Index>(),
                                                   slots ? m_nbrSlot.as<std::int8_t>() : nullptr, m_nbrCount.as<std::uint32_t>(),
-                                                  m_nbrCap, nbrLayout(), m_owned1.as<std::uint32_t>()});
+                                                  nbrLayout(), m_owned1.as<std::uint32_t>()});
       while (slots) {  // histories of pairs that changed owner move to the new owner
         resetConditions();
         m_exec.forEachTwoColours(layers, kernels::PullHistory<R>{
@@ -405,7 +450,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     if (m_splitFlag.bytes() < 2 * n * sizeof(std::uint32_t)) m_splitFlag.resize(2 * n * sizeof(std::uint32_t) + n * sizeof(std::uint32_t) / 2);
     std::uint32_t* flag = m_splitFlag.as<std::uint32_t>();
     std::uint32_t* scan = flag + n;
-    m_exec.forEach(m_owned, kernels::MarkBoundary{m_nbr.as<Index>(), m_nbrCount.as<std::uint32_t>(), nbrLayout(), m_nbrCap, m_owned, flag});
+    m_exec.forEach(m_owned, kernels::MarkBoundary{m_nbr.as<Index>(), m_nbrCount.as<std::uint32_t>(), nbrLayout(), m_owned, flag});
     m_numBoundary = Index(m_exec.exclusiveScan(flag, scan, m_owned));
     m_exec.forEach(m_owned, kernels::SplitByFlag{flag, scan, m_numBoundary, m_split.as<Index>()});
   }
@@ -421,8 +466,6 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     atLeast(m_nbrCount, n * sizeof(std::uint32_t));
     atLeast(m_wallCandCount, n * sizeof(std::uint32_t));
     atLeast(m_planeMask, n * sizeof(std::uint32_t));
-    // Column-major rows are m_owned apart: a buffer of at least m_owned * m_nbrCap entries fits either layout.
-    if (m_nbr.bytes() < std::size_t(m_owned) * m_nbrCap * sizeof(Index)) allocNeighbors();
     if (m_wallCand.bytes() < std::size_t(m_owned) * m_wallCap * sizeof(Index)) allocWallCandidates();
   }
   void binTriangles();
@@ -444,8 +487,9 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     std::vector<R> rad, mass;
     std::vector<std::int32_t> mat;
     std::vector<Gid> gid;
-    std::vector<Index> nbr, wallCand;
-    std::vector<std::uint32_t> nbrCount, wallCandCount;
+    HostRows rows;
+    std::vector<Index> wallCand;
+    std::vector<std::uint32_t> wallCandCount;
     std::vector<Vec3d> triVerts;
   };
   HostView hostView() const;
@@ -486,7 +530,6 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     a.nbr = m_nbr.as<Index>();
     a.nbrSlot = m_nbrSlot.as<std::int8_t>();
     a.nbrCount = m_nbrCount.as<std::uint32_t>();
-    a.nbrCapacity = m_nbrCap;
     a.nbrLayout = nbrLayout();
     a.slots = m_particles.contactSlots();
     a.histPartner = m_particles.template ptr<Field::HistoryPartner>();
@@ -537,11 +580,12 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   bool m_anyWalls = false;  // planes or triangles: the wall-force kernel runs
   bool m_binned = false;
   bool m_trianglesMoved = false;  // moveMeshes: some vertex is not where the last binning saw it
-  Index m_nbrCap = 16;
-  bool m_columnMajor = Exec::kColumnMajorLists;
+  std::uint32_t m_nbrShift = Exec::kColumnMajorLists ? 5 : 0;  // RowSlices: 32 rows a slice on a GPU, 1 on a CPU
+  std::size_t m_nbrEntries = 0;                                  // the rows' entries, as laid out at the last rebuild
+  Index m_nbrRows = kNoIndex;                                    // the owned particles they were laid out for
   Index m_wallCap = 4;
   Buffer m_moved{m_mem, 0}, m_cellKey{m_mem, 0}, m_perm{m_mem, 0}, m_cellStart{m_mem, 0};
-  Buffer m_nbr{m_mem, 0}, m_nbrSlot{m_mem, 0}, m_nbrCount{m_mem, 0};
+  Buffer m_nbr{m_mem, 0}, m_nbrSlot{m_mem, 0}, m_nbrCount{m_mem, 0}, m_nbrStart{m_mem, 0}, m_nbrWidth{m_mem, 0};
   Buffer m_planes{m_mem, 0}, m_triRef{m_mem, 0}, m_triVerts{m_mem, 0}, m_triRebuild{m_mem, 0};
   Buffer m_triMesh{m_mem, 0}, m_triMaterial{m_mem, 0}, m_meshMotion{m_mem, 0};
   std::vector<bool> m_meshMoves;           // per mesh: has a motion, or a drive has set one
@@ -575,9 +619,11 @@ void EngineImpl<Exec, R>::init() {
   // The executor's layouts, unless the setup asks for another executor's (tests), or PFLOW_LIST_LAYOUT=
   // row|column and PFLOW_SLOT_LAYOUT=particle|slot override them (measurements).
   bool slotMajor = Exec::kSlotMajor;
-  if (s.layout != EngineSetup::Layout::kExecutor) slotMajor = m_columnMajor = s.layout == EngineSetup::Layout::kGpu;
+  bool columnMajor = Exec::kColumnMajorLists;
+  if (s.layout != EngineSetup::Layout::kExecutor) slotMajor = columnMajor = s.layout == EngineSetup::Layout::kGpu;
   if (const char* layout = std::getenv("PFLOW_SLOT_LAYOUT")) slotMajor = std::string(layout) == "slot";
-  if (const char* layout = std::getenv("PFLOW_LIST_LAYOUT")) m_columnMajor = std::string(layout) == "column";
+  if (const char* layout = std::getenv("PFLOW_LIST_LAYOUT")) columnMajor = std::string(layout) == "column";
+  m_nbrShift = columnMajor ? 5 : 0;
   m_particles.allocate(m_n, s.historySlots, s.wallHistorySlots, slotMajor);
   std::vector<Gid> gids(m_n);
   for (Index i = 0; i < m_n; ++i) gids[i] = s.gid.empty() ? Gid(i) : s.gid[i];
@@ -612,7 +658,6 @@ void EngineImpl<Exec, R>::init() {
   m_perm.resize(std::size_t(m_n) * sizeof(Index));
   m_cellStart.resize((std::size_t(s.grid.numCells()) + 1) * sizeof(Index));
   m_nbrCount.resize(std::size_t(m_n) * sizeof(std::uint32_t));
-  allocNeighbors();
 
   upload(m_planes, s.planes);
   upload(m_params, s.contactTable);

@@ -9,9 +9,9 @@
 
 namespace pflow::compute {
 
-// Where entry e of particle i's candidate row lives. Row-major (i * capacity + e) suits a CPU core
-// walking its own row; column-major (e * n + i) lets the 32 threads of a GPU warp, 32 consecutive
-// particles, read 32 consecutive words. Each executor picks its default (Exec::kColumnMajorLists).
+// Where entry e of particle i's row lives, in rows of a fixed capacity. Row-major (i * capacity + e) suits a
+// CPU core walking its own row; column-major (e * n + i) lets the 32 threads of a GPU warp, 32 consecutive
+// particles, read 32 consecutive words. The SPH hit masks' rows (each executor picks: Exec::kColumnMajorLists).
 struct ListLayout {
   std::size_t rowStride = 1, colStride = 1;
   PFLOW_HOSTDEVICE PFLOW_FORCEINLINE std::size_t at(Index i, std::uint32_t e) const {
@@ -19,6 +19,24 @@ struct ListLayout {
   }
   static ListLayout rowMajor(Index capacity) { return {capacity, 1}; }
   static ListLayout columnMajor(Index n) { return {1, n}; }
+};
+
+// Where entry e of particle i's candidate row lives: rows of exact length, in slices of 2^shift consecutive
+// particles. A slice is as wide as its longest row, and holds its rows column-major: entry e of its particles
+// are 2^shift consecutive words, from start[slice] * 2^shift. Shift 5 on a GPU (a warp's 32 lanes, 32
+// consecutive particles, read 32 consecutive words, as with rows of one capacity for all); shift 0 on a CPU
+// (compressed rows: a core walks its own row). The rows then take what the particles' own counts need
+// (rounded up to their slice's longest), not every particle the longest row's room.
+struct RowSlices {
+  const std::uint32_t* start = nullptr;  // [slice]: first entry / 2^shift (exclusive scan of the widths)
+  std::uint32_t shift = 0;
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE std::size_t base(Index i) const {
+    return (std::size_t(start[i >> shift]) << shift) + (i & ((Index(1) << shift) - 1));
+  }
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE std::size_t stride() const { return std::size_t(1) << shift; }
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE std::size_t at(Index i, std::uint32_t e) const {
+    return base(i) + (std::size_t(e) << shift);
+  }
 };
 
 }  // namespace pflow::compute
@@ -30,12 +48,11 @@ namespace pflow::compute::kernels {
 struct MarkBoundary {
   const Index* nbr;
   const std::uint32_t* nbrCount;
-  ListLayout layout;
-  Index capacity;
+  RowSlices layout;
   Index owned;
   std::uint32_t* flag;
   PFLOW_HOSTDEVICE void operator()(Index i) const {
-    const std::uint32_t n = nbrCount[i] < capacity ? nbrCount[i] : capacity;
+    const std::uint32_t n = nbrCount[i];
     std::uint32_t b = 0;
     for (std::uint32_t e = 0; e < n; ++e) b |= nbr[layout.at(i, e)] >= owned ? 1u : 0u;
     flag[i] = b;
@@ -166,10 +183,11 @@ struct GatherBytes {
 };
 
 
-// Candidates j of particle i with |x_i - x_j| < r_i + r_j + skin, in fixed-stride rows of `capacity`.
-// Each candidate's history slot (the slot of i holding j's gid, or -1) is resolved here, so the
-// force loop reaches its history directly; slots whose partner is no longer a candidate (it moved
-// beyond the skin, so the contact has ended) are cleared. R: the precision of the radii. Without
+// Candidates j of particle i with |x_i - x_j| < r_i + r_j + skin, in two passes over the same walk: the first
+// (countOnly) counts each row, the host lays the rows out from the counts (SliceWidths, a scan: RowSlices), and
+// the second fills them. Each candidate's history slot (the slot of i holding j's gid, or -1) is resolved in
+// the second, so the force loop reaches its history directly; slots whose partner is no longer a candidate (it
+// moved beyond the skin, so the contact has ended) are cleared. R: the precision of the radii. Without
 // tangential history (slots == 0) only the candidates are listed (nbrSlot is not touched).
 template <class R>
 struct BuildNeighbors {
@@ -183,12 +201,12 @@ struct BuildNeighbors {
   int slots;
   SlotLayout slotLayout;
   double skin;
-  Index capacity;
-  ListLayout layout;
+  RowSlices layout;
   Index* nbr;               // [layout.at(i, e)]
   std::int8_t* nbrSlot;     // [layout.at(i, e)]
-  std::uint32_t* nbrCount;  // [i]
+  std::uint32_t* nbrCount;  // [i]: written by the counting pass, the row's length in the filling one
   Conditions* cond;
+  bool countOnly = false;
   // Ghosts (distributed runs; null otherwise): local particles ghostBase + ghostItems[k] for k in
   // [ghostCellStart[c], ghostCellStart[c + 1]) lie in cell c. Candidates of the owned particles only.
   const Index* ghostCellStart = nullptr;
@@ -204,7 +222,10 @@ struct BuildNeighbors {
     int cx, cy, cz;
     grid.coords(xi, cx, cy, cz);
     std::uint32_t count = 0;
-    const std::size_t row = std::size_t(i) * layout.rowStride, col = layout.colStride;
+    // The counting pass has no rows yet; the filling one writes no more than it counted (the same walk over
+    // the same positions finds the same candidates: a mismatch is flagged, never written past).
+    const std::uint32_t capacity = countOnly ? 0 : nbrCount[i];
+    const std::size_t row = countOnly ? 0 : layout.base(i), col = layout.stride();
     const SlotRow<PartnerId> partners = slotLayout.at(historyPartner, i);
     for (int dz = -1; dz <= 1; ++dz) {
       const int z = cz + dz;
@@ -219,7 +240,7 @@ struct BuildNeighbors {
           auto consider = [&](Index j) {
             const double cut = ri + double(radius[j]);
             if (norm2(pos[j] - xi) >= cut * cut) return;
-            if (count < capacity) {
+            if (!countOnly && count < capacity) {
               nbr[row + count * col] = j;
               if (slots == 0) {  // no tangential history (ModelFlags::tangential): nothing to resolve
                 ++count;
@@ -240,10 +261,12 @@ struct BuildNeighbors {
         }
       }
     }
-    nbrCount[i] = count;
-    if (count > capacity) {
-      atomicOrU32(&cond->flags, kNeighborOverflow);
-      atomicMaxU32(&cond->neededNeighbors, count);
+    if (countOnly) {
+      nbrCount[i] = count;
+      return;
+    }
+    if (count != capacity) {
+      atomicOrU32(&cond->flags, kNeighborMismatch);
       return;
     }
     if (canonicalOrder)  // insertion sort by gid (rows are short and mostly in order already)
@@ -265,6 +288,21 @@ struct BuildNeighbors {
       for (std::uint32_t e = 0; e < count && !candidate; ++e) candidate = nbrSlot[row + e * col] == k;
       if (!candidate) partners[k] = kNoPartner;
     }
+  }
+};
+
+// Width of each slice of candidate rows (RowSlices): its longest row, over the owned particles of the slice.
+struct SliceWidths {
+  const std::uint32_t* count;
+  Index n;
+  std::uint32_t shift;
+  std::uint32_t* width;  // [slice]
+  PFLOW_HOSTDEVICE void operator()(Index s) const {
+    const Index first = s << shift;
+    const Index last = n - first < (Index(1) << shift) ? n : first + (Index(1) << shift);
+    std::uint32_t w = 0;
+    for (Index i = first; i < last; ++i) w = count[i] > w ? count[i] : w;
+    width[s] = w;
   }
 };
 

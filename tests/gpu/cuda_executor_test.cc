@@ -130,6 +130,22 @@ TEST_P(CudaVsCpu, SameCandidatesForcesAndTrajectories) {
   const auto pc = cpu->engine().candidatePairs(), pg = gpu->engine().candidatePairs();
   EXPECT_GT(pc.size(), 5u * 4000);
   EXPECT_EQ(pc, pg);
+  // ... and both the brute-force set: every ordered pair closer than r_i + r_j + skin, once (rows of exact
+  // length, RowSlices: none lost at a slice's edge, none listed twice).
+  {
+    const compute::ParticleSnapshot s = cpu->snapshot();
+    const Gid* id = s.find("id")->as<Gid>();
+    const Vec3d* x = s.find("position")->as<Vec3d>();
+    const double* r = s.find("radius")->as<double>();
+    std::vector<std::pair<Gid, Gid>> brute;
+    for (std::size_t a = 0; a < s.n; ++a)
+      for (std::size_t b = 0; b < s.n; ++b) {
+        const double cut = r[a] + r[b] + cpu->skin();
+        if (a != b && norm2(x[a] - x[b]) < cut * cut) brute.emplace_back(id[a], id[b]);
+      }
+    std::sort(brute.begin(), brute.end());
+    EXPECT_EQ(pc, brute);
+  }
 
   // Forces at t = 0 and after steps with tangential history, rolling and walls: within 1e-12 (double) or
   // 1e-5 (float) of the largest force (the sums run in the same order; only fused multiply-adds round

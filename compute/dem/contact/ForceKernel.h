@@ -56,8 +56,7 @@ struct ForceArgs {
   const Index* nbr;
   std::int8_t* nbrSlot;
   const std::uint32_t* nbrCount;
-  Index nbrCapacity;
-  ListLayout nbrLayout;
+  RowSlices nbrLayout;
   int slots;
   PartnerId* histPartner;
   Vec3<R>* histDisp;
@@ -197,9 +196,10 @@ struct ComputeForces {
     const Gid* __restrict__ gid = a.gid;
     V* __restrict__ force = a.force;
     V* __restrict__ torque = a.torque;
-    const Index* __restrict__ nbr = a.nbr + std::size_t(i) * a.nbrLayout.rowStride;
-    std::int8_t* __restrict__ nbrSlot = a.nbrSlot + std::size_t(i) * a.nbrLayout.rowStride;
-    const std::size_t col = a.nbrLayout.colStride;
+    const std::size_t row = a.nbrLayout.base(i);
+    const Index* __restrict__ nbr = a.nbr + row;
+    std::int8_t* __restrict__ nbrSlot = a.nbrSlot + row;
+    const std::size_t col = a.nbrLayout.stride();
     const int slots = a.slots;
     const SlotRow<PartnerId> partner = a.histLayout.at(a.histPartner, i);
     const SlotRow<V> disp = a.histLayout.at(a.histDisp, i);
@@ -213,7 +213,7 @@ struct ComputeForces {
     const R Ii = R(0.4) * mi * ri * ri;
     V f = zero3<R>(), tq = zero3<R>();
 
-    const std::uint32_t count = kOnce ? owned[i] : (a.nbrCount[i] < a.nbrCapacity ? a.nbrCount[i] : a.nbrCapacity);
+    const std::uint32_t count = kOnce ? owned[i] : a.nbrCount[i];
     std::uint32_t contacts = 0;
     bool overflow = false;
     for (std::uint32_t e = 0; e < count; ++e) {
@@ -307,7 +307,7 @@ struct ComputeForces {
 
   // How many of the candidates particle i does not own touch it (counted only when its slots overflow).
   PFLOW_HOSTDEVICE std::uint32_t touchingNotOwned(Index i, const std::uint32_t* owned) const {
-    const std::uint32_t count = a.nbrCount[i] < a.nbrCapacity ? a.nbrCount[i] : a.nbrCapacity;
+    const std::uint32_t count = a.nbrCount[i];
     std::uint32_t n = 0;
     for (std::uint32_t e = owned[i]; e < count; ++e) {
       const Index j = a.nbr[a.nbrLayout.at(i, e)];
@@ -356,11 +356,10 @@ struct OwnedFirst {
   Index* nbr;
   std::int8_t* nbrSlot;  // null without history slots
   const std::uint32_t* nbrCount;
-  Index capacity;
-  ListLayout layout;
+  RowSlices layout;
   std::uint32_t* owned;
   void operator()(Index i) const {
-    const std::uint32_t count = nbrCount[i] < capacity ? nbrCount[i] : capacity;
+    const std::uint32_t count = nbrCount[i];
     thread_local std::vector<std::pair<Index, std::int8_t>> others;
     others.clear();
     const std::uint32_t si = slabOf[i];
@@ -399,7 +398,7 @@ struct PullHistory {
   const std::uint32_t* owned;
   const Index* nbr;
   std::int8_t* nbrSlot;
-  ListLayout layout;
+  RowSlices layout;
   PartnerId* histPartner;
   V* histDisp;
   SlotLayout histLayout;
