@@ -17,11 +17,11 @@ for round in $(seq 1 "${DEM_AB_ROUNDS:-2}"); do
 done
 python3 - "$OUT/ab.jsonl" <<'E'
 import json, sys
-print("%-5s %-22s %-7s %9s %12s %9s" % ("round", "binary", "prec", "N", "p-steps/s", "forces_s"))
+print("%-5s %-22s %-7s %9s %12s %9s %9s" % ("round", "binary", "prec", "N", "p-steps/s", "forces_s", "B/part"))
 for l in open(sys.argv[1]):
     try: r = json.loads(l)
     except Exception: continue
     ph = r.get("phases_s", {})
-    print("%-5s %-22s %-7s %9d %12.3e %9.3f" % (r["round"], r["commit"].split(":")[-1], r.get("precision", "?"), r["n"],
-          r.get("particle_steps_per_s", 0), ph.get("forces", float("nan"))))
+    print("%-5s %-22s %-7s %9d %12.3e %9.3f %9.1f" % (r["round"], r["commit"].split(":")[-1], r.get("precision", "?"), r["n"],
+          r.get("particle_steps_per_s", 0), ph.get("forces", float("nan")), r.get("device_bytes_per_particle", float("nan"))))
 E

@@ -353,8 +353,8 @@ PY
 )")
 fi
 if has layouts; then
-  for layout in row column; do
-    PFLOW_LIST_LAYOUT=$layout "$B/pflow-bench" --executor cuda -n 1000000 --settle-steps "${SETTLE:-3000}" --steps 500 \
+  for layout in 0 5; do  # candidate rows in slices of 2^layout (0: compressed rows, the default)
+    PFLOW_ROW_SLICE_SHIFT=$layout "$B/pflow-bench" --executor cuda -n 1000000 --settle-steps "${SETTLE:-3000}" --steps 500 \
       --no-lammps --device "$dev" --commit "$commit" >> "$OUT/layouts.jsonl" 2>> "$OUT/bench.log"
     summary+=("layout $layout $(tail -1 "$OUT/layouts.jsonl" | python3 -c 'import json,sys; j=json.loads(sys.stdin.read()); print(f"{j[\"particle_steps_per_s\"]:.3g}", j["phases_s"]["forces"], j["phases_s"]["contacts"])' 2>&1)")
   done

@@ -330,8 +330,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     fit(m_nbrSlot, m_setup.model.tangential ? m_nbrEntries * sizeof(std::int8_t) : 0);
     return Status::ok();
   }
-  // Candidate rows in slices of 32 on a GPU, compressed rows on a CPU (RowSlices; PFLOW_LIST_LAYOUT=row|column
-  // overrides the executor's choice, for measurements).
+  // Candidate rows: compressed (one row a slice) unless PFLOW_ROW_SLICE_SHIFT asks for wider slices.
   RowSlices nbrLayout() const { return {m_nbrStart.as<std::uint32_t>(), m_nbrShift}; }
   // Host copies of the candidate rows (diagnostics and tests; never on the step path).
   struct HostRows {
@@ -580,7 +579,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   bool m_anyWalls = false;  // planes or triangles: the wall-force kernel runs
   bool m_binned = false;
   bool m_trianglesMoved = false;  // moveMeshes: some vertex is not where the last binning saw it
-  std::uint32_t m_nbrShift = Exec::kColumnMajorLists ? 5 : 0;  // RowSlices: 32 rows a slice on a GPU, 1 on a CPU
+  std::uint32_t m_nbrShift = 0;                                  // RowSlices: 2^shift rows a slice (init)
   std::size_t m_nbrEntries = 0;                                  // the rows' entries, as laid out at the last rebuild
   Index m_nbrRows = kNoIndex;                                    // the owned particles they were laid out for
   Index m_wallCap = 4;
@@ -616,14 +615,14 @@ void EngineImpl<Exec, R>::init() {
   const EngineSetup& s = m_setup;
   m_n = m_owned = Index(s.position.size());
   m_numTri = Index(s.triMesh.size());
-  // The executor's layouts, unless the setup asks for another executor's (tests), or PFLOW_LIST_LAYOUT=
-  // row|column and PFLOW_SLOT_LAYOUT=particle|slot override them (measurements).
+  // The executor's slot layout, unless the setup asks for another executor's (tests), or PFLOW_SLOT_LAYOUT=
+  // particle|slot overrides it (measurements). Candidate rows are compressed on both executors (slices of one
+  // row); PFLOW_ROW_SLICE_SHIFT=k lays them out in slices of 2^k rows instead (measurements, tests).
   bool slotMajor = Exec::kSlotMajor;
-  bool columnMajor = Exec::kColumnMajorLists;
-  if (s.layout != EngineSetup::Layout::kExecutor) slotMajor = columnMajor = s.layout == EngineSetup::Layout::kGpu;
+  if (s.layout != EngineSetup::Layout::kExecutor) slotMajor = s.layout == EngineSetup::Layout::kGpu;
   if (const char* layout = std::getenv("PFLOW_SLOT_LAYOUT")) slotMajor = std::string(layout) == "slot";
-  if (const char* layout = std::getenv("PFLOW_LIST_LAYOUT")) columnMajor = std::string(layout) == "column";
-  m_nbrShift = columnMajor ? 5 : 0;
+  m_nbrShift = 0;
+  if (const char* shift = std::getenv("PFLOW_ROW_SLICE_SHIFT")) m_nbrShift = std::uint32_t(std::clamp(std::atoi(shift), 0, 5));
   m_particles.allocate(m_n, s.historySlots, s.wallHistorySlots, slotMajor);
   std::vector<Gid> gids(m_n);
   for (Index i = 0; i < m_n; ++i) gids[i] = s.gid.empty() ? Gid(i) : s.gid[i];

@@ -11,7 +11,8 @@ namespace pflow::compute {
 
 // Where entry e of particle i's row lives, in rows of a fixed capacity. Row-major (i * capacity + e) suits a
 // CPU core walking its own row; column-major (e * n + i) lets the 32 threads of a GPU warp, 32 consecutive
-// particles, read 32 consecutive words. The SPH hit masks' rows (each executor picks: Exec::kColumnMajorLists).
+// particles, read 32 consecutive words. The SPH hit masks' rows (each executor picks: Exec::kColumnMajorLists);
+// DEM's candidate rows are RowSlices.
 struct ListLayout {
   std::size_t rowStride = 1, colStride = 1;
   PFLOW_HOSTDEVICE PFLOW_FORCEINLINE std::size_t at(Index i, std::uint32_t e) const {
@@ -23,10 +24,11 @@ struct ListLayout {
 
 // Where entry e of particle i's candidate row lives: rows of exact length, in slices of 2^shift consecutive
 // particles. A slice is as wide as its longest row, and holds its rows column-major: entry e of its particles
-// are 2^shift consecutive words, from start[slice] * 2^shift. Shift 5 on a GPU (a warp's 32 lanes, 32
-// consecutive particles, read 32 consecutive words, as with rows of one capacity for all); shift 0 on a CPU
-// (compressed rows: a core walks its own row). The rows then take what the particles' own counts need
-// (rounded up to their slice's longest), not every particle the longest row's room.
+// are 2^shift consecutive words, from start[slice] * 2^shift. Both executors use shift 0 (compressed rows: a
+// thread walks its own row, which the GPU's L1 serves after the first entry): on the H200's settled bed, slices
+// of 32 (a warp's lanes reading 32 consecutive words) made the float force pass 6 % slower than compressed
+// rows, which read no padding up to the slice's longest row (docs/performance.md). The rows take what the
+// particles' own counts need, not every particle the longest row's room.
 struct RowSlices {
   const std::uint32_t* start = nullptr;  // [slice]: first entry / 2^shift (exclusive scan of the widths)
   std::uint32_t shift = 0;
