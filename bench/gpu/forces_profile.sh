@@ -7,7 +7,7 @@ source "$(dirname "$0")/setup.sh"
 NCU=$(command -v ncu || echo /usr/local/cuda/bin/ncu)
 mkdir -p /tmp/beds
 for bin in "$@"; do
-  timeout 400 "$NCU" --kernel-name-base demangled --kernel-name regex:"forEachKernel<pflow::compute::kernels::ComputeForces<float" \
+  timeout 400 "$NCU" --kernel-name-base demangled --kernel-name regex:"forEachKernel(Capped<80, )?<?pflow::compute::kernels::ComputeForces<float" \
     --launch-skip "${DEM_PROF_SKIP:-1005}" --launch-count 1 \
     --section SpeedOfLight --section LaunchStats --section Occupancy --section WarpStateStats --section MemoryWorkloadAnalysis \
     --section MemoryWorkloadAnalysis_Tables \

@@ -6,7 +6,7 @@
 # Writes $OUT/rates.ncu-rep, $OUT/rates_source.csv (the source page), $OUT/rates_details.txt.
 source "$(dirname "$0")/setup.sh"
 sp=${1:-0.0064}
-kernel=${2:-forEachKernelCap64}  # ncu matches the function's base name: the register-capped launcher of the rates pass
+kernel=${2:-forEachKernelCapped}  # ncu matches the function's base name: the register-capped launcher of the rates pass
 shift 2 2>/dev/null || shift $#
 NCU=$(command -v ncu || ls /usr/local/cuda/bin/ncu 2>/dev/null || echo ncu)
 # The 40th launch of the pass: past the block-size tuning (the first launches of a kernel try 64..512 threads).

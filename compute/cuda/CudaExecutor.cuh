@@ -45,19 +45,20 @@ __global__ void forEachKernel(Index n, F f) {
   if (i < n) f(i);
 }
 
-// The same with at most 64 registers a thread (F::kRegisterCap64 true): half the SM's threads resident instead of
-// the 37 % the compiler's choice allows the SPH rates pass in float, whose loads then hide behind more warps.
-template <class F>
-__global__ void __maxnreg__(64) forEachKernelCap64(Index n, F f) {
+// The same with at most N registers a thread (F::kMaxRegisters = N): more warps resident to hide the loads of
+// the latency-bound passes, for some spills (the SPH rates pass in float: 64; the DEM pair forces: 80 in float,
+// 128 in double; docs/performance.md and docs/sph.md say what each bought).
+template <int N, class F>
+__global__ void __maxnreg__(N) forEachKernelCapped(Index n, F f) {
   const Index i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i < n) f(i);
 }
 
-// The same with at most 128 registers a thread (F::kRegisterCap128 true): the DEM pair forces in double.
+// F's register cap (F::kMaxRegisters), 0 where it has none.
 template <class F>
-__global__ void __maxnreg__(128) forEachKernelCap128(Index n, F f) {
-  const Index i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i < n) f(i);
+constexpr int maxRegistersOf() {
+  if constexpr (requires { F::kMaxRegisters; }) return F::kMaxRegisters;
+  else return 0;
 }
 
 // The block's reduction of v by `op` (warp shuffles, then one warp over the warps' results in shared
@@ -144,19 +145,10 @@ class CudaExecutor {
   template <class F>
   void forEach(Index n, const F& f) const {
     if (n == 0) return;
-    if constexpr (requires { F::kRegisterCap64; }) {
-      if (F::kRegisterCap64) {
-        launch(reinterpret_cast<const void*>(&forEachKernelCap64<F>), typeid(F).name(), n,
-               [&](unsigned grid, int block) { forEachKernelCap64<F><<<grid, block>>>(n, f); });
-        return;
-      }
-    }
-    if constexpr (requires { F::kRegisterCap128; }) {
-      if constexpr (F::kRegisterCap128) {
-        launch(reinterpret_cast<const void*>(&forEachKernelCap128<F>), typeid(F).name(), n,
-               [&](unsigned grid, int block) { forEachKernelCap128<F><<<grid, block>>>(n, f); });
-        return;
-      }
+    if constexpr (constexpr int cap = maxRegistersOf<F>(); cap > 0) {
+      launch(reinterpret_cast<const void*>(&forEachKernelCapped<cap, F>), typeid(F).name(), n,
+             [&](unsigned grid, int block) { forEachKernelCapped<cap, F><<<grid, block>>>(n, f); });
+      return;
     }
     launch(reinterpret_cast<const void*>(&forEachKernel<F>), typeid(F).name(), n,
            [&](unsigned grid, int block) { forEachKernel<F><<<grid, block>>>(n, f); });

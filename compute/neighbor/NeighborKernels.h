@@ -77,22 +77,15 @@ struct SplitByFlag {
 // Runs kernel `f` over the rows in `list` (item k is row list[k]): a pass over part of the particles.
 // Only the force kernels use it, whose work per particle varies.
 template <class F>
-constexpr bool registerCap64() {
-  if constexpr (requires { F::kRegisterCap64; }) return F::kRegisterCap64;
-  else return false;
-}
-
-template <class F>
-constexpr bool registerCap128() {
-  if constexpr (requires { F::kRegisterCap128; }) return F::kRegisterCap128;
-  else return false;
+constexpr int maxRegisters() {
+  if constexpr (requires { F::kMaxRegisters; }) return F::kMaxRegisters;
+  else return 0;
 }
 
 template <class F>
 struct OverList {
   static constexpr bool kVariableCost = true;  // CpuExecutor::forEach: dynamic chunks
-  static constexpr bool kRegisterCap64 = registerCap64<F>();  // CudaExecutor: as f's
-  static constexpr bool kRegisterCap128 = registerCap128<F>();
+  static constexpr int kMaxRegisters = maxRegisters<F>();  // CudaExecutor: as f's
   F f;
   const Index* list;
   PFLOW_HOSTDEVICE void operator()(Index k) const { f(list[k]); }

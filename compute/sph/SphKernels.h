@@ -142,7 +142,7 @@ struct Interact {
   static constexpr bool kVariableCost = true;  // work per particle varies (CpuExecutor::forEach)
   // CudaExecutor: 64 registers in float, more warps resident (11.9 -> 11.0 ms a step on SPHERIC at 4·10^6); in
   // double the cap spills (25.5 -> 38.1 ms).
-  static constexpr bool kRegisterCap64 = sizeof(R) == 4;
+  static constexpr int kMaxRegisters = sizeof(R) == 4 ? 64 : 0;
   CellGrid grid;
   const Index* cellStart;  // numCells + 1
   const Vec3d* home;       // positions at the last sort: the cell a particle is listed in
@@ -411,7 +411,7 @@ template <class R, RatePass P>
 struct InteractPass {
   static constexpr bool kVariableCost = true;
   // The marking walk spills under the cap (96 bytes in float) and runs once a sort: uncapped.
-  static constexpr bool kRegisterCap64 = Interact<R>::kRegisterCap64 && P != RatePass::kMark;
+  static constexpr int kMaxRegisters = P != RatePass::kMark ? Interact<R>::kMaxRegisters : 0;
   Interact<R> k;
   PFLOW_HOSTDEVICE void operator()(Index a) const { k.template run<P>(a); }
 };

@@ -154,9 +154,10 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE contact::ContactState<R> pairState(Vec3d d, d
 template <class R, bool kCohesion = false, bool kFixed = false>
 struct ComputeForces {
   static constexpr bool kVariableCost = true;  // work per particle varies (CpuExecutor::forEach)
-  // Double: held to 128 registers a thread (16 resident warps an SM); the compiler's 130-136 left 14 and cost the
-  // forces phase a third on an H100 (docs/performance.md). CudaExecutor::forEach.
-  static constexpr bool kRegisterCap128 = std::is_same_v<R, double>;
+  // Held to 80 registers a thread in float (24 resident warps an SM, against the compiler's 88-92 and 20: the forces
+  // phase 8 % shorter on an H200, for 16 bytes of spills) and 128 in double (16 warps; the compiler's 130-136 left
+  // 14 and cost the forces phase a third on an H100). docs/performance.md; CudaExecutor::forEach.
+  static constexpr int kMaxRegisters = std::is_same_v<R, double> ? 128 : 80;
   using V = Vec3<R>;
   ForceArgs<R> a;
 
