@@ -32,9 +32,10 @@ void CpuExecutor::sortByKey(const std::uint32_t* keys, Index n, std::uint32_t nu
 
 std::uint64_t CpuExecutor::exclusiveScan(const std::uint32_t* in, std::uint32_t* out, Index n) const {
   std::uint64_t total = 0;
-  for (Index i = 0; i < n; ++i) {
+  for (Index i = 0; i < n; ++i) {  // in place when in == out
+    const std::uint32_t v = in[i];
     out[i] = static_cast<std::uint32_t>(total);
-    total += in[i];
+    total += v;
   }
   return total;
 }

@@ -82,7 +82,7 @@ class CpuExecutor {
     sortByKey(keys, n, numKeys, perm, keyStart);
   }
 
-  // out[i] = sum of in[0..i), returns the total.
+  // out[i] = sum of in[0..i), returns the total; in place when in == out.
   std::uint64_t exclusiveScan(const std::uint32_t* in, std::uint32_t* out, Index n) const;
 
   void synchronize() const {}

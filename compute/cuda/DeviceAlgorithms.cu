@@ -86,13 +86,14 @@ void DeviceAlgorithms::sortByKeyLent(std::uint32_t* keys, Index n, std::uint32_t
 
 std::uint64_t DeviceAlgorithms::exclusiveScan(const std::uint32_t* in, std::uint32_t* out, Index n) {
   if (n == 0) return 0;
+  std::uint32_t last[2];
+  // The last input first: in place (in == out, which CUB's scan allows) the scan overwrites it.
+  PFLOW_CUDA_CHECK(cudaMemcpy(&last[1], in + n - 1, sizeof(std::uint32_t), cudaMemcpyDeviceToHost));
   std::size_t bytes = 0;
   PFLOW_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, bytes, in, out, n));
   void* t = temp(bytes);
   PFLOW_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(t, bytes, in, out, n));
-  std::uint32_t last[2];
   PFLOW_CUDA_CHECK(cudaMemcpy(&last[0], out + n - 1, sizeof(std::uint32_t), cudaMemcpyDeviceToHost));
-  PFLOW_CUDA_CHECK(cudaMemcpy(&last[1], in + n - 1, sizeof(std::uint32_t), cudaMemcpyDeviceToHost));
   return std::uint64_t(last[0]) + last[1];
 }
 

@@ -25,7 +25,7 @@ class DeviceAlgorithms {
                      std::size_t lentBytes);
   static std::size_t lentBytesFor(Index n) { return alignedItems(n) * sizeof(std::uint32_t) + std::size_t(n) * sizeof(Index); }
 
-  // out[i] = sum of in[0..i); returns the total (read back to the host).
+  // out[i] = sum of in[0..i); returns the total (read back to the host). In place when in == out.
   std::uint64_t exclusiveScan(const std::uint32_t* in, std::uint32_t* out, Index n);
 
  private:

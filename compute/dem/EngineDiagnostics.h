@@ -24,8 +24,8 @@ typename EngineImpl<Exec, R>::HostView EngineImpl<Exec, R>::hostView() const {
   h.rows = hostRows();
   // Without wall phases (ModelFlags::walls) the candidate rows are never written: no candidates.
   h.wallCandCount.assign(m_owned, 0);
-  if (m_anyWalls) {
-    h.wallCand.resize(std::size_t(m_owned) * m_wallCap);
+  if (m_anyWalls && m_numTri) {
+    h.wallCand.resize(wallCandEntries());
     m_mem.copyToHost(h.wallCand.data(), m_wallCand.data(), h.wallCand.size() * sizeof(Index));
     m_mem.copyToHost(h.wallCandCount.data(), m_wallCandCount.data(), m_owned * sizeof(std::uint32_t));
   }

@@ -70,12 +70,16 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     const CellGrid& g = m_setup.grid;
     m_n = m_owned;
     m_particles.resize(m_n);
-    m_exec.forEach(m_n, kernels::CellKey{g, m_particles.template ptr<Field::Position>(), m_cellKey.as<std::uint32_t>()});
-    // The sort's second buffers, then the reorder's scratch, are the forces' memory (kRecomputed) unless they are kept.
+    // The cell keys and the permutation live in the displacements since the last rebuild, dead from here until
+    // buildContacts zeroes them (movedBytes); the sort's second buffers, then the reorder's scratch, are the forces'
+    // memory (kRecomputed) unless they are kept.
+    auto* key = m_moved.as<std::uint32_t>();
+    auto* perm = reinterpret_cast<Index*>(m_moved.as<unsigned char>() + permOffset(m_n));
+    m_exec.forEach(m_n, kernels::CellKey{g, m_particles.template ptr<Field::Position>(), key});
     Buffer& lent = m_particles.buffer(Field::Force);
-    m_exec.sortByKeyLent(m_cellKey.as<std::uint32_t>(), m_n, g.numCells(), m_perm.as<Index>(), m_cellStart.as<Index>(),
-                         keepForces ? nullptr : lent.data(), keepForces ? 0 : lent.bytes());
-    m_rows.reorder(m_perm.as<Index>(), m_n, keepForces);
+    m_exec.sortByKeyLent(key, m_n, g.numCells(), perm, m_cellStart.as<Index>(), keepForces ? nullptr : lent.data(),
+                         keepForces ? 0 : lent.bytes());
+    m_rows.reorder(perm, m_n, keepForces);
   }
 
   // ---- distributed runs (DistributedRows): LocalRows's operations (ForwardDistributedRows), and these ----
@@ -135,7 +139,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
                                      m_particles.template ptr<Field::HistoryPartner>(),
                                      m_particles.contactSlots(),
                                      m_particles.layout(Multiplicity::kContactSlots), m_setup.skin, {},
-                                     nullptr, nullptr, m_nbrCount.as<std::uint32_t>(), m_cond.as<Conditions>()};
+                                     nullptr, nullptr, rowCounts(), m_cond.as<Conditions>()};
     build.canonicalOrder = m_setup.canonicalOrder;
     if (m_n > m_owned) {
       build.ghostCellStart = m_rows.ghostCellStart();
@@ -156,7 +160,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
                                                   m_numTri ? m_binStart.as<Index>() : nullptr, m_binItems.as<Index>(),
                                                   m_triVerts.as<Vec3d>(), m_particles.template ptr<Field::Position>(),
                                                   m_particles.template ptr<Field::Radius>(), m_setup.skin, m_wallCap,
-                                                  m_wallCand.as<Index>(), m_wallCandCount.as<std::uint32_t>(),
+                                                  m_wallCand.as<Index>(), wallCandCount(),
                                                   m_planeMask.as<std::uint32_t>(), m_particles.template ptr<Field::WallKey>(),
                                                   m_particles.wallSlots(), m_particles.layout(Multiplicity::kWallSlots),
                                                   m_cond.as<Conditions>()});
@@ -307,18 +311,19 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   // and shrink when they hold more than twice that.
   Status layOutRows() {
     const Index slices = m_owned == 0 ? 0 : ((m_owned - 1) >> m_nbrShift) + 1;
-    if (m_nbrStart.bytes() < std::max<Index>(1, slices) * sizeof(std::uint32_t))
-      m_nbrStart.resize(std::max<Index>(1, slices) * sizeof(std::uint32_t));
-    const std::uint32_t* width = m_nbrCount.as<std::uint32_t>();  // slices of one row: the counts
+    std::uint32_t* start = rowStarts(slices);
+    const std::uint32_t* width = start;  // compressed rows: the counts, where the starts go (rowCounts)
     if (m_nbrShift > 0 && slices > 0) {
       if (m_nbrWidth.bytes() < slices * sizeof(std::uint32_t)) m_nbrWidth.resize(slices * sizeof(std::uint32_t));
       m_exec.forEach(slices, kernels::SliceWidths{m_nbrCount.as<std::uint32_t>(), m_owned, m_nbrShift, m_nbrWidth.as<std::uint32_t>()});
       width = m_nbrWidth.as<std::uint32_t>();
     }
-    const std::uint64_t units = slices ? m_exec.exclusiveScan(width, m_nbrStart.as<std::uint32_t>(), slices) : 0;
+    const std::uint64_t units = slices ? m_exec.exclusiveScan(width, start, slices) : 0;
     if (units > std::numeric_limits<std::uint32_t>::max())
       return Status(StatusCode::kResourceExhausted, "the candidate rows need " + std::to_string(units << m_nbrShift) +
                                                         " entries, more than the 2^32 their starts can address: run on more ranks");
+    const std::uint32_t end = std::uint32_t(units);  // the last row's end (RowSlices::count at shift 0)
+    m_mem.copyFromHost(start + slices, &end, sizeof end);
     m_nbrEntries = std::size_t(units) << m_nbrShift;
     m_nbrRows = m_owned;
     auto fit = [](Buffer& b, std::size_t bytes) {
@@ -331,7 +336,23 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     return Status::ok();
   }
   // Candidate rows: compressed (one row a slice) unless PFLOW_ROW_SLICE_SHIFT asks for wider slices.
-  RowSlices nbrLayout() const { return {m_nbrStart.as<std::uint32_t>(), m_nbrShift}; }
+  RowSlices nbrLayout() const {
+    return {m_nbrStart.as<std::uint32_t>(), m_nbrShift, m_nbrShift ? m_nbrCount.as<std::uint32_t>() : nullptr};
+  }
+  // The rows' starts, one a slice and the end of the last.
+  std::uint32_t* rowStarts(Index slices) {
+    const std::size_t bytes = (std::size_t(slices) + 1) * sizeof(std::uint32_t);
+    if (m_nbrStart.bytes() < bytes) m_nbrStart.resize(bytes + bytes / 16);
+    return m_nbrStart.as<std::uint32_t>();
+  }
+  // Where the counting pass writes each row's length: compressed rows need no counts of their own once laid out
+  // (RowSlices::count), so their counts go where their starts will be, and layOutRows scans them in place.
+  std::uint32_t* rowCounts() {
+    if (m_nbrShift == 0) return rowStarts(m_owned);
+    const std::size_t bytes = std::max<std::size_t>(1, m_owned) * sizeof(std::uint32_t);
+    if (m_nbrCount.bytes() < bytes) m_nbrCount.resize(bytes + bytes / 16);
+    return m_nbrCount.as<std::uint32_t>();
+  }
   // Host copies of the candidate rows (diagnostics and tests; never on the step path).
   struct HostRows {
     std::vector<Index> nbr;
@@ -347,13 +368,18 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     h.count.assign(m_owned, 0);
     if (m_nbrRows != m_owned || m_owned == 0) return h;
     h.nbr.resize(m_nbrEntries);
-    h.start.resize(((m_owned - 1) >> m_nbrShift) + 1);
+    h.start.resize(((m_owned - 1) >> m_nbrShift) + 2);
     m_mem.copyToHost(h.nbr.data(), m_nbr.data(), h.nbr.size() * sizeof(Index));
-    m_mem.copyToHost(h.count.data(), m_nbrCount.data(), h.count.size() * sizeof(std::uint32_t));
     m_mem.copyToHost(h.start.data(), m_nbrStart.data(), h.start.size() * sizeof(std::uint32_t));
+    if (m_nbrShift) m_mem.copyToHost(h.count.data(), m_nbrCount.data(), h.count.size() * sizeof(std::uint32_t));
+    else
+      for (Index i = 0; i < m_owned; ++i) h.count[i] = h.start[i + 1] - h.start[i];
     return h;
   }
-  void allocWallCandidates() { m_wallCand.resize(std::max<std::size_t>(1, std::size_t(m_owned) * m_wallCap) * sizeof(Index)); }
+  // Triangle candidates, m_wallCap a particle; none in a scene without triangles (planes are a mask a particle).
+  std::size_t wallCandEntries() const { return m_numTri ? std::size_t(m_owned) * m_wallCap : 0; }
+  std::uint32_t* wallCandCount() { return m_numTri ? m_wallCandCount.as<std::uint32_t>() : nullptr; }
+  void allocWallCandidates() { m_wallCand.resize(std::max<std::size_t>(1, wallCandEntries()) * sizeof(Index)); }
 
   // The pair kernel, then the wall kernel, over the particles of `set`: every owned one, or one part of
   // the list splitBoundary made (boundary rows first, then interior ones).
@@ -420,8 +446,8 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
                        m_slabStart.as<Index>());
       const bool slots = m_setup.model.tangential;
       m_exec.forEach(m_owned, kernels::OwnedFirst{m_slabOf.as<std::uint32_t>(), m_nbr.as<Index>(),
-                                                  slots ? m_nbrSlot.as<std::int8_t>() : nullptr, m_nbrCount.as<std::uint32_t>(),
-                                                  nbrLayout(), m_owned1.as<std::uint32_t>()});
+                                                  slots ? m_nbrSlot.as<std::int8_t>() : nullptr, nbrLayout(),
+                                                  m_owned1.as<std::uint32_t>()});
       while (slots) {  // histories of pairs that changed owner move to the new owner
         resetConditions();
         m_exec.forEachTwoColours(layers, kernels::PullHistory<R>{
@@ -449,7 +475,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     if (m_splitFlag.bytes() < 2 * n * sizeof(std::uint32_t)) m_splitFlag.resize(2 * n * sizeof(std::uint32_t) + n * sizeof(std::uint32_t) / 2);
     std::uint32_t* flag = m_splitFlag.as<std::uint32_t>();
     std::uint32_t* scan = flag + n;
-    m_exec.forEach(m_owned, kernels::MarkBoundary{m_nbr.as<Index>(), m_nbrCount.as<std::uint32_t>(), nbrLayout(), m_owned, flag});
+    m_exec.forEach(m_owned, kernels::MarkBoundary{m_nbr.as<Index>(), nbrLayout(), m_owned, flag});
     m_numBoundary = Index(m_exec.exclusiveScan(flag, scan, m_owned));
     m_exec.forEach(m_owned, kernels::SplitByFlag{flag, scan, m_numBoundary, m_split.as<Index>()});
   }
@@ -459,13 +485,10 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
       if (b.bytes() < bytes) b.resize(bytes + bytes / 4);
     };
     const std::size_t n = std::max<Index>(1, m_n);
-    atLeast(m_moved, n * sizeof(Vec3f));
-    atLeast(m_cellKey, n * sizeof(std::uint32_t));
-    atLeast(m_perm, n * sizeof(Index));
-    atLeast(m_nbrCount, n * sizeof(std::uint32_t));
-    atLeast(m_wallCandCount, n * sizeof(std::uint32_t));
+    atLeast(m_moved, movedBytes(n));
+    if (m_numTri) atLeast(m_wallCandCount, n * sizeof(std::uint32_t));
     atLeast(m_planeMask, n * sizeof(std::uint32_t));
-    if (m_wallCand.bytes() < std::size_t(m_owned) * m_wallCap * sizeof(Index)) allocWallCandidates();
+    if (m_wallCand.bytes() < wallCandEntries() * sizeof(Index)) allocWallCandidates();
   }
   void binTriangles();
   void resetConditions() { m_exec.forEach(1, kernels::ResetConditions{m_cond.as<Conditions>()}); }
@@ -528,7 +551,6 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     a.torque = m_particles.template ptr<Field::Torque>();
     a.nbr = m_nbr.as<Index>();
     a.nbrSlot = m_nbrSlot.as<std::int8_t>();
-    a.nbrCount = m_nbrCount.as<std::uint32_t>();
     a.nbrLayout = nbrLayout();
     a.slots = m_particles.contactSlots();
     a.histPartner = m_particles.template ptr<Field::HistoryPartner>();
@@ -544,7 +566,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     a.surfaceLoads = m_recordLoads ? m_surfaceLoads.as<double>() : nullptr;
     a.meshMotion = m_meshMotion.as<MeshMotionParams>();
     a.wallCand = m_wallCand.as<Index>();
-    a.wallCandCount = m_wallCandCount.as<std::uint32_t>();
+    a.wallCandCount = wallCandCount();
     a.wallCandCapacity = m_wallCap;
     a.wallSlots = m_particles.wallSlots();
     a.wallKey = m_particles.template ptr<Field::WallKey>();
@@ -583,7 +605,11 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   std::size_t m_nbrEntries = 0;                                  // the rows' entries, as laid out at the last rebuild
   Index m_nbrRows = kNoIndex;                                    // the owned particles they were laid out for
   Index m_wallCap = 4;
-  Buffer m_moved{m_mem, 0}, m_cellKey{m_mem, 0}, m_perm{m_mem, 0}, m_cellStart{m_mem, 0};
+  // The displacement since the last rebuild (float, 12 bytes a particle); during a cell sort, the keys and the
+  // permutation (sortByCell).
+  Buffer m_moved{m_mem, 0}, m_cellStart{m_mem, 0};
+  static std::size_t permOffset(std::size_t n) { return (n * sizeof(std::uint32_t) + 255) / 256 * 256; }
+  static std::size_t movedBytes(std::size_t n) { return std::max(n * sizeof(Vec3f), permOffset(n) + n * sizeof(Index)); }
   Buffer m_nbr{m_mem, 0}, m_nbrSlot{m_mem, 0}, m_nbrCount{m_mem, 0}, m_nbrStart{m_mem, 0}, m_nbrWidth{m_mem, 0};
   Buffer m_planes{m_mem, 0}, m_triRef{m_mem, 0}, m_triVerts{m_mem, 0}, m_triRebuild{m_mem, 0};
   Buffer m_triMesh{m_mem, 0}, m_triMaterial{m_mem, 0}, m_meshMotion{m_mem, 0};
@@ -652,11 +678,8 @@ void EngineImpl<Exec, R>::init() {
   for (Field f : {Field::HistoryDisp, Field::WallDisp})
     m_mem.fillBytes(m_particles.buffer(f).data(), 0, m_particles.buffer(f).bytes());
 
-  m_moved.resize(std::size_t(m_n) * sizeof(Vec3f));
-  m_cellKey.resize(std::size_t(m_n) * sizeof(std::uint32_t));
-  m_perm.resize(std::size_t(m_n) * sizeof(Index));
+  m_moved.resize(movedBytes(m_n));
   m_cellStart.resize((std::size_t(s.grid.numCells()) + 1) * sizeof(Index));
-  m_nbrCount.resize(std::size_t(m_n) * sizeof(std::uint32_t));
 
   upload(m_planes, s.planes);
   upload(m_params, s.contactTable);
@@ -673,10 +696,14 @@ void EngineImpl<Exec, R>::init() {
     m_meshMoves.push_back(m.angularSpeed != 0 || norm2(m.velocity) != 0 || (m.omega != 0 && norm2(m.vibration) != 0) || m.profilePoints > 0);
   listMovingTriangles();
   m_anyWalls = s.model.walls;  // deriveModel: off without planes and triangles (on in simulation.model: full)
-  m_binStart.resize((std::size_t(s.grid.numCells()) + 1) * sizeof(Index));
-  m_binCount.resize(std::size_t(s.grid.numCells()) * sizeof(std::uint32_t));
-  m_wallCandCount.resize(std::max<std::size_t>(1, m_n) * sizeof(std::uint32_t));
-  m_mem.fillBytes(m_wallCandCount.data(), 0, m_wallCandCount.bytes());
+  if (m_numTri) {  // the triangles' bins: a scene of planes alone needs none (8 bytes a cell)
+    m_binStart.resize((std::size_t(s.grid.numCells()) + 1) * sizeof(Index));
+    m_binCount.resize(std::size_t(s.grid.numCells()) * sizeof(std::uint32_t));
+  }
+  if (m_numTri) {
+    m_wallCandCount.resize(std::max<std::size_t>(1, m_n) * sizeof(std::uint32_t));
+    m_mem.fillBytes(m_wallCandCount.data(), 0, m_wallCandCount.bytes());
+  }
   m_planeMask.resize(std::max<std::size_t>(1, m_n) * sizeof(std::uint32_t));
   allocWallCandidates();
 }

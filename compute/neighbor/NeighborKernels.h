@@ -28,10 +28,13 @@ struct ListLayout {
 // thread walks its own row, which the GPU's L1 serves after the first entry): on the H200's settled bed, slices
 // of 32 (a warp's lanes reading 32 consecutive words) made the float force pass 6 % slower than compressed
 // rows, which read no padding up to the slice's longest row (docs/performance.md). The rows take what the
-// particles' own counts need, not every particle the longest row's room.
+// particles' own counts need, not every particle the longest row's room. Compressed rows need no counts of their
+// own: row i ends where row i + 1 starts (start has one entry more than there are rows).
 struct RowSlices {
   const std::uint32_t* start = nullptr;  // [slice]: first entry / 2^shift (exclusive scan of the widths)
   std::uint32_t shift = 0;
+  const std::uint32_t* counts = nullptr;  // [i]: row lengths, for slices wider than a row (shift > 0); null at shift 0
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE std::uint32_t count(Index i) const { return counts ? counts[i] : start[i + 1] - start[i]; }
   PFLOW_HOSTDEVICE PFLOW_FORCEINLINE std::size_t base(Index i) const {
     return (std::size_t(start[i >> shift]) << shift) + (i & ((Index(1) << shift) - 1));
   }
@@ -49,12 +52,11 @@ namespace pflow::compute::kernels {
 // candidates, so its forces need the refreshed halo; 0 when they can be computed while it is in flight.
 struct MarkBoundary {
   const Index* nbr;
-  const std::uint32_t* nbrCount;
   RowSlices layout;
   Index owned;
   std::uint32_t* flag;
   PFLOW_HOSTDEVICE void operator()(Index i) const {
-    const std::uint32_t n = nbrCount[i];
+    const std::uint32_t n = layout.count(i);
     std::uint32_t b = 0;
     for (std::uint32_t e = 0; e < n; ++e) b |= nbr[layout.at(i, e)] >= owned ? 1u : 0u;
     flag[i] = b;
@@ -199,7 +201,7 @@ struct BuildNeighbors {
   RowSlices layout;
   Index* nbr;               // [layout.at(i, e)]
   std::int8_t* nbrSlot;     // [layout.at(i, e)]
-  std::uint32_t* nbrCount;  // [i]: written by the counting pass, the row's length in the filling one
+  std::uint32_t* counted;   // [i]: written by the counting pass (the rows' starts, scanned in place, at shift 0)
   Conditions* cond;
   bool countOnly = false;
   // Ghosts (distributed runs; null otherwise): local particles ghostBase + ghostItems[k] for k in
@@ -219,7 +221,7 @@ struct BuildNeighbors {
     std::uint32_t count = 0;
     // The counting pass has no rows yet; the filling one writes no more than it counted (the same walk over
     // the same positions finds the same candidates: a mismatch is flagged, never written past).
-    const std::uint32_t capacity = countOnly ? 0 : nbrCount[i];
+    const std::uint32_t capacity = countOnly ? 0 : layout.count(i);
     const std::size_t row = countOnly ? 0 : layout.base(i), col = layout.stride();
     const SlotRow<PartnerId> partners = slotLayout.at(historyPartner, i);
     for (int dz = -1; dz <= 1; ++dz) {
@@ -257,7 +259,7 @@ struct BuildNeighbors {
       }
     }
     if (countOnly) {
-      nbrCount[i] = count;
+      counted[i] = count;
       return;
     }
     if (count != capacity) {

@@ -55,7 +55,6 @@ struct ForceArgs {
   // particle-particle candidates and history
   const Index* nbr;
   std::int8_t* nbrSlot;
-  const std::uint32_t* nbrCount;
   RowSlices nbrLayout;
   int slots;
   PartnerId* histPartner;
@@ -73,7 +72,7 @@ struct ForceArgs {
                                      // [N m]) summed over this pass's wall contacts (Engine::recordWallLoads)
   const MeshMotionParams* meshMotion;
   const Index* wallCand;
-  const std::uint32_t* wallCandCount;
+  const std::uint32_t* wallCandCount;  // null when there are no triangles
   Index wallCandCapacity;
   int wallSlots;
   std::uint64_t* wallKey;
@@ -155,9 +154,11 @@ template <class R, bool kCohesion = false, bool kFixed = false>
 struct ComputeForces {
   static constexpr bool kVariableCost = true;  // work per particle varies (CpuExecutor::forEach)
   // Held to 80 registers a thread in float (24 resident warps an SM, against the compiler's 88-92 and 20: the forces
-  // phase 8 % shorter on an H200, for 16 bytes of spills) and 128 in double (16 warps; the compiler's 130-136 left
-  // 14 and cost the forces phase a third on an H100). docs/performance.md; CudaExecutor::forEach.
-  static constexpr int kMaxRegisters = std::is_same_v<R, double> ? 128 : 80;
+  // phase 8 % shorter on an H200, for 16 bytes of spills) and 96 in double (20 warps against 16 at 128, for about
+  // 200 bytes of spill loads: the forces phase 7 % shorter on an H200; 80, 88 and 104 were slower than 128; the
+  // compiler's own 130-136 left 14 warps and cost a third on an H100). The adhesion loop in double, not measured at
+  // 96 and spilling half again as much there, keeps 128. docs/performance.md; CudaExecutor::forEach.
+  static constexpr int kMaxRegisters = std::is_same_v<R, double> ? (kCohesion ? 128 : 96) : 80;
   using V = Vec3<R>;
   ForceArgs<R> a;
 
@@ -214,7 +215,7 @@ struct ComputeForces {
     const R Ii = R(0.4) * mi * ri * ri;
     V f = zero3<R>(), tq = zero3<R>();
 
-    const std::uint32_t count = kOnce ? owned[i] : a.nbrCount[i];
+    const std::uint32_t count = kOnce ? owned[i] : a.nbrLayout.count(i);
     std::uint32_t contacts = 0;
     bool overflow = false;
     for (std::uint32_t e = 0; e < count; ++e) {
@@ -308,7 +309,7 @@ struct ComputeForces {
 
   // How many of the candidates particle i does not own touch it (counted only when its slots overflow).
   PFLOW_HOSTDEVICE std::uint32_t touchingNotOwned(Index i, const std::uint32_t* owned) const {
-    const std::uint32_t count = a.nbrCount[i];
+    const std::uint32_t count = a.nbrLayout.count(i);
     std::uint32_t n = 0;
     for (std::uint32_t e = owned[i]; e < count; ++e) {
       const Index j = a.nbr[a.nbrLayout.at(i, e)];
@@ -356,11 +357,10 @@ struct OwnedFirst {
   const std::uint32_t* slabOf;
   Index* nbr;
   std::int8_t* nbrSlot;  // null without history slots
-  const std::uint32_t* nbrCount;
   RowSlices layout;
   std::uint32_t* owned;
   void operator()(Index i) const {
-    const std::uint32_t count = nbrCount[i];
+    const std::uint32_t count = layout.count(i);
     thread_local std::vector<std::pair<Index, std::int8_t>> others;
     others.clear();
     const std::uint32_t si = slabOf[i];
@@ -444,7 +444,7 @@ struct ComputeWallForces {
   ForceArgs<R> a;
 
   PFLOW_HOSTDEVICE void operator()(Index i) const {
-    if (a.planeMask[i] == 0 && a.wallCandCount[i] == 0) return;  // far from every wall (slots cleared at rebuild)
+    if (a.planeMask[i] == 0 && (!a.wallCandCount || a.wallCandCount[i] == 0)) return;  // far from every wall (slots cleared at rebuild)
     const ContactParams* params = a.params + std::size_t(a.material[i]) * a.numMaterials;
     const R ri = a.radius[i], mi = a.mass[i];
     V f = zero3<R>(), tq = zero3<R>();
@@ -503,7 +503,7 @@ struct ComputeWallForces {
       wc[nwc++] = {-pl.normal, xi - sd * pl.normal, pl.normal, zero3<double>(), double(ri) - sd, planeKey(Index(p)), pl.material, true,
                    a.planeSurface ? a.planeSurface[p] : -1, sd >= double(ri)};
     }
-    const std::uint32_t nc = a.wallCandCount[i] < a.wallCandCapacity ? a.wallCandCount[i] : a.wallCandCapacity;
+    const std::uint32_t nc = !a.wallCandCount ? 0 : a.wallCandCount[i] < a.wallCandCapacity ? a.wallCandCount[i] : a.wallCandCapacity;
     for (std::uint32_t e = 0; e < nc; ++e) {
       const Index t = a.wallCand[std::size_t(i) * a.wallCandCapacity + e];
       const Vec3d* v = a.triVerts + 3 * t;

@@ -191,7 +191,7 @@ struct WallCandidates {
   double skin;
   Index capacity;
   Index* cand;               // [i * capacity + e]
-  std::uint32_t* candCount;  // [i]
+  std::uint32_t* candCount;  // [i]; null when there are no triangles
   std::uint32_t* planeMask;  // [i]
   std::uint64_t* wallKey;
   int wallSlots;
@@ -215,7 +215,7 @@ struct WallCandidates {
         ++count;
       }
     }
-    candCount[i] = count;
+    if (candCount) candCount[i] = count;
     if (count > capacity) {
       atomicOrU32(&cond->flags, kWallCandidateOverflow);
       atomicMaxU32(&cond->neededWallCandidates, count);
