@@ -97,9 +97,10 @@ std::vector<std::pair<std::string, double>> compulsoryTraffic(int realBytes, dou
   const double R = realBytes, pos = 24;  // positions are double at both precisions
   // integrate1: read x, v, w, F, T, m, r and the float displacement since rebuild; write x, v, w and it.
   const double integrate1 = 2 * pos + 3 * R * 4 + 2 * R + 2 * 12 + 3 * R * 2;
-  // forces: own x, v, w, r, m, material, candidate count; per candidate an index and a slot byte; per contact
-  // its history read and written; F and T written; the wall kernel's two per-particle counts.
-  const double forces = pos + 8 * R + 4 + 4 + 5 * candidates + 6 * R * contacts + 6 * R + 8;
+  // forces: own x, v, w, r, m, material, row start (the row's end is the next row's start); per candidate an index
+  // and a slot byte; per contact its history read and written; F and T written; the wall kernel's plane mask (the
+  // bed has planes alone: no triangle candidates to count).
+  const double forces = pos + 8 * R + 4 + 4 + 5 * candidates + 6 * R * contacts + 6 * R + 4;
   // integrate2: read x (finite check), v, w, F, T, m, r; write v, w.
   const double integrate2 = pos + 3 * R * 4 + 2 * R + 3 * R * 2;
   return {{"integrate1", integrate1}, {"forces", forces}, {"integrate2", integrate2}};

@@ -8,10 +8,9 @@
 namespace pflow::compute {
 
 enum ConditionBits : std::uint32_t {
-  kNeighborMismatch = 1u << 0,      // the candidate walk's filling pass found another count than its counting pass
+  kNeighborMismatch = 1u << 0,      // a candidate walk's filling pass (particles or triangles) found another count than its counting pass
   kHistoryOverflow = 1u << 1,       // a particle has more contacts than history slots
   kWallHistoryOverflow = 1u << 2,   // a particle has more wall contacts than wall slots
-  kWallCandidateOverflow = 1u << 3, // a particle has more candidate triangles than the stride
   kNonFinite = 1u << 4,             // a position, velocity, spin, force or torque is NaN or infinite
   kTooManyWallContacts = 1u << 5,   // more simultaneous triangle contacts than kMaxWallContacts
   kExcessiveOverlap = 1u << 6,      // an overlap beyond the run's limit (simulation.max_overlap): blow-up
@@ -24,7 +23,6 @@ struct Conditions {
   std::uint32_t flags = 0;
   std::uint32_t neededHistory = 0;       // largest contact count seen
   std::uint32_t neededWallHistory = 0;   // largest wall-contact count seen
-  std::uint32_t neededWallCandidates = 0;
   std::uint32_t badParticle = kNoIndex;  // lowest local index with a non-finite value (the host names the quantity)
   std::uint32_t deepParticle = kNoIndex; // lowest local index with an excessive overlap
   std::uint32_t tunnelParticle = kNoIndex;  // lowest local index that tunnelled through a wall

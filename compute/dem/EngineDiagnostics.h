@@ -23,12 +23,7 @@ typename EngineImpl<Exec, R>::HostView EngineImpl<Exec, R>::hostView() const {
   m_mem.copyToHost(h.gid.data(), m_particles.template ptr<Field::Gid>(), m_n * sizeof(Gid));
   h.rows = hostRows();
   // Without wall phases (ModelFlags::walls) the candidate rows are never written: no candidates.
-  h.wallCandCount.assign(m_owned, 0);
-  if (m_anyWalls && m_numTri) {
-    h.wallCand.resize(wallCandEntries());
-    m_mem.copyToHost(h.wallCand.data(), m_wallCand.data(), h.wallCand.size() * sizeof(Index));
-    m_mem.copyToHost(h.wallCandCount.data(), m_wallCandCount.data(), m_owned * sizeof(std::uint32_t));
-  }
+  hostWallCandidates(h.wallCand, h.wallCandStart);
   h.triVerts.resize(3 * std::size_t(m_numTri));
   m_mem.copyToHost(h.triVerts.data(), m_triVerts.data(), h.triVerts.size() * sizeof(Vec3d));
   return h;
@@ -49,8 +44,8 @@ typename EngineImpl<Exec, R>::Deepest EngineImpl<Exec, R>::deepestContact(const 
     const double ov = ri - dot(h.pos[i] - m_setup.planes[p].point, m_setup.planes[p].normal);
     if (ov > best.overlap) best = {"plane '" + m_setup.planeNames[p] + "'", kNoGid, ov, ov / ri};
   }
-  for (std::uint32_t e = 0; e < std::min<std::uint32_t>(h.wallCandCount[i], m_wallCap); ++e) {
-    const Index t = h.wallCand[std::size_t(i) * m_wallCap + e];
+  for (std::uint32_t e = h.wallCandStart[i]; e < h.wallCandStart[i + 1]; ++e) {
+    const Index t = h.wallCand[e];
     const auto cp = geometry::closestPointOnTriangle(h.pos[i], h.triVerts[3 * t], h.triVerts[3 * t + 1], h.triVerts[3 * t + 2]);
     const double ov = ri - norm(cp.point - h.pos[i]);
     if (ov > best.overlap)
@@ -132,8 +127,8 @@ Status EngineImpl<Exec, R>::tunnelError(Index i, double dt) const {
     // A triangle's face: the mesh of the candidate triangle nearest the centre.
     const HostView h = hostView();
     double nearest = 1e300;
-    for (std::uint32_t e = 0; e < std::min<std::uint32_t>(h.wallCandCount[i], m_wallCap); ++e) {
-      const Index t = h.wallCand[std::size_t(i) * m_wallCap + e];
+    for (std::uint32_t e = h.wallCandStart[i]; e < h.wallCandStart[i + 1]; ++e) {
+      const Index t = h.wallCand[e];
       const auto cp = geometry::closestPointOnTriangle(p.position, h.triVerts[3 * t], h.triVerts[3 * t + 1], h.triVerts[3 * t + 2]);
       const double d = norm(cp.point - p.position);
       if (d < nearest) {
@@ -208,8 +203,8 @@ double EngineImpl<Exec, R>::elasticEnergy() const {
     double edge = 0;
     int edgeMaterial = 0;
     bool face = false;
-    for (std::uint32_t e = 0; e < std::min<std::uint32_t>(h.wallCandCount[i], m_wallCap); ++e) {
-      const Index t = h.wallCand[std::size_t(i) * m_wallCap + e];
+    for (std::uint32_t e = h.wallCandStart[i]; e < h.wallCandStart[i + 1]; ++e) {
+      const Index t = h.wallCand[e];
       const auto cp = geometry::closestPointOnTriangle(h.pos[i], h.triVerts[3 * t], h.triVerts[3 * t + 1], h.triVerts[3 * t + 2]);
       const double ov = ri - norm(cp.point - h.pos[i]);
       if (ov <= 0) continue;
@@ -266,14 +261,11 @@ ContactStats EngineImpl<Exec, R>::contactStats() const {
   m_mem.copyToHost(mass.data(), m_particles.template ptr<Field::Mass>(), m_n * sizeof(R));
   // Mesh walls: each particle's candidate triangles (as of the last rebuild) and the triangles' vertices now.
   std::vector<Index> wallCand;
-  std::vector<std::uint32_t> wallCnt;
+  std::vector<std::uint32_t> wallStart;
   std::vector<Vec3d> triVerts;
+  hostWallCandidates(wallCand, wallStart);
   if (m_anyWalls && m_numTri > 0) {
-    wallCand.resize(std::size_t(n) * m_wallCap);
-    wallCnt.resize(n);
     triVerts.resize(3 * std::size_t(m_numTri));
-    m_mem.copyToHost(wallCand.data(), m_wallCand.data(), wallCand.size() * sizeof(Index));
-    m_mem.copyToHost(wallCnt.data(), m_wallCandCount.data(), n * sizeof(std::uint32_t));
     m_mem.copyToHost(triVerts.data(), m_triVerts.data(), triVerts.size() * sizeof(Vec3d));
   }
   ContactStats st;
@@ -296,8 +288,8 @@ ContactStats EngineImpl<Exec, R>::contactStats() const {
       ++st.wallContacts;
       st.maxOverlapRatio = std::max(st.maxOverlapRatio, ov / rad[i]);
     }
-    for (std::uint32_t e = 0; e < std::min<std::uint32_t>(wallCnt.empty() ? 0 : wallCnt[i], m_wallCap); ++e) {  // mesh triangles
-      const Index t = wallCand[std::size_t(i) * m_wallCap + e];
+    for (std::uint32_t e = wallStart[i]; e < wallStart[i + 1]; ++e) {  // mesh triangles
+      const Index t = wallCand[e];
       const auto cp = geometry::closestPointOnTriangle(pos[i], triVerts[3 * t], triVerts[3 * t + 1], triVerts[3 * t + 2]);
       const double ov = double(rad[i]) - norm(cp.point - pos[i]);
       if (ov <= 0) continue;

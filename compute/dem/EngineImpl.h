@@ -154,24 +154,27 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     build.nbr = m_nbr.as<Index>();
     build.nbrSlot = m_nbrSlot.as<std::int8_t>();
     m_exec.forEach(m_owned, build);
-    for (;;) {
-      if (m_anyWalls)  // no wall phases (ModelFlags::walls): no candidates to find
-        m_exec.forEach(m_owned, kernels::WallCandidates<R>{m_setup.grid, m_planes.as<PlaneParams>(), int(m_setup.planes.size()),
-                                                  m_numTri ? m_binStart.as<Index>() : nullptr, m_binItems.as<Index>(),
-                                                  m_triVerts.as<Vec3d>(), m_particles.template ptr<Field::Position>(),
-                                                  m_particles.template ptr<Field::Radius>(), m_setup.skin, m_wallCap,
-                                                  m_wallCand.as<Index>(), wallCandCount(),
-                                                  m_planeMask.as<std::uint32_t>(), m_particles.template ptr<Field::WallKey>(),
-                                                  m_particles.wallSlots(), m_particles.layout(Multiplicity::kWallSlots),
-                                                  m_cond.as<Conditions>()});
-      const Conditions c = readConditions();
-      if (c.flags & kNeighborMismatch)
-        return Status(StatusCode::kInternal, "the candidate walk found other counts when filling its rows than when counting them");
-      if (!(c.flags & kWallCandidateOverflow)) break;
-      m_wallCap = std::max<Index>(c.neededWallCandidates + c.neededWallCandidates / 4, m_wallCap + 4);
-      allocWallCandidates();
-      resetConditions();
+    if (m_anyWalls) {  // no wall phases (ModelFlags::walls): no candidates to find
+      // Planes: a bit mask a particle. Triangles: rows of exact length, counted, laid out, then filled.
+      kernels::WallCandidates<R> walls{m_setup.grid, m_planes.as<PlaneParams>(), int(m_setup.planes.size()),
+                                       m_numTri ? m_binStart.as<Index>() : nullptr, m_binItems.as<Index>(),
+                                       m_triVerts.as<Vec3d>(), m_particles.template ptr<Field::Position>(),
+                                       m_particles.template ptr<Field::Radius>(), m_setup.skin, nullptr, nullptr,
+                                       m_planeMask.as<std::uint32_t>(), m_particles.template ptr<Field::WallKey>(),
+                                       m_particles.wallSlots(), m_particles.layout(Multiplicity::kWallSlots),
+                                       m_cond.as<Conditions>()};
+      if (m_numTri) {
+        walls.start = wallCandStarts(m_owned);
+        walls.countOnly = true;
+        m_exec.forEach(m_owned, walls);
+        if (Status st = layOutWallCandidates(); !st.ok()) return st;
+        walls.countOnly = false;
+        walls.cand = m_wallCand.as<Index>();
+      }
+      m_exec.forEach(m_owned, walls);
     }
+    if (readConditions().flags & kNeighborMismatch)
+      return Status(StatusCode::kInternal, "a candidate walk found other counts when filling its rows than when counting them");
     splitBoundary();
     return buildSlabs();
   }
@@ -376,10 +379,38 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
       for (Index i = 0; i < m_owned; ++i) h.count[i] = h.start[i + 1] - h.start[i];
     return h;
   }
-  // Triangle candidates, m_wallCap a particle; none in a scene without triangles (planes are a mask a particle).
-  std::size_t wallCandEntries() const { return m_numTri ? std::size_t(m_owned) * m_wallCap : 0; }
-  std::uint32_t* wallCandCount() { return m_numTri ? m_wallCandCount.as<std::uint32_t>() : nullptr; }
-  void allocWallCandidates() { m_wallCand.resize(std::max<std::size_t>(1, wallCandEntries()) * sizeof(Index)); }
+  // Triangle candidates: rows of exact length (WallCandidates), none in a scene without triangles (planes are a
+  // mask a particle). The starts: one a particle and the end of the last row, the counts scanned in place.
+  std::uint32_t* wallCandStarts(Index rows) {
+    const std::size_t bytes = (std::size_t(rows) + 1) * sizeof(std::uint32_t);
+    if (m_wallCandStart.bytes() < bytes) m_wallCandStart.resize(bytes + bytes / 16);
+    return m_wallCandStart.as<std::uint32_t>();
+  }
+  const std::uint32_t* wallCandStart() const { return m_numTri ? m_wallCandStart.as<std::uint32_t>() : nullptr; }
+  // Host copies of the triangle candidates (diagnostics): rows not laid out for the owned particles of now read as
+  // empty, as hostRows's.
+  void hostWallCandidates(std::vector<Index>& cand, std::vector<std::uint32_t>& start) const {
+    start.assign(std::size_t(m_owned) + 1, 0);
+    cand.clear();
+    if (!m_anyWalls || !m_numTri || m_wallCandRows != m_owned) return;
+    cand.resize(m_wallCandEntries);
+    m_mem.copyToHost(start.data(), m_wallCandStart.data(), start.size() * sizeof(std::uint32_t));
+    m_mem.copyToHost(cand.data(), m_wallCand.data(), cand.size() * sizeof(Index));
+  }
+  Status layOutWallCandidates() {
+    std::uint32_t* start = m_wallCandStart.as<std::uint32_t>();
+    const std::uint64_t total = m_owned ? m_exec.exclusiveScan(start, start, m_owned) : 0;
+    if (total > std::numeric_limits<std::uint32_t>::max())
+      return Status(StatusCode::kResourceExhausted, "the triangle candidates need " + std::to_string(total) +
+                                                        " entries, more than the 2^32 their starts can address: run on more ranks");
+    const std::uint32_t end = std::uint32_t(total);
+    m_mem.copyFromHost(start + m_owned, &end, sizeof end);
+    m_wallCandEntries = std::size_t(total);
+    m_wallCandRows = m_owned;
+    const std::size_t want = std::max<std::size_t>(1, total + total / 16) * sizeof(Index);
+    if (m_wallCand.bytes() < total * sizeof(Index) || m_wallCand.bytes() > 2 * want) m_wallCand.resize(want);
+    return Status::ok();
+  }
 
   // The pair kernel, then the wall kernel, over the particles of `set`: every owned one, or one part of
   // the list splitBoundary made (boundary rows first, then interior ones).
@@ -486,9 +517,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     };
     const std::size_t n = std::max<Index>(1, m_n);
     atLeast(m_moved, movedBytes(n));
-    if (m_numTri) atLeast(m_wallCandCount, n * sizeof(std::uint32_t));
     atLeast(m_planeMask, n * sizeof(std::uint32_t));
-    if (m_wallCand.bytes() < wallCandEntries() * sizeof(Index)) allocWallCandidates();
   }
   void binTriangles();
   void resetConditions() { m_exec.forEach(1, kernels::ResetConditions{m_cond.as<Conditions>()}); }
@@ -511,7 +540,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     std::vector<Gid> gid;
     HostRows rows;
     std::vector<Index> wallCand;
-    std::vector<std::uint32_t> wallCandCount;
+    std::vector<std::uint32_t> wallCandStart;  // owned + 1 entries (all zero without triangles)
     std::vector<Vec3d> triVerts;
   };
   HostView hostView() const;
@@ -566,8 +595,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     a.surfaceLoads = m_recordLoads ? m_surfaceLoads.as<double>() : nullptr;
     a.meshMotion = m_meshMotion.as<MeshMotionParams>();
     a.wallCand = m_wallCand.as<Index>();
-    a.wallCandCount = wallCandCount();
-    a.wallCandCapacity = m_wallCap;
+    a.wallCandStart = wallCandStart();
     a.wallSlots = m_particles.wallSlots();
     a.wallKey = m_particles.template ptr<Field::WallKey>();
     a.wallDisp = m_particles.template ptr<Field::WallDisp>();
@@ -604,7 +632,8 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   std::uint32_t m_nbrShift = 0;                                  // RowSlices: 2^shift rows a slice (init)
   std::size_t m_nbrEntries = 0;                                  // the rows' entries, as laid out at the last rebuild
   Index m_nbrRows = kNoIndex;                                    // the owned particles they were laid out for
-  Index m_wallCap = 4;
+  std::size_t m_wallCandEntries = 0;  // triangle candidates, as laid out at the last rebuild
+  Index m_wallCandRows = kNoIndex;    // the owned particles they were laid out for
   // The displacement since the last rebuild (float, 12 bytes a particle); during a cell sort, the keys and the
   // permutation (sortByCell).
   Buffer m_moved{m_mem, 0}, m_cellStart{m_mem, 0};
@@ -627,7 +656,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   Buffer m_triSurface{m_mem, 0}, m_planeSurface{m_mem, 0}, m_surfaceLoads{m_mem, 0};
   bool m_recordLoads = false;
   Buffer m_binStart{m_mem, 0}, m_binItems{m_mem, 0}, m_binCount{m_mem, 0};
-  Buffer m_wallCand{m_mem, 0}, m_wallCandCount{m_mem, 0}, m_planeMask{m_mem, 0};
+  Buffer m_wallCand{m_mem, 0}, m_wallCandStart{m_mem, 0}, m_planeMask{m_mem, 0};
   Buffer m_params{m_mem, 0}, m_cond{m_mem, sizeof(Conditions)};
   Buffer m_split{m_mem, 0}, m_splitFlag{m_mem, 0};  // boundary rows, then interior ones (splitBoundary)
   // buildSlabs (pairs evaluated once): slab per particle, particles by slab, slab starts, owned candidates per row
@@ -700,12 +729,12 @@ void EngineImpl<Exec, R>::init() {
     m_binStart.resize((std::size_t(s.grid.numCells()) + 1) * sizeof(Index));
     m_binCount.resize(std::size_t(s.grid.numCells()) * sizeof(std::uint32_t));
   }
-  if (m_numTri) {
-    m_wallCandCount.resize(std::max<std::size_t>(1, m_n) * sizeof(std::uint32_t));
-    m_mem.fillBytes(m_wallCandCount.data(), 0, m_wallCandCount.bytes());
+  if (m_numTri) {  // no triangle candidates before the first rebuild
+    std::uint32_t* start = wallCandStarts(m_n);
+    m_mem.fillBytes(start, 0, m_wallCandStart.bytes());
   }
   m_planeMask.resize(std::max<std::size_t>(1, m_n) * sizeof(std::uint32_t));
-  allocWallCandidates();
+  m_wallCand.resize(sizeof(Index));
 }
 
 template <class Exec, class R>

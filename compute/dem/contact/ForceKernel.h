@@ -71,9 +71,8 @@ struct ForceArgs {
   double* surfaceLoads;              // null, or 6 per surface (force on the wall [N], torque on it about the origin
                                      // [N m]) summed over this pass's wall contacts (Engine::recordWallLoads)
   const MeshMotionParams* meshMotion;
-  const Index* wallCand;
-  const std::uint32_t* wallCandCount;  // null when there are no triangles
-  Index wallCandCapacity;
+  const Index* wallCand;                // particle i's triangle candidates: [wallCandStart[i], wallCandStart[i + 1])
+  const std::uint32_t* wallCandStart;   // null when there are no triangles
   int wallSlots;
   std::uint64_t* wallKey;
   Vec3<R>* wallDisp;
@@ -444,7 +443,7 @@ struct ComputeWallForces {
   ForceArgs<R> a;
 
   PFLOW_HOSTDEVICE void operator()(Index i) const {
-    if (a.planeMask[i] == 0 && (!a.wallCandCount || a.wallCandCount[i] == 0)) return;  // far from every wall (slots cleared at rebuild)
+    if (a.planeMask[i] == 0 && (!a.wallCandStart || a.wallCandStart[i + 1] == a.wallCandStart[i])) return;  // far from every wall (slots cleared at rebuild)
     const ContactParams* params = a.params + std::size_t(a.material[i]) * a.numMaterials;
     const R ri = a.radius[i], mi = a.mass[i];
     V f = zero3<R>(), tq = zero3<R>();
@@ -503,9 +502,10 @@ struct ComputeWallForces {
       wc[nwc++] = {-pl.normal, xi - sd * pl.normal, pl.normal, zero3<double>(), double(ri) - sd, planeKey(Index(p)), pl.material, true,
                    a.planeSurface ? a.planeSurface[p] : -1, sd >= double(ri)};
     }
-    const std::uint32_t nc = !a.wallCandCount ? 0 : a.wallCandCount[i] < a.wallCandCapacity ? a.wallCandCount[i] : a.wallCandCapacity;
+    const std::uint32_t firstCand = a.wallCandStart ? a.wallCandStart[i] : 0;
+    const std::uint32_t nc = a.wallCandStart ? a.wallCandStart[i + 1] - firstCand : 0;
     for (std::uint32_t e = 0; e < nc; ++e) {
-      const Index t = a.wallCand[std::size_t(i) * a.wallCandCapacity + e];
+      const Index t = a.wallCand[firstCand + e];
       const Vec3d* v = a.triVerts + 3 * t;
       const auto cp = geometry::closestPointOnTriangle(xi, v[0], v[1], v[2]);
       const Vec3d dv = cp.point - xi;

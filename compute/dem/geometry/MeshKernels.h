@@ -189,38 +189,45 @@ struct WallCandidates {
   const Vec3d* pos;
   const R* radius;
   double skin;
-  Index capacity;
-  Index* cand;               // [i * capacity + e]
-  std::uint32_t* candCount;  // [i]; null when there are no triangles
+  // Triangle candidates in rows of exact length, as the particle candidates: the counting pass (countOnly) writes
+  // each particle's count to start[i]; the host scans them in place (start[n] the end of the last row); the
+  // filling pass writes row i to cand[start[i] .. start[i + 1]). Both null when there are no triangles.
+  Index* cand;
+  std::uint32_t* start;
   std::uint32_t* planeMask;  // [i]
   std::uint64_t* wallKey;
   int wallSlots;
   SlotLayout slotLayout;
   Conditions* cond;
+  bool countOnly = false;
   PFLOW_HOSTDEVICE void operator()(Index i) const {
     const Vec3d x = pos[i];
     const double cut = double(radius[i]) + skin;
-    std::uint32_t mask = 0;
-    for (int p = 0; p < numPlanes; ++p)
-      if (dot(x - planes[p].point, planes[p].normal) < cut) mask |= 1u << p;
-    planeMask[i] = mask;
     std::uint32_t count = 0;
+    const std::uint32_t first = countOnly || !start ? 0 : start[i];
+    const std::uint32_t capacity = countOnly || !start ? 0 : start[i + 1] - first;
     if (binStart) {
       const std::uint32_t c = grid.cellOf(x);
       for (Index k = binStart[c]; k < binStart[c + 1]; ++k) {
         const Index t = binItems[k];
         const auto cp = geometry::closestPointOnTriangle(x, verts[3 * t], verts[3 * t + 1], verts[3 * t + 2]);
         if (norm2(x - cp.point) >= cut * cut) continue;
-        if (count < capacity) cand[std::size_t(i) * capacity + count] = t;
+        if (count < capacity) cand[first + count] = t;
         ++count;
       }
     }
-    if (candCount) candCount[i] = count;
-    if (count > capacity) {
-      atomicOrU32(&cond->flags, kWallCandidateOverflow);
-      atomicMaxU32(&cond->neededWallCandidates, count);
+    if (countOnly) {
+      start[i] = count;
       return;
     }
+    if (count != capacity) {  // the same walk over the same positions: never, but never written past a row either
+      atomicOrU32(&cond->flags, kNeighborMismatch);
+      return;
+    }
+    std::uint32_t mask = 0;
+    for (int p = 0; p < numPlanes; ++p)
+      if (dot(x - planes[p].point, planes[p].normal) < cut) mask |= 1u << p;
+    planeMask[i] = mask;
     const SlotRow<std::uint64_t> key = slotLayout.at(wallKey, i);
     for (int k = 0; k < wallSlots; ++k) {
       if (key[k] == kNoGid) continue;
@@ -228,7 +235,7 @@ struct WallCandidates {
       if (key[k] >> 63) {
         near = (mask >> (key[k] & 31u)) & 1u;
       } else {
-        for (std::uint32_t e = 0; e < count && !near; ++e) near = (key[k] & 0xffffffffu) == cand[std::size_t(i) * capacity + e];
+        for (std::uint32_t e = 0; e < count && !near; ++e) near = (key[k] & 0xffffffffu) == cand[first + e];
       }
       if (!near) key[k] = kNoGid;
     }
