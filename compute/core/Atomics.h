@@ -51,6 +51,16 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE std::uint32_t atomicAddU32(std::uint32_t* add
 #endif
 }
 
+// Stores v at *addr if it holds `expected`; returns whether it did (history pool claims, one owner a key).
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE bool atomicCasU64(std::uint64_t* addr, std::uint64_t expected, std::uint64_t v) {
+#if defined(__CUDA_ARCH__)
+  return atomicCAS(reinterpret_cast<unsigned long long*>(addr), (unsigned long long)expected, (unsigned long long)v) ==
+         (unsigned long long)expected;
+#else
+  return __atomic_compare_exchange_n(addr, &expected, v, false, __ATOMIC_RELAXED, __ATOMIC_RELAXED);
+#endif
+}
+
 // Adds v to a double (wall loads: a few addresses, on the steps that record them only).
 PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void atomicAddF64(double* addr, double v) {
 #if defined(__CUDA_ARCH__)

@@ -46,6 +46,11 @@ struct EngineSetup {
   double skin = 0;
   double maxRadius = 0;
   int historySlots = 8;
+  // Contact slots every particle carries at most where a history pool can take the rest (HistoryPool.h: the GPU's
+  // pass in one process, without adhesion); 0: all inline (distributed runs: MpiDomain::partition).
+  // PFLOW_INLINE_SLOTS=k overrides a nonzero value (measurements). 7: on the settled bed 311 B a particle in float,
+  // the fastest of 5-8 (docs/performance.md, "The history pool").
+  int inlineHistorySlots = 7;
   int wallHistorySlots = 4;
   // run-time detectors (docs/physics.md, "Instability detectors")
   double maxOverlap = 0.5;  // overlap limit, relative to the smaller radius (simulation.max_overlap)

@@ -309,6 +309,7 @@ ContactStats EngineImpl<Exec, R>::contactStats() const {
   };
   occupied(Field::HistoryPartner, kNoPartner, m_numSlabs ? 2 : 1);  // pairs once: the owner's stands for both
   occupied(Field::WallKey, kNoGid, 1);
+  st.historyEntries += m_pool.entries().size();  // the histories beyond the inline slots (HistoryPool.h)
   return st;
 }
 

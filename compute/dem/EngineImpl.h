@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "compute/dem/contact/ForceKernel.h"
+#include "compute/dem/HistoryPoolStore.h"
 #include "compute/dem/geometry/MeshKernels.h"
 #include "compute/dem/integrate/VelocityVerlet.h"
 #include "compute/neighbor/NeighborKernels.h"
@@ -32,7 +33,8 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   using V = Vec3<R>;
 
   explicit EngineImpl(EngineSetup s)
-      : m_exec(s.threads), m_mem(m_exec.memory()), m_particles(m_mem), m_rows(m_exec, m_mem, m_particles), m_setup(std::move(s)) {
+      : m_exec(s.threads), m_mem(m_exec.memory()), m_particles(m_mem), m_rows(m_exec, m_mem, m_particles), m_setup(std::move(s)),
+        m_pool(m_exec, m_mem) {
     init();
   }
 
@@ -95,6 +97,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     std::vector<Index> rows(m_owned);
     for (Index i = 0; i < m_owned; ++i) rows[i] = i;
     m_rows.pack(rows, {int(m_owned)}, kMigrate, out);
+    savePool();
   }
   void restore(const std::vector<std::byte>& rows, Index count, int contactSlots, int wallSlots) override {
     m_particles.allocate(std::max<Index>(count, 1), contactSlots, wallSlots, m_particles.slotMajor());
@@ -103,9 +106,12 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     m_owned = m_n;
     m_particles.resize(m_n);
     sizeLocalBuffers();
+    restorePool();
   }
   ParticleSnapshot stateArrays(std::int64_t step, double time) const override {
-    return m_rows.stateArrays(step, time, m_owned, kMigrate | kCheckpoint);
+    ParticleSnapshot s = m_rows.stateArrays(step, time, m_owned, kMigrate | kCheckpoint);
+    mergePool(s);
+    return s;
   }
   Status loadState(const ParticleSnapshot& s, int contactSlots, int wallSlots) override {
     m_particles.allocate(std::max<Index>(Index(s.n), 1), contactSlots, wallSlots, m_particles.slotMajor());
@@ -113,6 +119,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     m_particles.resize(m_n);
     Status st = m_rows.loadState(s, kMigrate | kCheckpoint);
     sizeLocalBuffers();
+    clearPooled();  // a checkpoint holds every history inline
     return st;
   }
   void ensureSlots(int contactSlots, int wallSlots) override {
@@ -173,6 +180,12 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
       }
       m_exec.forEach(m_owned, walls);
     }
+    if (m_pool.active())  // the pooled histories of the contacts that go on, into a fresh table
+      m_pool.resolve(kernels::ResolvePool<R>{m_particles.template ptr<Field::Position>(), m_particles.template ptr<Field::Radius>(),
+                                             m_particles.template ptr<Field::Gid>(), m_nbr.as<Index>(), m_nbrSlot.as<std::int8_t>(),
+                                             nbrLayout(), m_particles.template ptr<Field::HistoryPooled>(), {}, {},
+                                             m_cond.as<Conditions>()},
+                     m_owned);
     if (readConditions().flags & kNeighborMismatch)
       return Status(StatusCode::kInternal, "a candidate walk found other counts when filling its rows than when counting them");
     splitBoundary();
@@ -195,17 +208,26 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
                         " wall faces at once; the mesh is finer than the particles, coarsen it");
     // Slots ran out: the forces are already exact (a new contact starts from zero displacement); grow
     // the slots and store the displacements that found no slot.
+    // More contacts than the scene allows (simulation.max_contacts): a collapse, not a dense packing (with a pool
+    // flagged without kHistoryOverflow: the pool held them).
+    if (int(c.neededHistory) > m_setup.maxContacts) return slotOverflowError(dt);
     while (c.flags & (kHistoryOverflow | kWallHistoryOverflow)) {
       if (c.flags & kHistoryOverflow) {
-        // More contacts than the scene allows (simulation.max_contacts): a collapse, not a dense packing.
         if (int(c.neededHistory) > m_setup.maxContacts) return slotOverflowError(dt);
-        // One spare slot (up to the cap): slots are carried by every particle, so headroom costs n times over.
-        const int grown = std::max<int>(m_particles.contactSlots() + 1,
-                                        std::min<int>(int(c.neededHistory) + 1, m_setup.maxContacts));
-        if (grown > 127)
-          return Status(StatusCode::kResourceExhausted,
-                        "a particle has " + std::to_string(c.neededHistory) + " simultaneous contacts, above the 127-slot limit");
-        m_particles.resizeSlots(Multiplicity::kContactSlots, grown);
+        if (m_pool.active()) {  // the inline slots are at their cap: the pool takes the rest
+          if (!m_pool.grow(m_cond.as<Conditions>()))
+            return Status(StatusCode::kResourceExhausted, "the contact-history pool reached 2^30 entries");
+        } else {
+          // One spare slot (up to the cap): slots are carried by every particle, so headroom costs n times over.
+          int grown = std::max<int>(m_particles.contactSlots() + 1, std::min<int>(int(c.neededHistory) + 1, m_setup.maxContacts));
+          if (m_poolAllowed) grown = std::min(grown, m_inlineCap);
+          if (grown > 127)
+            return Status(StatusCode::kResourceExhausted,
+                          "a particle has " + std::to_string(c.neededHistory) + " simultaneous contacts, above the 127-slot limit");
+          if (grown > m_particles.contactSlots()) m_particles.resizeSlots(Multiplicity::kContactSlots, grown);
+          if (m_poolAllowed && m_particles.contactSlots() >= m_inlineCap)
+            m_pool.enable(std::uint32_t(std::max<Index>(m_owned / 64, 1)));
+        }
       }
       if (c.flags & kWallHistoryOverflow) {
         // No spare: most particles never touch a wall, and the few that touch several (a box's edges and corners)
@@ -585,6 +607,9 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     a.histPartner = m_particles.template ptr<Field::HistoryPartner>();
     a.histDisp = m_particles.template ptr<Field::HistoryDisp>();
     a.histLayout = m_particles.layout(Multiplicity::kContactSlots);
+    if (m_pool.active()) a.pool = m_pool.view();
+    a.pooled = m_particles.template ptr<Field::HistoryPooled>();
+    a.maxContacts = m_setup.maxContacts;
     a.planes = m_planes.as<PlaneParams>();
     a.planeMask = m_planeMask.as<std::uint32_t>();
     a.triVerts = m_triVerts.as<Vec3d>();
@@ -663,6 +688,14 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   Buffer m_slabOf{m_mem, 0}, m_slabItems{m_mem, 0}, m_slabStart{m_mem, 0}, m_owned1{m_mem, 0};
   Index m_numSlabs = 0;  // 0: every particle evaluates all its pairs (ComputeForces)
   Index m_numBoundary = 0;
+  // Histories beyond the inline slots (HistoryPool.h): allowed in one process evaluating pairs from both sides,
+  // without adhesion; active once the inline slots reach m_inlineCap.
+  HistoryPoolStore<Exec, R> m_pool;
+  bool m_poolAllowed = false;
+  int m_inlineCap = 127;
+  mutable typename HistoryPoolStore<Exec, R>::HostCopy m_savedPool;  // with save(): reduce_dt's in-memory checkpoint
+  mutable std::vector<std::int32_t> m_savedPooled;
+  void savePool() const, restorePool(), clearPooled(), mergePool(ParticleSnapshot& s) const;  // EnginePool.h
 };
 
 template <class Exec, class R>
@@ -678,7 +711,14 @@ void EngineImpl<Exec, R>::init() {
   if (const char* layout = std::getenv("PFLOW_SLOT_LAYOUT")) slotMajor = std::string(layout) == "slot";
   m_nbrShift = 0;
   if (const char* shift = std::getenv("PFLOW_ROW_SLICE_SHIFT")) m_nbrShift = std::uint32_t(std::clamp(std::atoi(shift), 0, 5));
-  m_particles.allocate(m_n, s.historySlots, s.wallHistorySlots, slotMajor);
+  m_inlineCap = s.inlineHistorySlots;
+  if (const char* cap = std::getenv("PFLOW_INLINE_SLOTS"); cap && m_inlineCap > 0) m_inlineCap = std::clamp(std::atoi(cap), 0, 126);
+  m_poolAllowed = m_inlineCap > 0 && s.model.tangential && !s.model.cohesion && !s.canonicalOrder &&
+                  !(Exec::kPairsOnce && s.pairsOnce);
+  if (!m_poolAllowed) m_inlineCap = 127;
+  const int slots = m_poolAllowed ? std::min(s.historySlots, m_inlineCap) : s.historySlots;
+  m_particles.allocate(m_n, slots, s.wallHistorySlots, slotMajor);
+  if (m_poolAllowed && slots >= m_inlineCap) m_pool.enable(std::uint32_t(std::max<Index>(m_n / 64, 1)));
   std::vector<Gid> gids(m_n);
   for (Index i = 0; i < m_n; ++i) gids[i] = s.gid.empty() ? Gid(i) : s.gid[i];
   // Host values (double) converted to the field's type at the run's precision; empty = zero.
@@ -704,7 +744,7 @@ void EngineImpl<Exec, R>::init() {
   put(std::integral_constant<Field, Field::Gid>{}, gids);
   for (Field f : {Field::HistoryPartner, Field::WallKey})
     m_mem.fillBytes(m_particles.buffer(f).data(), 0xFF, m_particles.buffer(f).bytes());
-  for (Field f : {Field::HistoryDisp, Field::WallDisp})
+  for (Field f : {Field::HistoryDisp, Field::WallDisp, Field::HistoryPooled})
     m_mem.fillBytes(m_particles.buffer(f).data(), 0, m_particles.buffer(f).bytes());
 
   m_moved.resize(movedBytes(m_n));
@@ -759,3 +799,5 @@ void EngineImpl<Exec, R>::binTriangles() {
 
 // The error path and diagnostics (host copies, never on the step path).
 #include "compute/dem/EngineDiagnostics.h"
+// The history pool's host side: checkpoints in memory and in files.
+#include "compute/dem/EnginePool.h"

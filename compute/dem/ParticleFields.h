@@ -25,6 +25,7 @@ namespace pflow::compute {
   X(Gid,             "id",                 Gid,           kOne,          "",      kSnapshot | kMigrate | kGhost)        \
   X(HistoryPartner,  "history_partner",    PartnerId,     kContactSlots, "",      kMigrate)                             \
   X(HistoryDisp,     "history_disp",       Real3,         kContactSlots, "m",     kMigrate)                             \
+  X(HistoryPooled,   "history_pooled",     std::int32_t,  kOne,          "",      0u)                                   \
   X(WallKey,         "wall_key",           std::uint64_t, kWallSlots,    "",      kMigrate)                             \
   X(WallDisp,        "wall_disp",          Real3,         kWallSlots,    "m",     kMigrate)
 // clang-format on

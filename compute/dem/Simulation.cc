@@ -303,7 +303,10 @@ Result<SimulationState> Simulation::state() const {
   if (m_domain->ranks() > 1)
     m_engine->ensureSlots(int(m_domain->max(double(m_engine->historySlots()))), int(m_domain->max(double(m_engine->wallHistorySlots()))));
   s.particles = m_domain->gather(m_engine->stateArrays(m_step, m_time));
-  s.contactSlots = m_engine->historySlots();
+  // The arrays' own slot count: a history pool's entries are merged into the inline slots (EnginePool.h), which
+  // may take more slots than the engine carries inline.
+  const SnapshotArray* partners = s.particles.find("history_partner");
+  s.contactSlots = partners ? partners->components : m_engine->historySlots();
   s.wallSlots = m_engine->wallHistorySlots();
   s.step = m_step;
   s.stepBase = m_stepBase;

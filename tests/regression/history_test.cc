@@ -5,6 +5,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <memory>
 #include <vector>
 
 #include "compute/dem/Simulation.h"
@@ -175,6 +179,85 @@ TEST(History, PairsOnceMatchesBothSidesAndIgnoresThreadCount) {
   EXPECT_LT(worst, 1e-6 * kR) << "largest position difference [m]";
   EXPECT_EQ(hOnce, hBoth);
   EXPECT_GT(hBoth, 600u);  // a packed heap: histories really held
+}
+
+// The history pool (compute/dem/contact/HistoryPool.h): with two inline slots a particle and the rest pooled, a
+// poured heap evaluated from both sides (the GPU's way) follows the run that keeps every history inline bit for
+// bit, holds as many histories, grows the pool within steps (it starts at 256 entries), and a checkpoint taken with
+// pooled histories (merged into the inline slots) resumes bit for bit.
+namespace pool {
+struct InlineSlots {  // PFLOW_INLINE_SLOTS for the simulations created in its scope
+  explicit InlineSlots(const char* k) { setenv("PFLOW_INLINE_SLOTS", k, 1); }
+  ~InlineSlots() { unsetenv("PFLOW_INLINE_SLOTS"); }
+};
+std::unique_ptr<Simulation> make(const char* inlineSlots) {
+  InlineSlots scope(inlineSlots);
+  compute::SimulationOptions o;
+  o.pairsOnce = false;
+  auto sim = Simulation::create(test::pouredHeap(kR, 2), o);
+  EXPECT_TRUE(sim.isOk()) << sim.status().toString();
+  return sim.isOk() ? std::move(sim).value() : nullptr;
+}
+std::map<Gid, Vec3d> byGid(const Simulation& s, const char* field) {
+  const auto snap = s.snapshot();
+  std::map<Gid, Vec3d> out;
+  for (std::size_t k = 0; k < snap.n; ++k) out[snap.find("id")->as<Gid>()[k]] = snap.find(field)->as<Vec3d>()[k];
+  return out;
+}
+// Histories beyond `inlineSlots` a particle, from a run that keeps them all inline.
+std::size_t beyond(const Simulation& s, int inlineSlots) {
+  const auto state = s.engine().stateArrays(s.stepCount(), 0);
+  const compute::SnapshotArray* p = state.find("history_partner");
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < state.n; ++i) {
+    int used = 0;
+    for (int k = 0; k < p->components; ++k) used += p->as<PartnerId>()[i * p->components + k] != kNoPartner;
+    n += std::size_t(std::max(0, used - inlineSlots));
+  }
+  return n;
+}
+void expectIdentical(const Simulation& a, const Simulation& b) {
+  for (const char* f : {"position", "velocity", "angular_velocity"}) {
+    const auto x = byGid(a, f), y = byGid(b, f);
+    ASSERT_EQ(x.size(), y.size());
+    int differ = 0;
+    for (const auto& [g, v] : x) differ += std::memcmp(&v, &y.at(g), sizeof v) != 0;
+    EXPECT_EQ(differ, 0) << f;
+  }
+}
+}  // namespace pool
+
+
+TEST(History, PoolBeyondInlineSlotsChangesNoResult) {
+  auto pooled = pool::make("2"), all = pool::make("0");
+  ASSERT_TRUE(pooled && all);
+  std::size_t most = 0;
+  for (int k = 0; k < 3; ++k) {
+    ASSERT_TRUE(pooled->runSteps(1000).isOk());
+    ASSERT_TRUE(all->runSteps(1000).isOk());
+    EXPECT_EQ(pooled->contactStats().historyEntries, all->contactStats().historyEntries) << "after " << pooled->stepCount();
+    most = std::max(most, pool::beyond(*all, 2));
+  }
+  std::printf("histories beyond two a particle: at most %zu\n", most);
+  EXPECT_EQ(pooled->engine().historySlots(), 2);
+  EXPECT_GT(all->engine().historySlots(), 4);  // the heap's particles really have more contacts than two
+  EXPECT_GT(most, 128u);                       // the pool outgrew the 128 claims of its first table
+  EXPECT_GT(pooled->rebuilds(), 5);
+  pool::expectIdentical(*pooled, *all);
+}
+
+TEST(History, PooledCheckpointResumesBitForBit) {
+  auto straight = pool::make("2"), first = pool::make("2"), resumed = pool::make("2");
+  ASSERT_TRUE(straight && first && resumed);
+  ASSERT_TRUE(straight->runSteps(3000).isOk());
+  ASSERT_TRUE(first->runSteps(2000).isOk());
+  while (!first->justRebuilt()) ASSERT_TRUE(first->runSteps(1).isOk());
+  auto state = first->state();
+  ASSERT_TRUE(state.isOk()) << state.status().toString();
+  EXPECT_GT(state.value().contactSlots, 2);  // the pooled histories went into the file's rows
+  ASSERT_TRUE(resumed->resume(state.value()).isOk());
+  ASSERT_TRUE(resumed->runSteps(3000 - resumed->stepCount()).isOk());
+  pool::expectIdentical(*straight, *resumed);
 }
 
 }  // namespace

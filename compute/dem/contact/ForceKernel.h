@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "compute/dem/contact/ContactModels.h"
+#include "compute/dem/contact/HistoryPool.h"
 #include "compute/core/Atomics.h"
 #include "compute/core/Conditions.h"
 #include "compute/dem/geometry/MeshKernels.h"
@@ -60,6 +61,9 @@ struct ForceArgs {
   PartnerId* histPartner;
   Vec3<R>* histDisp;
   SlotLayout histLayout;
+  HistoryPool<R> pool;   // the histories beyond the inline slots (HistoryPool.h); pool.key null: none
+  std::int32_t* pooled;  // [i]: i's contacts held in the pool
+  int maxContacts;       // simulation.max_contacts: a particle with more is an error, pool or not
   // walls
   const PlaneParams* planes;
   const std::uint32_t* planeMask;  // per particle: planes within r + skin at the last rebuild
@@ -202,6 +206,9 @@ struct ComputeForces {
     std::int8_t* __restrict__ nbrSlot = a.nbrSlot + row;
     const std::size_t col = a.nbrLayout.stride();
     const int slots = a.slots;
+    const HistoryPool<R>& pool = a.pool;  // read from the launch's parameters where used, not held in registers
+    const PartnerId gi = pool.key ? PartnerId(gid[i]) : kNoPartner;
+    int pooledHere = pool.key ? a.pooled[i] : 0;
     const SlotRow<PartnerId> partner = a.histLayout.at(a.histPartner, i);
     const SlotRow<V> disp = a.histLayout.at(a.histDisp, i);
     const ContactParams* __restrict__ params = a.params + std::size_t(material[i]) * a.numMaterials;
@@ -224,25 +231,39 @@ struct ComputeForces {
       const double rs = double(ri) + double(rj);
       const double d2 = norm2(d);
       int slot = -1;
+      std::int32_t entry = -1;  // the pool's entry when slot == kPoolSlot
       V xiOld = zero3<R>();
       if constexpr (kTangential) {
-        // Invariant: nbrSlot[e] >= 0 exactly when slot nbrSlot[e] holds j's history (set at rebuild,
-        // on claiming, cleared here when the contact ends), so the hot path never reads gid[j].
+        // Invariant: nbrSlot[e] >= 0 exactly when slot nbrSlot[e] holds j's history, or the pool does (kPoolSlot)
+        // (set at rebuild, on claiming, cleared here when the contact ends), so the hot path never reads gid[j].
         slot = nbrSlot[e * col];
         // A JKR contact holds past zero overlap, to its break point; only one that exists (has its slot) does.
         if (d2 >= rs * rs && !(kAdhesion && slot >= 0 && holds(params[material[j]], d2, rs, ri, rj))) {
-          if (slot >= 0) {  // the contact has ended: forget its history
+          if (slot == kPoolSlot) {  // the contact has ended: forget its history
+            entry = pool.find(HistoryPool<R>::keyOf(gi, PartnerId(gid[j])));
+            if (entry >= 0) pool.key[entry] = HistoryPool<R>::kErased;
+            --pooledHere;
+          } else if (slot >= 0) {
             partner[slot] = kNoPartner;
-            nbrSlot[e * col] = -1;
           }
+          if (slot >= 0) nbrSlot[e * col] = -1;
           continue;
         }
         ++contacts;
         if (slot >= 0) {
           if (storeOnly) continue;  // stored by the first pass
-          xiOld = disp[slot];
+          if (slot == kPoolSlot) {
+            entry = pool.find(HistoryPool<R>::keyOf(gi, PartnerId(gid[j])));
+            if (entry >= 0) xiOld = pool.disp[entry];
+          } else {
+            xiOld = disp[slot];
+          }
         } else {
           slot = claimSlot(partner, slots, gid[j]);
+          if (slot < 0 && pool.key) {  // inline slots full: the pool
+            entry = pool.insert(HistoryPool<R>::keyOf(gi, PartnerId(gid[j])));
+            if (entry >= 0) slot = kPoolSlot, ++pooledHere;
+          }
           overflow |= slot < 0;
           if (storeOnly && slot < 0) continue;
         }
@@ -260,7 +281,11 @@ struct ComputeForces {
       }
       const auto out = contact::hertzMindlin<kTangential, kRolling, kAdhesion>(pp, s, xiOld, dt);
       if constexpr (kTangential) {
-        if (slot >= 0) disp[slot] = out.history;
+        if (slot == kPoolSlot) {
+          if (entry >= 0) pool.disp[entry] = out.history;
+        } else if (slot >= 0) {
+          disp[slot] = out.history;
+        }
         nbrSlot[e * col] = std::int8_t(slot);
       }
       f += out.force;
@@ -278,6 +303,13 @@ struct ComputeForces {
       if constexpr (kOnce) contacts += touchingNotOwned(i, owned);
       atomicOrU32(&a.cond->flags, kHistoryOverflow);
       atomicMaxU32(&a.cond->neededHistory, contacts);
+    }
+    if constexpr (kTangential) {
+      if (pool.key) {
+        a.pooled[i] = pooledHere;
+        // The pool takes what the inline slots do not: simulation.max_contacts still holds.
+        if (contacts > std::uint32_t(a.maxContacts)) atomicMaxU32(&a.cond->neededHistory, contacts);
+      }
     }
     if (storeOnly) return;
     if constexpr (kOnce) {
