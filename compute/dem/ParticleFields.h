@@ -63,6 +63,7 @@ inline constexpr FieldInfo kFieldTableOf[kNumFields] = {
     PFLOW_PARTICLE_FIELDS(PFLOW_X)
 #undef PFLOW_X
 };
+static_assert(wordSized(kFieldTableOf<float>) && wordSized(kFieldTableOf<double>), "a field of whole 4-byte words");
 // Names, units, flags and multiplicities are the same at both precisions; sizes are those of a double run.
 inline constexpr const FieldInfo (&kFieldTable)[kNumFields] = kFieldTableOf<double>;
 inline const FieldInfo* fieldTable(bool singlePrecision) {

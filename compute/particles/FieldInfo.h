@@ -47,4 +47,13 @@ struct FieldInfoOf {
   std::uint32_t flags;
 };
 
+// The reorder, pack and copy kernels move whole 4- or 8-byte words (kernels::GatherBlocks, GatherBytes): a field
+// whose element is not a multiple of 4 bytes would silently not move. Each table asserts this.
+template <class Info, std::size_t N>
+constexpr bool wordSized(const Info (&table)[N]) {
+  for (const Info& f : table)
+    if (f.elementBytes % 4 != 0) return false;
+  return true;
+}
+
 }  // namespace pflow::compute

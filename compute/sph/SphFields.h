@@ -63,6 +63,7 @@ inline constexpr SphFieldInfo kSphFieldTableOf[kNumSphFields] = {
     PFLOW_SPH_FIELDS(PFLOW_X)
 #undef PFLOW_X
 };
+static_assert(wordSized(kSphFieldTableOf<float>) && wordSized(kSphFieldTableOf<double>), "a field of whole 4-byte words");
 
 // The SPH field set, as FieldStore (compute/particles/FieldStore.h) sees it.
 struct SphFieldSet {
