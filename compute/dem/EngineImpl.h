@@ -208,25 +208,24 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
                         " wall faces at once; the mesh is finer than the particles, coarsen it");
     // Slots ran out: the forces are already exact (a new contact starts from zero displacement); grow
     // the slots and store the displacements that found no slot.
-    // More contacts than the scene allows (simulation.max_contacts): a collapse, not a dense packing (with a pool
-    // flagged without kHistoryOverflow: the pool held them).
-    if (int(c.neededHistory) > m_setup.maxContacts) return slotOverflowError(dt);
-    while (c.flags & (kHistoryOverflow | kWallHistoryOverflow)) {
+    for (;;) {
+      // More contacts than the scene allows (simulation.max_contacts): a collapse, not a dense packing (checked
+      // whatever the flags: a pool holds such contacts without kHistoryOverflow).
+      if (int(c.neededHistory) > m_setup.maxContacts) return slotOverflowError(dt);
+      if (!(c.flags & (kHistoryOverflow | kWallHistoryOverflow))) break;
       if (c.flags & kHistoryOverflow) {
-        if (int(c.neededHistory) > m_setup.maxContacts) return slotOverflowError(dt);
         if (m_pool.active()) {  // the inline slots are at their cap: the pool takes the rest
           if (!m_pool.grow(m_cond.as<Conditions>()))
             return Status(StatusCode::kResourceExhausted, "the contact-history pool reached 2^30 entries");
         } else {
           // One spare slot (up to the cap): slots are carried by every particle, so headroom costs n times over.
-          int grown = std::max<int>(m_particles.contactSlots() + 1, std::min<int>(int(c.neededHistory) + 1, m_setup.maxContacts));
-          if (m_poolAllowed) grown = std::min(grown, m_inlineCap);
+          const int grown = m_pool.inlineSlots(
+              std::max<int>(m_particles.contactSlots() + 1, std::min<int>(int(c.neededHistory) + 1, m_setup.maxContacts)));
           if (grown > 127)
             return Status(StatusCode::kResourceExhausted,
                           "a particle has " + std::to_string(c.neededHistory) + " simultaneous contacts, above the 127-slot limit");
           if (grown > m_particles.contactSlots()) m_particles.resizeSlots(Multiplicity::kContactSlots, grown);
-          if (m_poolAllowed && m_particles.contactSlots() >= m_inlineCap)
-            m_pool.enable(std::uint32_t(std::max<Index>(m_owned / 64, 1)));
+          m_pool.enableAt(m_particles.contactSlots(), m_owned);
         }
       }
       if (c.flags & kWallHistoryOverflow) {
@@ -688,11 +687,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   Buffer m_slabOf{m_mem, 0}, m_slabItems{m_mem, 0}, m_slabStart{m_mem, 0}, m_owned1{m_mem, 0};
   Index m_numSlabs = 0;  // 0: every particle evaluates all its pairs (ComputeForces)
   Index m_numBoundary = 0;
-  // Histories beyond the inline slots (HistoryPool.h): allowed in one process evaluating pairs from both sides,
-  // without adhesion; active once the inline slots reach m_inlineCap.
-  HistoryPoolStore<Exec, R> m_pool;
-  bool m_poolAllowed = false;
-  int m_inlineCap = 127;
+  HistoryPoolStore<Exec, R> m_pool;  // histories beyond the inline slots (HistoryPool.h)
   mutable typename HistoryPoolStore<Exec, R>::HostCopy m_savedPool;  // with save(): reduce_dt's in-memory checkpoint
   mutable std::vector<std::int32_t> m_savedPooled;
   void savePool() const, restorePool(), clearPooled(), mergePool(ParticleSnapshot& s) const;  // EnginePool.h
@@ -711,14 +706,10 @@ void EngineImpl<Exec, R>::init() {
   if (const char* layout = std::getenv("PFLOW_SLOT_LAYOUT")) slotMajor = std::string(layout) == "slot";
   m_nbrShift = 0;
   if (const char* shift = std::getenv("PFLOW_ROW_SLICE_SHIFT")) m_nbrShift = std::uint32_t(std::clamp(std::atoi(shift), 0, 5));
-  m_inlineCap = s.inlineHistorySlots;
-  if (const char* cap = std::getenv("PFLOW_INLINE_SLOTS"); cap && m_inlineCap > 0) m_inlineCap = std::clamp(std::atoi(cap), 0, 126);
-  m_poolAllowed = m_inlineCap > 0 && s.model.tangential && !s.model.cohesion && !s.canonicalOrder &&
-                  !(Exec::kPairsOnce && s.pairsOnce);
-  if (!m_poolAllowed) m_inlineCap = 127;
-  const int slots = m_poolAllowed ? std::min(s.historySlots, m_inlineCap) : s.historySlots;
+  m_pool.configure(s, Exec::kPairsOnce);
+  const int slots = m_pool.inlineSlots(s.historySlots);
   m_particles.allocate(m_n, slots, s.wallHistorySlots, slotMajor);
-  if (m_poolAllowed && slots >= m_inlineCap) m_pool.enable(std::uint32_t(std::max<Index>(m_n / 64, 1)));
+  m_pool.enableAt(slots, m_n);
   std::vector<Gid> gids(m_n);
   for (Index i = 0; i < m_n; ++i) gids[i] = s.gid.empty() ? Gid(i) : s.gid[i];
   // Host values (double) converted to the field's type at the run's precision; empty = zero.

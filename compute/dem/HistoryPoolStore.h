@@ -5,10 +5,12 @@
 #pragma once
 #include <algorithm>
 #include <cstdint>
+#include <cstdlib>
 #include <utility>
 #include <vector>
 
 #include "compute/core/Memory.h"
+#include "compute/dem/Engine.h"
 #include "compute/dem/contact/HistoryPool.h"
 
 namespace pflow::compute {
@@ -30,14 +32,24 @@ class HistoryPoolStore {
   HistoryPoolStore(Exec& exec, MemorySpace& mem) : m_exec(exec), m_mem(mem) {}
 
   bool active() const { return m_capacity > 0; }
-  std::uint32_t capacity() const { return m_capacity; }
-  Pool view() const { return viewOf(m_live); }
+  Pool view() const { return viewOf(m_live, m_capacity); }
 
-  // First use: a table of at least `capacity` entries (a power of two), empty.
-  void enable(std::uint32_t capacity) {
-    if (active()) return;
+  // Whether this run may pool, and its inline cap: the setup's (PFLOW_INLINE_SLOTS overrides a nonzero one), where
+  // each pair is evaluated from both sides in one process (not by a pairs-once executor), with friction, without
+  // adhesion.
+  void configure(const EngineSetup& s, bool pairsOnceExecutor) {
+    int cap = s.inlineHistorySlots;
+    if (const char* env = std::getenv("PFLOW_INLINE_SLOTS"); env && cap > 0) cap = std::clamp(std::atoi(env), 0, 126);
+    const bool allowed = s.model.tangential && !s.model.cohesion && !s.canonicalOrder && !(pairsOnceExecutor && s.pairsOnce);
+    m_cap = allowed ? cap : 0;
+  }
+  // The inline slots to carry for `wanted`: no more than the cap where a pool may take the rest.
+  int inlineSlots(int wanted) const { return m_cap > 0 ? std::min(wanted, m_cap) : wanted; }
+  // Once the inline slots reach the cap: an empty table, sized for a 64th of the particles (at least 256 entries).
+  void enableAt(int slots, Index particles) {
+    if (m_cap == 0 || slots < m_cap || active()) return;
     std::uint32_t c = 256;
-    while (c < capacity) c *= 2;
+    while (c < particles / 64) c *= 2;
     allocate(c);
     clear(m_live);
   }
@@ -48,8 +60,8 @@ class HistoryPoolStore {
     if (!active()) return;
     const int next = 1 - m_live;
     clear(next);
-    r.from = viewOf(m_live);
-    r.to = viewOf(next);
+    r.from = viewOf(m_live, m_capacity);
+    r.to = viewOf(next, m_capacity);
     m_exec.forEach(owned, r);
     m_live = next;
   }
@@ -61,10 +73,9 @@ class HistoryPoolStore {
     const int next = 1 - m_live;
     const std::uint32_t bigger = m_capacity * 2;
     sizeTable(next, bigger);
-    Pool to{m_key[next].template as<std::uint64_t>(), m_disp[next].template as<Vec3<R>>(), claimedOf(next), bigger,
-            bigger / 2, shiftOf(bigger)};
+    const Pool to = viewOf(next, bigger);
     clearAt(to);
-    m_exec.forEach(Index(m_capacity), kernels::RehashPool<R>{viewOf(m_live), to, cond});
+    m_exec.forEach(Index(m_capacity), kernels::RehashPool<R>{viewOf(m_live, m_capacity), to, cond});
     m_live = next;
     sizeTable(1 - m_live, bigger);  // the other table, for the next rebuild (its contents do not matter)
     m_capacity = bigger;
@@ -111,10 +122,10 @@ class HistoryPoolStore {
     return 64 - bits;
   }
   std::uint32_t* claimedOf(int t) const { return const_cast<Buffer&>(m_claimed).template as<std::uint32_t>() + t; }
-  Pool viewOf(int t) const {
+  Pool viewOf(int t, std::uint32_t capacity) const {
     auto& self = const_cast<HistoryPoolStore&>(*this);
-    return {self.m_key[t].template as<std::uint64_t>(), self.m_disp[t].template as<Vec3<R>>(), claimedOf(t), m_capacity,
-            m_capacity / 2, shiftOf(m_capacity)};
+    return {self.m_key[t].template as<std::uint64_t>(), self.m_disp[t].template as<Vec3<R>>(), claimedOf(t), capacity,
+            capacity / 2, shiftOf(capacity)};
   }
   void sizeTable(int t, std::uint32_t capacity) {
     m_key[t].resize(std::size_t(capacity) * sizeof(std::uint64_t));
@@ -131,7 +142,7 @@ class HistoryPoolStore {
     m_mem.fillBytes(p.key, 0xFF, std::size_t(p.capacity) * sizeof(std::uint64_t));  // kEmpty
     m_mem.fillBytes(p.claimed, 0, sizeof(std::uint32_t));
   }
-  void clear(int t) { clearAt(viewOf(t)); }
+  void clear(int t) { clearAt(viewOf(t, m_capacity)); }
 
   Exec& m_exec;
   MemorySpace& m_mem;
@@ -140,6 +151,7 @@ class HistoryPoolStore {
   Buffer m_claimed{m_mem, 0};
   std::uint32_t m_capacity = 0;
   int m_live = 0;
+  int m_cap = 0;  // inline slots at most (configure); 0: no pool
 };
 
 }  // namespace pflow::compute
