@@ -1,19 +1,21 @@
 #!/usr/bin/env bash
 # The DEM pair-force kernel of each pflow-bench build named on the command line (file names under .gpu/bin),
 # profiled by ncu on the settled bed (DEM_PROF_PRECISION, default float; DEM_PROF_N spheres, default 4000000, tiled from the 2e5 bed cached
-# in /tmp/beds as dem_ab.sh does): one launch after the resettling and a few steps. Sections to $OUT/ncu_<bin>.txt,
+# in /tmp/beds as dem_ab.sh does): one launch after the resettling and a few steps (the kernel matched by its
+# functor's name, so the one-phase loop too under PFLOW_TWO_PHASE_PAIRS=0). Sections to $OUT/ncu_<bin>_<prec>.log,
 # a digest on stdout.   bash bench/gpu/forces_profile.sh pflow-bench-base pflow-bench
 source "$(dirname "$0")/setup.sh"
 NCU=$(command -v ncu || echo /usr/local/cuda/bin/ncu)
 mkdir -p /tmp/beds
 prec=${DEM_PROF_PRECISION:-float}
 for bin in "$@"; do
-  timeout 400 "$NCU" --kernel-name-base demangled --kernel-name regex:"forEachKernel(Capped<[0-9]+, )?<?pflow::compute::kernels::ComputeForces<$prec" \
+  timeout 400 "$NCU" --kernel-name-base demangled --kernel-name regex:"kernels::ComputeForces<$prec" \
     --launch-skip "${DEM_PROF_SKIP:-1005}" --launch-count 1 \
     --section SpeedOfLight --section LaunchStats --section Occupancy --section WarpStateStats --section MemoryWorkloadAnalysis \
     --section MemoryWorkloadAnalysis_Tables \
+    --section InstructionStats --section SchedulerStats \
     "$B/$bin" --base-cache /tmp/beds --executor cuda -n "${DEM_PROF_N:-4000000}" --tile-from 200000 --settle-steps 30000 \
-    --resettle-steps 1000 --steps 10 --no-lammps --precision "$prec" > "$OUT/ncu_$bin.txt" 2>&1
+    --resettle-steps 1000 --steps 10 --no-lammps --precision "$prec" > "$OUT/ncu_${bin}_$prec.log" 2>&1
   echo "== $bin rc=$?"
-  grep -E "Duration|Memory Throughput|DRAM Throughput|L1/TEX Hit|L2 Hit|Mem Busy|Registers Per|Achieved Occupancy|Theoretical Occupancy|Warp Cycles Per Issued|Block Size|Grid Size|Local" "$OUT/ncu_$bin.txt" | head -20
+  grep -E "Duration|Memory Throughput|DRAM Throughput|L1/TEX Hit|L2 Hit|Mem Busy|Registers Per|Achieved Occupancy|Theoretical Occupancy|Warp Cycles Per Issued|Block Size|Grid Size|Local|Active Threads Per Warp|Executed Instructions  " "$OUT/ncu_${bin}_$prec.log" | head -22
 done

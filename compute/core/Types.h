@@ -9,6 +9,12 @@
 #define PFLOW_HOSTDEVICE
 #define PFLOW_FORCEINLINE inline __attribute__((always_inline))
 #endif
+// After a lambda's parameters: inlined where it is called (device code inlines lambdas anyway).
+#if defined(__CUDA_ARCH__)
+#define PFLOW_FORCEINLINE_LAMBDA
+#else
+#define PFLOW_FORCEINLINE_LAMBDA __attribute__((always_inline))
+#endif
 
 namespace pflow {
 

@@ -458,13 +458,15 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
           return;
         }
       }
-      m_exec.forEach(m_owned, kernels::ComputeForces<R, kC, kF>{args});
+      if (m_twoPhase) m_exec.forEach(m_owned, kernels::ComputeForces<R, kC, kF, true>{args});
+      else m_exec.forEach(m_owned, kernels::ComputeForces<R, kC, kF>{args});
       if (m_anyWalls) m_exec.forEach(m_owned, kernels::ComputeWallForces<R, kC>{args});
       return;
     }
     const Index* list = m_split.as<Index>() + (set == ForceSet::kBoundary ? 0 : m_numBoundary);
     const Index count = set == ForceSet::kBoundary ? m_numBoundary : m_owned - m_numBoundary;
-    m_exec.forEach(count, kernels::OverList<kernels::ComputeForces<R, kC, kF>>{{args}, list});
+    if (m_twoPhase) m_exec.forEach(count, kernels::OverList<kernels::ComputeForces<R, kC, kF, true>>{{args}, list});
+    else m_exec.forEach(count, kernels::OverList<kernels::ComputeForces<R, kC, kF>>{{args}, list});
     if (m_anyWalls) m_exec.forEach(count, kernels::OverList<kernels::ComputeWallForces<R, kC>>{{args}, list});
   }
   // After the candidate lists, where each pair is evaluated once (EngineSetup::pairsOnce): the particles by
@@ -686,6 +688,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   // buildSlabs (pairs evaluated once): slab per particle, particles by slab, slab starts, owned candidates per row
   Buffer m_slabOf{m_mem, 0}, m_slabItems{m_mem, 0}, m_slabStart{m_mem, 0}, m_owned1{m_mem, 0};
   Index m_numSlabs = 0;  // 0: every particle evaluates all its pairs (ComputeForces)
+  bool m_twoPhase = false;  // ComputeForces' kTwoPhase (EngineSetup::twoPhasePairs)
   Index m_numBoundary = 0;
   HistoryPoolStore<Exec, R> m_pool;  // histories beyond the inline slots (HistoryPool.h)
   mutable typename HistoryPoolStore<Exec, R>::HostCopy m_savedPool;  // with save(): reduce_dt's in-memory checkpoint
@@ -706,6 +709,8 @@ void EngineImpl<Exec, R>::init() {
   if (const char* layout = std::getenv("PFLOW_SLOT_LAYOUT")) slotMajor = std::string(layout) == "slot";
   m_nbrShift = 0;
   if (const char* shift = std::getenv("PFLOW_ROW_SLICE_SHIFT")) m_nbrShift = std::uint32_t(std::clamp(std::atoi(shift), 0, 5));
+  m_twoPhase = s.twoPhasePairs.value_or(Exec::kLockstepLanes || s.layout == EngineSetup::Layout::kGpu);
+  if (const char* two = std::getenv("PFLOW_TWO_PHASE_PAIRS")) m_twoPhase = std::atoi(two) != 0;
   m_pool.configure(s, Exec::kPairsOnce);
   const int slots = m_pool.inlineSlots(s.historySlots);
   m_particles.allocate(m_n, slots, s.wallHistorySlots, slotMajor);

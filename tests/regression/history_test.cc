@@ -190,8 +190,15 @@ struct InlineSlots {  // PFLOW_INLINE_SLOTS for the simulations created in its s
   explicit InlineSlots(const char* k) { setenv("PFLOW_INLINE_SLOTS", k, 1); }
   ~InlineSlots() { unsetenv("PFLOW_INLINE_SLOTS"); }
 };
-std::unique_ptr<Simulation> make(const char* inlineSlots) {
+struct TwoPhase {  // PFLOW_TWO_PHASE_PAIRS for the simulations created in its scope (none: the executor's choice)
+  explicit TwoPhase(const char* on) {
+    if (on) setenv("PFLOW_TWO_PHASE_PAIRS", on, 1);
+  }
+  ~TwoPhase() { unsetenv("PFLOW_TWO_PHASE_PAIRS"); }
+};
+std::unique_ptr<Simulation> make(const char* inlineSlots, const char* twoPhase = nullptr) {
   InlineSlots scope(inlineSlots);
+  TwoPhase phases(twoPhase);
   compute::SimulationOptions o;
   o.pairsOnce = false;
   auto sim = Simulation::create(test::pouredHeap(kR, 2), o);
@@ -258,6 +265,55 @@ TEST(History, PooledCheckpointResumesBitForBit) {
   ASSERT_TRUE(resumed->resume(state.value()).isOk());
   ASSERT_TRUE(resumed->runSteps(3000 - resumed->stepCount()).isOk());
   pool::expectIdentical(*straight, *resumed);
+}
+
+// The pair kernel's two-phase loop (ComputeForces' kTwoPhase, the GPU's: a piece of candidates tested, then the
+// marked ones evaluated) against the one-phase loop, on the CPU: the same sums, the same slots claimed, the same
+// pool, so the same run bit for bit, through contacts that start and end and histories pooled beyond two slots.
+TEST(History, TwoPhasePairLoopChangesNoResult) {
+  auto two = pool::make("2", "1"), one = pool::make("2", "0");
+  ASSERT_TRUE(two && one);
+  for (int k = 0; k < 3; ++k) {
+    ASSERT_TRUE(two->runSteps(1000).isOk());
+    ASSERT_TRUE(one->runSteps(1000).isOk());
+    EXPECT_EQ(two->contactStats().historyEntries, one->contactStats().historyEntries) << "after " << two->stepCount();
+  }
+  EXPECT_GT(two->contactStats().historyEntries, 600u);
+  pool::expectIdentical(*two, *one);
+}
+
+// The same with rows longer than one piece of 32: a sphere of 5 r in the middle of the heap (the lattice's spheres
+// where it lies taken out) has about 60 candidates, so that its row is tested in several pieces.
+TEST(History, TwoPhasePairLoopOverLongRowsChangesNoResult) {
+  auto make = [](const char* twoPhase) -> std::unique_ptr<Simulation> {
+    pool::InlineSlots scope("2");
+    pool::TwoPhase phases(twoPhase);
+    const compute::RunConfig heap = test::pouredHeap(kR, 2);
+    compute::RunConfig c = heap;
+    c.particles = {};
+    const Vec3d centre{10.5 * kR, 10.5 * kR, 6 * kR};
+    for (std::size_t k = 0; k < heap.particles.position.size(); ++k)
+      if (norm(heap.particles.position[k] - centre) > 6.2 * kR)
+        addParticle(c, heap.particles.position[k], heap.particles.radius[k], 0);
+    addParticle(c, centre, 5 * kR, 0);
+    compute::SimulationOptions o;
+    o.pairsOnce = false;
+    auto sim = Simulation::create(c, o);
+    EXPECT_TRUE(sim.isOk()) << sim.status().toString();
+    return sim.isOk() ? std::move(sim).value() : nullptr;
+  };
+  auto two = make("1"), one = make("0");
+  ASSERT_TRUE(two && one);
+  ASSERT_TRUE(two->runSteps(1500).isOk());
+  ASSERT_TRUE(one->runSteps(1500).isOk());
+  std::map<Gid, int> rowLength;
+  for (const auto& [a, b] : two->engine().candidatePairs()) ++rowLength[a];  // (i, each of i's candidates)
+  int longest = 0;
+  for (const auto& [g, n] : rowLength) longest = std::max(longest, n);
+  std::printf("longest row: %d candidates\n", longest);
+  EXPECT_GT(longest, 40) << "the big sphere's candidates";
+  EXPECT_EQ(two->contactStats().historyEntries, one->contactStats().historyEntries);
+  pool::expectIdentical(*two, *one);
 }
 
 }  // namespace

@@ -153,15 +153,21 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE contact::ContactState<R> pairState(Vec3d d, d
 // kCohesion: the loop with adhesion (ModelFlags::cohesion), a kernel of its own so that its registers do not
 // weigh on scenes without it. kFixed: a scene with fixed materials (ContactParams::fixedSide read per pair, pairState);
 // a kernel of its own too (the select cost the float forces phase 6 % on an H100 when every scene carried it).
-template <class R, bool kCohesion = false, bool kFixed = false>
+// kTwoPhase (executors whose lanes run in lockstep: the GPU's; EngineSetup::twoPhasePairs): each piece of 32
+// candidates is first only tested, a bit set for each that touches or holds a slot, then the marked ones are
+// evaluated, in the row's order. Evaluating each candidate where it is tested kept a warp in the contact's
+// arithmetic for every candidate any lane touched (14.5 of 32 lanes active, ncu, H200): now a warp runs as many
+// evaluations as its busiest lane has contacts. The unmarked candidates are those the one-phase loop passes over
+// without effect, so the sums, the slots claimed and the pool's entries are the same bit for bit.
+template <class R, bool kCohesion = false, bool kFixed = false, bool kTwoPhase = false>
 struct ComputeForces {
   static constexpr bool kVariableCost = true;  // work per particle varies (CpuExecutor::forEach)
-  // Held to 80 registers a thread in float (24 resident warps an SM, against the compiler's 88-92 and 20: the forces
-  // phase 8 % shorter on an H200, for 16 bytes of spills) and 96 in double (20 warps against 16 at 128, for about
-  // 200 bytes of spill loads: the forces phase 7 % shorter on an H200; 80, 88 and 104 were slower than 128; the
-  // compiler's own 130-136 left 14 warps and cost a third on an H100). The adhesion loop in double, not measured at
-  // 96 and spilling half again as much there, keeps 128. docs/performance.md; CudaExecutor::forEach.
-  static constexpr int kMaxRegisters = std::is_same_v<R, double> ? (kCohesion ? 128 : 96) : 80;
+  // Held to 80 registers a thread in float and 128 in double in the two-phase loop (the GPU's), against the compiler's
+  // own 88-92 and 130-136. In float 80 keeps 24 warps an SM for 56 B of spill loads; 96 (20 warps, no spills) made
+  // the forces phase 10 % longer, 72 and 88 8-10 %. In double 112 and 120 were 7 % and 2 % slower than 128 (H200).
+  // The one-phase loop (the GPU's only in measurements): 80 in float, 96 in double (the adhesion loop 128).
+  // docs/performance.md ("Forces"); CudaExecutor::forEach.
+  static constexpr int kMaxRegisters = !std::is_same_v<R, double> ? 80 : kTwoPhase || kCohesion ? 128 : 96;
   using V = Vec3<R>;
   ForceArgs<R> a;
 
@@ -224,7 +230,9 @@ struct ComputeForces {
     const std::uint32_t count = kOnce ? owned[i] : a.nbrLayout.count(i);
     std::uint32_t contacts = 0;
     bool overflow = false;
-    for (std::uint32_t e = 0; e < count; ++e) {
+    // One candidate, as the one-phase loop sees it: tested, then (touching, or ending a contact that holds a slot)
+    // evaluated, its history kept. `return` passes on to the next.
+    const auto candidate = [&](std::uint32_t e) PFLOW_FORCEINLINE_LAMBDA {
       const Index j = nbr[e * col];
       const Vec3d d = pos[j] - xi;
       const R rj = radius[j];
@@ -247,11 +255,11 @@ struct ComputeForces {
             partner[slot] = kNoPartner;
           }
           if (slot >= 0) nbrSlot[e * col] = -1;
-          continue;
+          return;
         }
         ++contacts;
         if (slot >= 0) {
-          if (storeOnly) continue;  // stored by the first pass
+          if (storeOnly) return;  // stored by the first pass
           if (slot == kPoolSlot) {
             entry = pool.find(HistoryPool<R>::keyOf(gi, PartnerId(gid[j])));
             if (entry >= 0) xiOld = pool.disp[entry];
@@ -265,10 +273,10 @@ struct ComputeForces {
             if (entry >= 0) slot = kPoolSlot, ++pooledHere;
           }
           overflow |= slot < 0;
-          if (storeOnly && slot < 0) continue;
+          if (storeOnly && slot < 0) return;
         }
       } else {
-        if (d2 >= rs * rs) continue;
+        if (d2 >= rs * rs) return;
       }
       const R mj = mass[j];
       const ContactParams& pp = params[material[j]];
@@ -296,6 +304,27 @@ struct ComputeForces {
           if constexpr (kSpin) torque[j] += contact::partnerTorque(out, s.n, rj - R(0.5) * s.overlap);
         }
       }
+    };
+    if constexpr (kTwoPhase && !kOnce) {
+      for (std::uint32_t base = 0; base < count; base += 32) {
+        const std::uint32_t end = count - base > 32 ? base + 32 : count;
+        std::uint32_t marked = 0;
+        for (std::uint32_t e = base; e < end; ++e) {
+          const Index j = nbr[e * col];
+          const double rs = double(ri) + double(radius[j]);
+          // A hair wider than the candidate's own test, which decides: its sums may contract otherwise.
+          bool visit = norm2(pos[j] - xi) < rs * rs * (1 + 1e-9);
+          if constexpr (kTangential) visit |= nbrSlot[e * col] >= 0;
+          marked |= std::uint32_t(visit) << (e - base);
+        }
+        while (marked) {
+          const int b = lowestBit(marked);
+          marked &= marked - 1;
+          candidate(base + std::uint32_t(b));
+        }
+      }
+    } else {
+      for (std::uint32_t e = 0; e < count; ++e) candidate(e);
     }
     if (overflow) {
       // Slots are sized, and held to simulation.max_contacts, by all of i's contacts in both ways of
