@@ -3,6 +3,7 @@
 #pragma once
 #include <cstddef>
 #include <cstring>
+#include <memory>
 #include <stdexcept>
 #include <utility>
 
@@ -25,6 +26,10 @@ class MemorySpace {
   virtual void copyFromHost(void* dst, const void* hostSrc, std::size_t bytes) = 0;
   virtual void copyWithin(void* dst, const void* src, std::size_t bytes) = 0;
   virtual void fillBytes(void* dst, unsigned char value, std::size_t bytes) = 0;
+  // Whether a block that grows keeping its contents waits in host memory while it is reallocated
+  // (Buffer::growKeep): a device's memory is the scarce one, so there the old and the grown block are never held
+  // together; the host's keeps both for the copy.
+  virtual bool growsThroughHost() const { return false; }
   std::size_t bytesInUse() const { return m_bytesInUse; }
   std::size_t peakBytes() const { return m_peakBytes; }
 
@@ -78,12 +83,33 @@ class Buffer {
     if (bytes) m_ptr = m_space->allocate(bytes);
     m_bytes = bytes;
   }
-  // Grows to at least `bytes`, keeping the first min(old, new) bytes.
+  // Grows to at least `bytes`, keeping the first min(old, new) bytes. In a space that grows through the host
+  // (a GPU's), the contents wait in host memory while the old block is released and the larger one allocated, so
+  // that growing never holds both (a contact-slot field growing by one slot would otherwise lift a run's peak by
+  // the whole old field); if the larger block cannot be had, the old size is allocated again and its contents put
+  // back before the error goes on. Elsewhere the larger block is allocated beside the old one.
   void growKeep(std::size_t bytes) {
     if (bytes <= m_bytes) return;
-    Buffer bigger(*m_space, bytes);
-    if (m_bytes) m_space->copyWithin(bigger.m_ptr, m_ptr, m_bytes);
-    swap(bigger);
+    if (!m_bytes || !m_space->growsThroughHost()) {
+      Buffer bigger(*m_space, bytes);
+      if (m_bytes) m_space->copyWithin(bigger.m_ptr, m_ptr, m_bytes);
+      swap(bigger);
+      return;
+    }
+    const std::size_t kept = m_bytes;
+    std::unique_ptr<unsigned char[]> host(new unsigned char[kept]);
+    m_space->copyToHost(host.get(), m_ptr, kept);
+    release();
+    try {
+      m_ptr = m_space->allocate(bytes);
+      m_bytes = bytes;
+    } catch (...) {
+      m_ptr = m_space->allocate(kept);
+      m_bytes = kept;
+      m_space->copyFromHost(m_ptr, host.get(), kept);
+      throw;
+    }
+    m_space->copyFromHost(m_ptr, host.get(), kept);
   }
   void swap(Buffer& o) noexcept {
     std::swap(m_space, o.m_space);

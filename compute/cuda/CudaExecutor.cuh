@@ -34,6 +34,7 @@ class CudaMemory final : public MemorySpace {
   void copyFromHost(void* d, const void* s, std::size_t b) override;
   void copyWithin(void* d, const void* s, std::size_t b) override;
   void fillBytes(void* d, unsigned char v, std::size_t b) override;
+  bool growsThroughHost() const override { return true; }
 
  private:
   std::map<void*, std::size_t> m_sizes;

@@ -73,10 +73,6 @@ struct EngineSetup {
   // Data layouts: the executor's own, or forced to the GPU's (column-major candidate rows, slot-major
   // history) or the CPU's, so the CPU executor can be compared with itself across layouts in tests.
   enum class Layout { kExecutor, kGpu, kCpu } layout = Layout::kExecutor;
-  // The pair kernel's candidates tested a piece before any is evaluated (kernels::ComputeForces' kTwoPhase): unset,
-  // where the executor's lanes run in lockstep (the GPU) or the layout is the GPU's. PFLOW_TWO_PHASE_PAIRS=0|1
-  // overrides (measurements). The same sums either way.
-  std::optional<bool> twoPhasePairs;
 };
 
 struct ContactStats {

@@ -23,10 +23,19 @@ SCENE = os.path.join(SRC, "tests/data/service_scene.yaml")
 LONG = os.path.join(SRC, "tests/data/service_long_scene.yaml")
 
 
+_given = set()
+
+
 def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+    """A free loopback port, never one this process was given before: a port closed at once may be handed out again
+    by the next bind, and two services would then race for one."""
+    while True:
+        with socket.socket() as s:
+            s.bind(("127.0.0.1", 0))
+            port = s.getsockname()[1]
+        if port not in _given:
+            _given.add(port)
+            return port
 
 
 class Stack:
@@ -95,25 +104,43 @@ class Stack:
         if not os.environ.get("PFLOW_E2E_KEEP"):
             shutil.rmtree(self.dir, ignore_errors=True)
 
+    def diagnosis(self):
+        """Which processes have exited, and the end of each log: what a failed start is explained by."""
+        lines = []
+        for name, p in self.procs.items():
+            code = p.poll()
+            lines.append("%s: %s" % (name, "running" if code is None else "exited with %s" % code))
+            try:
+                with open(os.path.join(self.dir, name + ".log"), "rb") as f:
+                    tail = f.read()[-1500:].decode("utf-8", "replace")
+                lines += ["  | " + line for line in tail.splitlines()[-12:]]
+            except OSError:
+                pass
+        return "\n".join(lines)
 
-def wait_nodes(client, timeout=30):
+
+def wait_nodes(client, timeout=60, stack=None):
     end = time.time() + timeout
+    last = None
     while time.time() < end:
         try:
             nodes = client.nodes()
             if nodes and nodes[0].devices and not nodes[0].lost:
                 return nodes
-        except Exception:
-            pass
+            last = "nodes: %r" % (nodes,)
+        except Exception as e:  # the manager may not listen yet
+            last = repr(e)
+        if stack is not None and any(p.poll() is not None for p in stack.procs.values()):
+            break
         time.sleep(0.2)
-    raise AssertionError("the agent did not register")
+    raise AssertionError("the agent did not register (last answer: %s)\n%s" % (last, stack.diagnosis() if stack else ""))
 
 
 @pytest.fixture(scope="session")
 def stack():
     s = Stack()
     try:
-        wait_nodes(s.client())
+        wait_nodes(s.client(), stack=s)
         yield s
     finally:
         s.close()

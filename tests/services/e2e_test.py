@@ -46,10 +46,19 @@ for _k in ("PFLOW_TOKEN", "PFLOW_CA", "PFLOW_INSECURE", "PFLOW_CONFIG", "PFLOW_M
 CERTS = os.path.join(SRC, "deploy/local/certs.sh")
 
 
+_given = set()
+
+
 def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+    """A free loopback port, never one this process was given before: a port closed at once may be handed out again
+    by the next bind, and two services would then race for one."""
+    while True:
+        with socket.socket() as s:
+            s.bind(("127.0.0.1", 0))
+            port = s.getsockname()[1]
+        if port not in _given:
+            _given.add(port)
+            return port
 
 
 def can_bind(host):
