@@ -168,7 +168,9 @@ Result<Scene> withPlate(const std::string& yaml, const char* name, const ReposeO
 
 // The poured pile's scene: the beads on a lattice in a funnel (a cone from the orifice up, then a cylinder of the
 // lifted cylinder's radius), its orifice closed by a gate that slides away after the settling (100 mm, past the
-// plate's edge, where it stops); the plate below.
+// plate's edge, where it stops); the plate below, and 20 mm under it a tray that catches the beads rolling off the
+// plate's edge: falling on without it, ever faster, they made the neighbour lists be rebuilt every two steps by the
+// end of a run (600 161 rebuilds in 1.32·10⁶ steps, 56 % of the run's time; about one in 25 steps before they fall).
 Result<Scene> pourScene(const ReposeOptions& o) {
   const double R = o.cylinderRadius, rIn = R - o.rMax - 0.0005, cone = R - o.orifice / 2, z0 = o.pourHeight;
   const double fill = fillHeight(o, rIn), D = o.orifice;
@@ -182,6 +184,9 @@ Result<Scene> pourScene(const ReposeOptions& o) {
     material: plate
     box: {min: [%.6g, %.6g, %.6g], max: [%.6g, %.6g, %.6g], side: outside}
     motion: {velocity_profile: [[0, 0.5, 0, 0], [0.2, 0.5, 0, 0], [0.2001, 0, 0, 0]], start_time: %.6g}
+  - name: tray
+    material: plate
+    plane: {point: [0, 0, -0.02], normal: [0, 0, 1]}
 simulation:
   duration: %.6g
   precision: %s
@@ -296,6 +301,7 @@ ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind) {
     if (std::size_t(id[i]) >= o.particles) continue;  // a glued floor bead (below the pile's surface: not measured)
     ++counted;
     if (x[i].z > -0.001) ++res.onPlate;
+    res.lowest = counted == 1 ? x[i].z : std::min(res.lowest, x[i].z);
     res.kineticEnergy += 0.5 * o.density * 4.0 / 3.0 * kPi * r[i] * r[i] * r[i] * norm2(v[i]);
     dSum += 2 * r[i];
   }

@@ -75,6 +75,7 @@ struct ReposeResult {
   std::size_t particles = 0;
   std::size_t floorBeads = 0;          // glued beads of a bead floor (ReposeOptions::floor)
   std::size_t onPlate = 0;             // beads at the end above the plate's underside (the rest fell off its edge)
+  double lowest = 0;                   // the lowest bead centre at the end [m] (a poured pile's tray: 20 mm under the plate)
   double wall = 0;                     // [s]
   std::string error;
   bool unfinished = false;             // stopped at wallLimit, its state in the checkpoint

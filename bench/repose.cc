@@ -81,7 +81,7 @@ int main(int argc, char** argv) {
   for (double mr : rolling) {
     o.rolling = mr, o.wallRolling = wallRolling >= 0 ? wallRolling : mr;
     const pflow::bench::ReposeResult r = pflow::bench::runRepose(o, kind);
-    nlohmann::json j{{"rolling", mr}, {"wall_rolling", o.wallRolling}, {"friction", o.friction}, {"on_plate", r.onPlate}, {"angle_deg", r.angle}, {"quadrants_deg", r.quadrant},
+    nlohmann::json j{{"rolling", mr}, {"wall_rolling", o.wallRolling}, {"friction", o.friction}, {"on_plate", r.onPlate}, {"lowest_m", r.lowest}, {"angle_deg", r.angle}, {"quadrants_deg", r.quadrant},
                      {"spread_deg", r.spread}, {"heap_radius_m", r.heapRadius}, {"heap_height_m", r.heapHeight},
                      {"kinetic_energy_J", r.kineticEnergy}, {"particles", r.particles}, {"wall_s", r.wall},
                      {"executor", executor}, {"precision", o.precision}, {"method", o.method},

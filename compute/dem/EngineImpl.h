@@ -688,10 +688,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   // buildSlabs (pairs evaluated once): slab per particle, particles by slab, slab starts, owned candidates per row
   Buffer m_slabOf{m_mem, 0}, m_slabItems{m_mem, 0}, m_slabStart{m_mem, 0}, m_owned1{m_mem, 0};
   Index m_numSlabs = 0;  // 0: every particle evaluates all its pairs (ComputeForces)
-  // ComputeForces' kTwoPhase (candidates tested a piece before any is evaluated): where the executor's lanes run in
-  // lockstep (the GPU) or the layout is the GPU's; PFLOW_TWO_PHASE_PAIRS=0|1 overrides (measurements, tests). The
-  // same sums either way.
-  bool m_twoPhase = false;
+  bool m_twoPhase = false;  // ComputeForces' kTwoPhase: lockstep lanes or the GPU's layout (init); the same sums
   Index m_numBoundary = 0;
   HistoryPoolStore<Exec, R> m_pool;  // histories beyond the inline slots (HistoryPool.h)
   mutable typename HistoryPoolStore<Exec, R>::HostCopy m_savedPool;  // with save(): reduce_dt's in-memory checkpoint
@@ -712,7 +709,7 @@ void EngineImpl<Exec, R>::init() {
   if (const char* layout = std::getenv("PFLOW_SLOT_LAYOUT")) slotMajor = std::string(layout) == "slot";
   m_nbrShift = 0;
   if (const char* shift = std::getenv("PFLOW_ROW_SLICE_SHIFT")) m_nbrShift = std::uint32_t(std::clamp(std::atoi(shift), 0, 5));
-  m_twoPhase = Exec::kLockstepLanes || s.layout == EngineSetup::Layout::kGpu;
+  m_twoPhase = Exec::kLockstepLanes || s.layout == EngineSetup::Layout::kGpu;  // PFLOW_TWO_PHASE_PAIRS=0|1 overrides
   if (const char* two = std::getenv("PFLOW_TWO_PHASE_PAIRS")) m_twoPhase = std::atoi(two) != 0;
   m_pool.configure(s, Exec::kPairsOnce);
   const int slots = m_pool.inlineSlots(s.historySlots);

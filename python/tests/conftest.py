@@ -4,8 +4,8 @@ a user with the first admin's token. PFLOW_BIN_DIR (default: build/bin) and PFLO
 import os
 import shutil
 import signal
-import socket
 import subprocess
+import sys
 import tempfile
 import time
 
@@ -18,24 +18,11 @@ for _k in ("PFLOW_TOKEN", "PFLOW_CA", "PFLOW_INSECURE", "PFLOW_CONFIG", "PFLOW_M
     ENV.pop(_k, None)
     os.environ.pop(_k, None)
 os.environ.setdefault("PFLOW_CLI", os.path.join(BIN, "pflow"))
+sys.path.insert(0, os.path.join(SRC, "tests", "services"))
+from ports import free_port  # noqa: E402  (the checkout's tests/services/ports.py, shared with the service tests)
 
 SCENE = os.path.join(SRC, "tests/data/service_scene.yaml")
 LONG = os.path.join(SRC, "tests/data/service_long_scene.yaml")
-
-
-_given = set()
-
-
-def free_port():
-    """A free loopback port, never one this process was given before: a port closed at once may be handed out again
-    by the next bind, and two services would then race for one."""
-    while True:
-        with socket.socket() as s:
-            s.bind(("127.0.0.1", 0))
-            port = s.getsockname()[1]
-        if port not in _given:
-            _given.add(port)
-            return port
 
 
 class Stack:

@@ -1,6 +1,6 @@
 // The angle of repose's measurement (bench/ReposeHeap.h), on heaps built by hand: beads stacked on cones of known
 // slope (with a flattened apex and a one-layer foot that the fit must leave out) give back the cone's angle, over all
-// azimuths and in each quadrant.
+// azimuths and in each quadrant. A poured pile's scene on the CPU: beads off the plate land on its tray.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -93,6 +93,21 @@ TEST(ReposeCheckpoint, ACutRunGoesOnAsIfUncut) {
   const pflow::bench::ReposeResult other = pflow::bench::runRepose(o, kind);
   EXPECT_NE(other.error.find("another run's"), std::string::npos) << other.error;
   std::remove(o.checkpoint.c_str());
+}
+
+// The poured pile's scene runs, and the beads that spill off a small plate's edge come to rest on the tray 20 mm
+// under it instead of falling on (which made a run rebuild its neighbour lists every other step by its end).
+TEST(ReposePour, BeadsOffThePlateLandOnTheTray) {
+  pflow::bench::ReposeOptions o;
+  o.method = "pour";
+  o.particles = 300, o.roughness = 0, o.plateHalfWidth = 0.006, o.settle = 0.02, o.pour = 0.25, o.rest = 0.05;
+  const pflow::bench::ReposeResult r = pflow::bench::runRepose(o, pflow::compute::ExecutorKind::kCpu);
+  ASSERT_TRUE(r.error.empty()) << r.error;
+  std::printf("on the plate %zu of %zu, lowest centre %.4f m, %lld steps, %lld rebuilds\n", r.onPlate, r.particles, r.lowest,
+              (long long)r.steps, (long long)r.rebuilds);
+  EXPECT_LT(r.onPlate, r.particles) << "no bead reached the plate's edge: the tray is not tested";
+  EXPECT_GT(r.lowest, -0.02) << "a bead fell through the tray";
+  EXPECT_LT(r.lowest, -0.015) << "no bead reached the tray";
 }
 
 }  // namespace

@@ -33,6 +33,8 @@ import traceback
 import h5py
 import numpy as np
 
+from ports import free_port  # tests/services/ports.py, beside this file
+
 BIN, SRC = sys.argv[1], sys.argv[2]
 PFLOW = os.path.join(BIN, "pflow")
 SCENE = os.path.join(SRC, "tests/data/service_scene.yaml")
@@ -44,21 +46,6 @@ ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIR
 for _k in ("PFLOW_TOKEN", "PFLOW_CA", "PFLOW_INSECURE", "PFLOW_CONFIG", "PFLOW_MANAGER", "PFLOW_BACKEND"):
     ENV.pop(_k, None)  # the stack's own settings only
 CERTS = os.path.join(SRC, "deploy/local/certs.sh")
-
-
-_given = set()
-
-
-def free_port():
-    """A free loopback port, never one this process was given before: a port closed at once may be handed out again
-    by the next bind, and two services would then race for one."""
-    while True:
-        with socket.socket() as s:
-            s.bind(("127.0.0.1", 0))
-            port = s.getsockname()[1]
-        if port not in _given:
-            _given.add(port)
-            return port
 
 
 def can_bind(host):

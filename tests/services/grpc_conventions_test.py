@@ -15,7 +15,6 @@ Usage: grpc_conventions_test.py BIN_DIR SRC_DIR BUILD_DIR; exit code 77 (skipped
 """
 import os
 import signal
-import socket
 import subprocess
 import sys
 import tempfile
@@ -32,25 +31,11 @@ sys.path.insert(0, os.path.join(BUILD, "python"))
 from google.protobuf import descriptor_pb2  # noqa: E402
 from grpc_std.health.v1 import health_pb2, health_pb2_grpc  # noqa: E402
 from grpc_std.reflection.v1alpha import reflection_pb2, reflection_pb2_grpc  # noqa: E402
+from ports import free_port  # noqa: E402  (tests/services/ports.py, beside this file)
 
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
 SERVING = health_pb2.HealthCheckResponse.SERVING
 NOT_SERVING = health_pb2.HealthCheckResponse.NOT_SERVING
-
-
-_given = set()
-
-
-def free_port():
-    """A free loopback port, never one this process was given before: a port closed at once may be handed out again
-    by the next bind, and two services would then race for one."""
-    while True:
-        with socket.socket() as s:
-            s.bind(("127.0.0.1", 0))
-            port = s.getsockname()[1]
-        if port not in _given:
-            _given.add(port)
-            return port
 
 
 class Stack:
