@@ -1,15 +1,13 @@
 // Host pieces of the executor: the skin accumulator's rounding, the host memory space's parallel
-// first touch, copies and fills, and how a buffer grows in a device's memory and in the host's.
+// first touch, copies and fills, and how a buffer grows in a device's memory.
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstring>
-#include <string>
-#include <utility>
 #include <vector>
 
 #include "compute/core/Memory.h"
 #include "compute/dem/integrate/VelocityVerlet.h"
+#include "tests/support/DeviceLikeMemory.h"
 
 // The skin accumulator rounds each sum away from zero by at most one unit in the last place, the way
 // nextafterf would, and never below the exact sum: a slow creep still reaches the skin.
@@ -57,37 +55,7 @@ TEST(HostMemory, ParallelCopyAndFillMatchSerial) {
 
 namespace {
 
-// Host memory standing in for a device's: at most `limit` bytes at once (OutOfDeviceMemory beyond), growing through
-// the host as a GPU's memory does.
-class ScarceMemory final : public pflow::compute::MemorySpace {
- public:
-  explicit ScarceMemory(std::size_t limit) : m_limit(limit) {}
-  void* allocate(std::size_t bytes) override {
-    if (bytesInUse() + bytes > m_limit) throw pflow::compute::OutOfDeviceMemory("scarce: " + std::to_string(bytes));
-    account(std::ptrdiff_t(bytes));
-    void* p = ::operator new(bytes);
-    m_sizes.emplace_back(p, bytes);
-    return p;
-  }
-  void deallocate(void* p) override {
-    for (auto it = m_sizes.begin(); it != m_sizes.end(); ++it)
-      if (it->first == p) {
-        account(-std::ptrdiff_t(it->second));
-        m_sizes.erase(it);
-        break;
-      }
-    ::operator delete(p);
-  }
-  void copyToHost(void* d, const void* s, std::size_t b) override { std::memcpy(d, s, b); }
-  void copyFromHost(void* d, const void* s, std::size_t b) override { std::memcpy(d, s, b); }
-  void copyWithin(void* d, const void* s, std::size_t b) override { std::memcpy(d, s, b); }
-  void fillBytes(void* d, unsigned char v, std::size_t b) override { std::memset(d, v, b); }
-  bool growsThroughHost() const override { return true; }
-
- private:
-  std::size_t m_limit;
-  std::vector<std::pair<void*, std::size_t>> m_sizes;
-};
+using pflow::test::DeviceLikeMemory;
 
 std::vector<unsigned char> contents(pflow::compute::Buffer& b, std::size_t bytes) {
   std::vector<unsigned char> out(bytes);
@@ -100,7 +68,7 @@ std::vector<unsigned char> contents(pflow::compute::Buffer& b, std::size_t bytes
 // A slot field growing on a device never holds the old and the grown block at once: a 60-byte block grows to 100
 // in a space of 100 bytes, its contents kept, the peak the grown size (beside the old one it would need 160).
 TEST(BufferGrowth, ThroughTheHostNeverHoldsBothBlocks) {
-  ScarceMemory mem(100);
+  DeviceLikeMemory mem(100);
   pflow::compute::Buffer b(mem, 60);
   std::vector<unsigned char> pattern(60);
   for (std::size_t k = 0; k < pattern.size(); ++k) pattern[k] = static_cast<unsigned char>(7 * k + 1);
@@ -114,7 +82,7 @@ TEST(BufferGrowth, ThroughTheHostNeverHoldsBothBlocks) {
 
 // A growth that does not fit fails with the device's error and leaves the block as it was: its size, its contents.
 TEST(BufferGrowth, AGrowthThatDoesNotFitKeepsTheBlock) {
-  ScarceMemory mem(100);
+  DeviceLikeMemory mem(100);
   pflow::compute::Buffer b(mem, 60);
   std::vector<unsigned char> pattern(60);
   for (std::size_t k = 0; k < pattern.size(); ++k) pattern[k] = static_cast<unsigned char>(255 - 3 * k);
@@ -123,14 +91,4 @@ TEST(BufferGrowth, AGrowthThatDoesNotFitKeepsTheBlock) {
   EXPECT_EQ(b.bytes(), 60u);
   EXPECT_EQ(contents(b, 60), pattern);
   EXPECT_EQ(mem.bytesInUse(), 60u);
-}
-
-// Host memory (the CPU executor's) grows beside the old block: both are held for the copy.
-TEST(BufferGrowth, HostMemoryGrowsBesideTheOldBlock) {
-  pflow::compute::HostMemory mem(1);
-  pflow::compute::Buffer b(mem, 64);
-  mem.fillBytes(b.data(), 0x5A, 64);
-  b.growKeep(256);
-  EXPECT_EQ(contents(b, 64), std::vector<unsigned char>(64, 0x5A));
-  EXPECT_EQ(mem.peakBytes(), 64u + 256u);
 }

@@ -1,6 +1,7 @@
 // The cell sort's reorder of the DEM field table (compute/particles/FieldRows.h): every field moves with its row,
 // slot columns included, whichever scratch it goes through; the force and torque (kRecomputed) are left out and
-// lend their memory, so a large table is sorted with no buffer of its own.
+// lend their memory, so a large table is sorted with no buffer of its own. Slot fields grow on a device without
+// holding any field twice.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,6 +13,7 @@
 #include "compute/core/CpuExecutor.h"
 #include "compute/dem/ParticleFields.h"
 #include "compute/particles/FieldRows.h"
+#include "tests/support/DeviceLikeMemory.h"
 
 namespace pflow::compute {
 namespace {
@@ -127,6 +129,43 @@ TEST(FieldRowsReorder, SmallTableMovesEveryField) {
     const std::vector<Index> perm = shuffled(n, 3);
     t.rows.reorder(perm.data(), n);
     EXPECT_EQ(t.misplaced(perm, false), 0u);
+  }
+}
+
+// Slot fields growing in the GPU's layout (slot-major) in a memory that grows through the host, as CudaMemory does:
+// the space never holds more than it holds after the growths (before 2026-11-29 the bed's peak was 12 B a particle
+// above its end, the old wall field beside the grown one); every kept slot keeps its values, every new slot is
+// empty. The same growths in host memory, which keeps both blocks for the copy, do peak above the end: the check
+// tells the two apart.
+TEST(FieldStoreSlots, GrowingThroughTheHostHoldsNoFieldTwice) {
+  const Index n = 1000;
+  test::DeviceLikeMemory device;
+  CpuExecutor exec{1};
+  for (MemorySpace* mem : {static_cast<MemorySpace*>(&device), &exec.memory()}) {
+    Store store(*mem);
+    store.allocate(n, 2, 1, /*slotMajor=*/true);
+    const auto slotFields = [&](const auto& f) {
+      for (int k = 0; k < kNumFields; ++k)
+        if (Store::kTable[k].multiplicity != Multiplicity::kOne) f(k, Store::kTable[k]);
+    };
+    slotFields([&](int k, const FieldInfo& fi) {
+      std::vector<unsigned char> host(store.columnBytes(fi) * store.valuesPerParticle(fi));
+      for (std::size_t b = 0; b < host.size(); ++b) host[b] = tag(k, b, 0);
+      mem->copyFromHost(store.buffer(fi.id).data(), host.data(), host.size());
+    });
+    store.resizeSlots(Multiplicity::kWallSlots, 2);
+    store.resizeSlots(Multiplicity::kContactSlots, 3);
+    if (mem == &device) EXPECT_EQ(mem->peakBytes(), mem->bytesInUse());
+    else EXPECT_GT(mem->peakBytes(), mem->bytesInUse());
+    slotFields([&](int k, const FieldInfo& fi) {
+      const std::size_t column = store.columnBytes(fi), kept = fi.multiplicity == Multiplicity::kWallSlots ? 1 : 2;
+      std::vector<unsigned char> host(column * store.valuesPerParticle(fi));
+      mem->copyToHost(host.data(), store.buffer(fi.id).data(), host.size());
+      std::size_t bad = 0;
+      for (std::size_t b = 0; b < host.size(); ++b)
+        bad += host[b] != (b < kept * column ? tag(k, b, 0) : DemFieldSet::emptySlotByte(fi.id));
+      EXPECT_EQ(bad, 0u) << fi.name;
+    });
   }
 }
 
