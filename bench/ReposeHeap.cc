@@ -170,7 +170,7 @@ Result<Scene> withPlate(const std::string& yaml, const char* name, const ReposeO
 // lifted cylinder's radius), its orifice closed by a gate that slides away after the settling (100 mm, past the
 // plate's edge, where it stops); the plate below, and 20 mm under it a tray that catches the beads rolling off the
 // plate's edge: falling on without it, ever faster, they made the neighbour lists be rebuilt every two steps by the
-// end of a run (600 161 rebuilds in 1.32·10⁶ steps, 56 % of the run's time; about one in 25 steps before they fall).
+// end of a run (600 161 rebuilds in 1.32·10⁶ steps, 56 % of the run's time; one in 24 steps before any falls).
 Result<Scene> pourScene(const ReposeOptions& o) {
   const double R = o.cylinderRadius, rIn = R - o.rMax - 0.0005, cone = R - o.orifice / 2, z0 = o.pourHeight;
   const double fill = fillHeight(o, rIn), D = o.orifice;
