@@ -15,19 +15,25 @@ import matplotlib.pyplot as plt  # noqa: E402
 MEASURED, SPREAD = 25.2, 0.8
 
 
+def run_key(r):
+    """A run's rolling coefficients, floor and pour height [mm] (40 where the CSV predates the column)."""
+    return (r["rolling"], r.get("wall_rolling", r["rolling"]), r.get("floor") or "field",
+            round(float(r.get("pour_height_m") or 0.04) * 1e3, 3))
+
+
 def main():
     out, rows_path, profiles_path = sys.argv[1:4]
     rows = list(csv.DictReader(open(rows_path)))
     profiles = list(csv.DictReader(open(profiles_path)))
     fig, ax = plt.subplots(figsize=(6, 3.8))
-    for row, colour in zip(rows, ("tab:blue", "tab:orange", "tab:green", "tab:red")):
-        key = (row["rolling"], row.get("wall_rolling", row["rolling"]), row.get("floor") or "field")
-        pts = [(float(p["radius_m"]), float(p["height_m"])) for p in profiles
-               if (p["rolling"], p.get("wall_rolling", p["rolling"]), p.get("floor") or "field") == key]
+    for row, colour in zip(rows, ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple")):
+        key = run_key(row)
+        pts = [(float(p["radius_m"]), float(p["height_m"])) for p in profiles if run_key(p) == key]
         radius, lo, hi = float(row["heap_radius_m"]), float(row["fit_from_m"]), float(row["fit_to_m"])
         pts = [(r, h) for r, h in pts if r <= 1.3 * radius and h > -0.002]
         ax.plot([r * 1e3 for r, _ in pts], [h * 1e3 for _, h in pts], ".", ms=3, color=colour,
-                label="μr %s / %s%s: %.1f°" % (key[0], key[1], ", bead floor" if key[2] == "beads" else "", float(row["angle_deg"])))
+                label="μr %s / %s%s%s: %.1f°" % (key[0], key[1], ", bead floor" if key[2] == "beads" else "",
+                                                  "" if key[3] == 40 else ", poured from %g mm" % key[3], float(row["angle_deg"])))
         fit = [(r, h) for r, h in pts if lo <= r <= hi]
         n = len(fit)
         sx, sy = sum(r for r, _ in fit), sum(h for _, h in fit)
