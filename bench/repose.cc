@@ -52,7 +52,8 @@ int main(int argc, char** argv) {
                  "stop after this many seconds of stepping (at the next neighbour rebuild), writing --checkpoint; exit 3")
       ->capture_default_str();
   app.add_option("--csv", csv, "write the rows here");
-  app.add_option("--profiles", profiles, "write the heaps' surfaces here (rolling, wall_rolling, radius, height)");
+  app.add_option("--profiles", profiles, "write the heaps' surfaces here (rolling, wall_rolling, radius, height, and the run's floor, "
+                                         "pour height, precision and --plate, which tell runs apart)");
   CLI11_PARSE(app, argc, argv);
   pflow::log::init("pflow-repose", "warn");
   if (!o.checkpoint.empty() && rolling.size() != 1) {
@@ -71,11 +72,11 @@ int main(int argc, char** argv) {
   if (!csv.empty()) {
     rows.open(csv);
     rows << "rolling,wall_rolling,friction,angle_deg,q0_deg,q1_deg,q2_deg,q3_deg,spread_deg,heap_radius_m,heap_height_m,fit_from_m,fit_to_m,"
-            "kinetic_energy_J,particles,executor,precision,wall_s,floor,pour_height_m\n";
+            "kinetic_energy_J,particles,executor,precision,wall_s,floor,pour_height_m,plate_half_width_m\n";
   }
   if (!profiles.empty()) {
     surf.open(profiles);
-    surf << "rolling,wall_rolling,radius_m,height_m,floor,pour_height_m\n";
+    surf << "rolling,wall_rolling,radius_m,height_m,floor,pour_height_m,precision,plate_half_width_m\n";
   }
   int failed = 0, unfinished = 0;
   for (double mr : rolling) {
@@ -85,7 +86,7 @@ int main(int argc, char** argv) {
                      {"spread_deg", r.spread}, {"heap_radius_m", r.heapRadius}, {"heap_height_m", r.heapHeight},
                      {"kinetic_energy_J", r.kineticEnergy}, {"particles", r.particles}, {"wall_s", r.wall},
                      {"executor", executor}, {"precision", o.precision}, {"method", o.method},
-                     {"floor", o.floor}, {"floor_beads", r.floorBeads}, {"pour_height_m", o.pourHeight}};
+                     {"floor", o.floor}, {"floor_beads", r.floorBeads}, {"pour_height_m", o.pourHeight}, {"plate_half_width_m", o.plateHalfWidth}};
     if (!r.error.empty()) j["error"] = r.error, ++failed;
     if (r.unfinished) {  // the heap is not measured: the run goes on from the checkpoint
       std::printf("%s\n", nlohmann::json{{"unfinished", true}, {"time_s", r.time}, {"wall_s", r.wall}, {"steps", r.steps}, {"rebuilds", r.rebuilds}, {"phases", r.phases}, {"triangles", r.triangles}, {"cell_m", r.cellSize}, {"contact_slots", r.contactSlots}, {"wall_slots", r.wallSlots}, {"checkpoint", o.checkpoint}}.dump().c_str());
@@ -100,10 +101,11 @@ int main(int argc, char** argv) {
       rows << mr << "," << o.wallRolling << "," << o.friction << "," << r.angle << "," << r.quadrant[0] << "," << r.quadrant[1] << "," << r.quadrant[2]
            << "," << r.quadrant[3] << "," << r.spread << "," << r.heapRadius << "," << r.heapHeight << "," << r.fitFrom << ","
            << r.fitTo << "," << r.kineticEnergy << "," << r.particles << "," << executor << "," << o.precision << "," << r.wall << "," << o.floor
-           << "," << o.pourHeight << "\n";
+           << "," << o.pourHeight << "," << o.plateHalfWidth << "\n";
     if (surf.is_open())
       for (std::size_t k = 0; k < r.profile.height.size(); ++k)
-        if (r.profile.height[k] == r.profile.height[k]) surf << mr << "," << o.wallRolling << "," << r.profile.radius[k] << "," << r.profile.height[k] << "," << o.floor << "," << o.pourHeight << "\n";
+        if (r.profile.height[k] == r.profile.height[k]) surf << mr << "," << o.wallRolling << "," << r.profile.radius[k] << "," << r.profile.height[k] << "," << o.floor << "," << o.pourHeight << ","
+                                                    << o.precision << "," << o.plateHalfWidth << "\n";
   }
   return failed ? 1 : unfinished ? 3 : 0;
 }

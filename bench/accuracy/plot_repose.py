@@ -16,24 +16,33 @@ MEASURED, SPREAD = 25.2, 0.8
 
 
 def run_key(r):
-    """A run's rolling coefficients, floor and pour height [mm] (40 where the CSV predates the column)."""
+    """A run's rolling coefficients, floor, pour height [mm], precision and plate half-width [mm] (0: the default;
+    40 mm, float and 0 where a CSV predates those columns)."""
     return (r["rolling"], r.get("wall_rolling", r["rolling"]), r.get("floor") or "field",
-            round(float(r.get("pour_height_m") or 0.04) * 1e3, 3))
+            round(float(r.get("pour_height_m") or 0.04) * 1e3, 3), r.get("precision") or "float",
+            round(float(r.get("plate_half_width_m") or 0) * 1e3, 3))
+
+
+def label(key, angle):
+    rolling, wall, floor, height, precision, plate = key
+    more = [", bead floor" if floor == "beads" else "", "" if height == 40 else ", poured from %g mm" % height,
+            "" if precision == "float" else ", " + precision, "" if plate == 0 else ", %g mm platform" % (2 * plate)]
+    return "μr %s / %s%s: %.1f°" % (rolling, wall, "".join(more), angle)
 
 
 def main():
     out, rows_path, profiles_path = sys.argv[1:4]
     rows = list(csv.DictReader(open(rows_path)))
     profiles = list(csv.DictReader(open(profiles_path)))
-    fig, ax = plt.subplots(figsize=(6, 3.8))
-    for row, colour in zip(rows, ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple")):
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    colours = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink", "tab:olive")
+    for row, colour in zip(rows, colours):
         key = run_key(row)
         pts = [(float(p["radius_m"]), float(p["height_m"])) for p in profiles if run_key(p) == key]
         radius, lo, hi = float(row["heap_radius_m"]), float(row["fit_from_m"]), float(row["fit_to_m"])
         pts = [(r, h) for r, h in pts if r <= 1.3 * radius and h > -0.002]
         ax.plot([r * 1e3 for r, _ in pts], [h * 1e3 for _, h in pts], ".", ms=3, color=colour,
-                label="μr %s / %s%s%s: %.1f°" % (key[0], key[1], ", bead floor" if key[2] == "beads" else "",
-                                                  "" if key[3] == 40 else ", poured from %g mm" % key[3], float(row["angle_deg"])))
+                label=label(key, float(row["angle_deg"])))
         fit = [(r, h) for r, h in pts if lo <= r <= hi]
         n = len(fit)
         sx, sy = sum(r for r, _ in fit), sum(h for _, h in fit)
@@ -49,7 +58,7 @@ def main():
     ax.plot([], [], "--", color="k", lw=0.7, label="measured 25.2 ± 0.8° (Sunday et al. 2020)")
     ax.set_xlabel("distance from the axis [mm]")
     ax.set_ylabel("highest bead top [mm]")
-    ax.set_title("Poured pile, 58 040 glass beads (d 0.8–1.2 mm), float")
+    ax.set_title("Poured pile, 58 040 glass beads (d 0.8–1.2 mm); float unless marked")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="upper right")
     fig.tight_layout()

@@ -45,8 +45,9 @@ if [[ " $* " == *" cuda "* || " $* " == *"--executor=cuda"* ]] && [[ " $* " != *
     fi
   done
   # The angle of repose (docs/accuracy.md): the poured pile at the paper's mu_r = 0.09 read as pflow's and as Chrono's
-  # (0.18 bead-bead here), both doubled (0.36 / 0.18), 0.18 / 0.09 on a floor of glued beads and poured from 25 mm
-  # instead of 40; float; 260-470 s of GPU each.
+  # (0.18 bead-bead here), both doubled (0.36 / 0.18), 0.18 / 0.09 on a floor of glued beads, poured from 25 mm
+  # instead of 40, in double, and on a 100 mm platform of glued beads (a fixed base); float but for the one; 250-490 s
+  # of GPU each.
   if [[ -x "$bindir/pflow-repose" ]]; then
     "$bindir/pflow-repose" --executor cuda --method pour --precision float --settle 0.2 --rest 0.3 \
       --rolling 0.09,0.18 --wall-rolling 0.09 \
@@ -60,7 +61,13 @@ if [[ " $* " == *" cuda "* || " $* " == *"--executor=cuda"* ]] && [[ " $* " != *
     "$bindir/pflow-repose" --executor cuda --method pour --precision float --settle 0.2 --rest 0.3 \
       --rolling 0.18 --wall-rolling 0.09 --pour-height 0.025 \
       --csv "$out/repose_poured_low.csv" --profiles "$out/repose_poured_profiles_low.csv"
-    for more in doubled beads low; do
+    "$bindir/pflow-repose" --executor cuda --method pour --precision double --settle 0.2 --rest 0.3 \
+      --rolling 0.18 --wall-rolling 0.09 \
+      --csv "$out/repose_poured_double.csv" --profiles "$out/repose_poured_profiles_double.csv"
+    "$bindir/pflow-repose" --executor cuda --method pour --precision float --settle 0.2 --rest 0.3 \
+      --rolling 0.18 --wall-rolling 0.09 --floor beads --plate 0.05 \
+      --csv "$out/repose_poured_platform.csv" --profiles "$out/repose_poured_profiles_platform.csv"
+    for more in doubled beads low double platform; do
       tail -n +2 "$out/repose_poured_$more.csv" >> "$out/repose_poured.csv"
       tail -n +2 "$out/repose_poured_profiles_$more.csv" >> "$out/repose_poured_profiles.csv"
       rm -f "$out/repose_poured_$more.csv" "$out/repose_poured_profiles_$more.csv"
