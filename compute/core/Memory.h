@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <cstring>
 #include <memory>
+#include <vector>
 #include <stdexcept>
 #include <utility>
 
@@ -83,33 +84,53 @@ class Buffer {
     if (bytes) m_ptr = m_space->allocate(bytes);
     m_bytes = bytes;
   }
-  // Grows to at least `bytes`, keeping the first min(old, new) bytes. In a space that grows through the host
-  // (a GPU's), the contents wait in host memory while the old block is released and the larger one allocated, so
-  // that growing never holds both (a contact-slot field growing by one slot would otherwise lift a run's peak by
-  // the whole old field); if the larger block cannot be had, the old size is allocated again and its contents put
-  // back before the error goes on. Elsewhere the larger block is allocated beside the old one.
+  // Grows to at least `bytes`, keeping the first min(old, new) bytes: growPlaced with the old contents in place.
   void growKeep(std::size_t bytes) {
     if (bytes <= m_bytes) return;
+    growPlaced(bytes, {Move{0, 0, m_bytes}});
+  }
+  // A piece of the old contents that growPlaced keeps: `bytes` from offset `from` of the old block to offset `to` of
+  // the grown one.
+  struct Move {
+    std::size_t from, to, bytes;
+  };
+  // Grows to `bytes` (more than now), the pieces `moves` of the old contents kept at their new offsets, the rest
+  // undefined. In a space that grows through the host (a GPU's), the pieces wait in host memory while the old block is
+  // released and the larger one allocated, so that growing never holds both (a contact-slot field growing by one
+  // slot, or every field of a rank whose rows outgrow their capacity, would otherwise lift a run's peak by the old
+  // block); if the larger block cannot be had, the old size is allocated again and the pieces put back where they
+  // were before the error goes on. Elsewhere the larger block is allocated beside the old one.
+  void growPlaced(std::size_t bytes, const std::vector<Move>& moves) {
     if (!m_bytes || !m_space->growsThroughHost()) {
       Buffer bigger(*m_space, bytes);
-      if (m_bytes) m_space->copyWithin(bigger.m_ptr, m_ptr, m_bytes);
+      for (const Move& m : moves)
+        if (m.bytes) m_space->copyWithin(static_cast<unsigned char*>(bigger.m_ptr) + m.to, static_cast<unsigned char*>(m_ptr) + m.from, m.bytes);
       swap(bigger);
       return;
     }
-    const std::size_t kept = m_bytes;
-    std::unique_ptr<unsigned char[]> host(new unsigned char[kept]);
-    m_space->copyToHost(host.get(), m_ptr, kept);
+    std::size_t kept = 0;
+    for (const Move& m : moves) kept += m.bytes;
+    std::unique_ptr<unsigned char[]> host(new unsigned char[kept ? kept : 1]);
+    const auto each = [&](auto&& f) {
+      std::size_t at = 0;
+      for (const Move& m : moves) {
+        if (m.bytes) f(m, host.get() + at);
+        at += m.bytes;
+      }
+    };
+    each([&](const Move& m, unsigned char* h) { m_space->copyToHost(h, static_cast<unsigned char*>(m_ptr) + m.from, m.bytes); });
+    const std::size_t old = m_bytes;
     release();
     try {
       m_ptr = m_space->allocate(bytes);
       m_bytes = bytes;
     } catch (...) {
-      m_ptr = m_space->allocate(kept);
-      m_bytes = kept;
-      m_space->copyFromHost(m_ptr, host.get(), kept);
+      m_ptr = m_space->allocate(old);
+      m_bytes = old;
+      each([&](const Move& m, const unsigned char* h) { m_space->copyFromHost(static_cast<unsigned char*>(m_ptr) + m.from, h, m.bytes); });
       throw;
     }
-    m_space->copyFromHost(m_ptr, host.get(), kept);
+    each([&](const Move& m, const unsigned char* h) { m_space->copyFromHost(static_cast<unsigned char*>(m_ptr) + m.to, h, m.bytes); });
   }
   void swap(Buffer& o) noexcept {
     std::swap(m_space, o.m_space);

@@ -123,17 +123,19 @@ void FieldStore<Set, R>::resize(Index n) {
   const Index capacity = std::max<Index>(n, m_capacity + m_capacity / 2);
   for (int k = 0; k < kCount; ++k) {
     const Info& f = kTable[k];
-    Buffer& b = m_fields[k];
-    Buffer grown(*m_space, f.elementBytes * valuesPerParticle(f) * std::size_t(capacity));
+    const std::size_t bytes = f.elementBytes * valuesPerParticle(f) * std::size_t(capacity);
+    if (!bytes) continue;  // a slot field with no slots
+    std::vector<Buffer::Move> moves;
     if (m_slotMajor && f.multiplicity != Multiplicity::kOne) {
       // Columns are `capacity` long: each moves to its new offset.
       for (std::size_t c = 0; c < valuesPerParticle(f); ++c)
-        m_space->copyWithin(static_cast<unsigned char*>(grown.data()) + c * f.elementBytes * capacity,
-                            static_cast<const unsigned char*>(b.data()) + c * columnBytes(f), f.elementBytes * m_n);
-    } else if (m_n) {
-      m_space->copyWithin(grown.data(), b.data(), fieldBytes(f, m_n));
+        moves.push_back({c * columnBytes(f), c * f.elementBytes * capacity, f.elementBytes * m_n});
+    } else {
+      moves.push_back({0, 0, fieldBytes(f, m_n)});
     }
-    b.swap(grown);
+    // Through the host on a GPU (Buffer::growPlaced): a rank whose rows outgrow their capacity never holds a field
+    // twice.
+    m_fields[k].growPlaced(bytes, moves);
   }
   m_capacity = capacity;
   m_n = n;

@@ -2,6 +2,8 @@
 // first touch, copies and fills, and how a buffer grows in a device's memory.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <cmath>
 #include <vector>
 
@@ -78,6 +80,30 @@ TEST(BufferGrowth, ThroughTheHostNeverHoldsBothBlocks) {
   EXPECT_EQ(contents(b, 60), pattern);
   EXPECT_EQ(mem.peakBytes(), 100u);
   EXPECT_EQ(mem.bytesInUse(), 100u);
+}
+
+// Growing with pieces moved (Buffer::growPlaced, the capacity growth of slot-major columns): each piece lands at its
+// new offset, through the host without holding both blocks; a growth that does not fit puts each piece back where it
+// was.
+TEST(BufferGrowth, PlacedPiecesMoveThroughTheHostAndComeBackOnFailure) {
+  DeviceLikeMemory mem(100);
+  pflow::compute::Buffer b(mem, 40);
+  std::vector<unsigned char> pattern(40);
+  for (std::size_t k = 0; k < pattern.size(); ++k) pattern[k] = static_cast<unsigned char>(5 * k + 3);
+  mem.copyFromHost(b.data(), pattern.data(), pattern.size());
+  // Two columns of 20 bytes, 15 of them kept, to columns of 40.
+  const std::vector<pflow::compute::Buffer::Move> moves{{0, 0, 15}, {20, 40, 15}};
+  EXPECT_THROW(b.growPlaced(120, moves), pflow::compute::OutOfDeviceMemory);
+  EXPECT_EQ(b.bytes(), 40u);
+  const std::vector<unsigned char> back = contents(b, 40);
+  EXPECT_TRUE(std::equal(pattern.begin(), pattern.begin() + 15, back.begin()));
+  EXPECT_TRUE(std::equal(pattern.begin() + 20, pattern.begin() + 35, back.begin() + 20));
+  b.growPlaced(80, moves);
+  EXPECT_EQ(b.bytes(), 80u);
+  const std::vector<unsigned char> grown = contents(b, 80);
+  EXPECT_TRUE(std::equal(pattern.begin(), pattern.begin() + 15, grown.begin()));
+  EXPECT_TRUE(std::equal(pattern.begin() + 20, pattern.begin() + 35, grown.begin() + 40));
+  EXPECT_EQ(mem.peakBytes(), 80u);
 }
 
 // A growth that does not fit fails with the device's error and leaves the block as it was: its size, its contents.

@@ -1,7 +1,7 @@
 // The cell sort's reorder of the DEM field table (compute/particles/FieldRows.h): every field moves with its row,
 // slot columns included, whichever scratch it goes through; the force and torque (kRecomputed) are left out and
-// lend their memory, so a large table is sorted with no buffer of its own. Slot fields grow on a device without
-// holding any field twice.
+// lend their memory, so a large table is sorted with no buffer of its own. Slot fields, and the rows' capacity, grow
+// on a device without holding any field twice.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -166,6 +166,50 @@ TEST(FieldStoreSlots, GrowingThroughTheHostHoldsNoFieldTwice) {
         bad += host[b] != (b < kept * column ? tag(k, b, 0) : DemFieldSet::emptySlotByte(fi.id));
       EXPECT_EQ(bad, 0u) << fi.name;
     });
+  }
+}
+
+// A rank's rows outgrowing their capacity (FieldStore::resize, distributed runs) in the GPU's layout, in a memory that
+// grows through the host: every field, slot columns included, moves to its new place with no field held twice (the
+// peak is the end's; before 2026-11-29 each field's old and grown blocks were held together while it moved), and
+// every kept row keeps its bytes, each slot column at its new offset. Host memory does hold both: the check tells
+// the two apart.
+TEST(FieldStoreCapacity, GrowingThroughTheHostHoldsNoFieldTwice) {
+  const Index n = 1000, grown = 1700;
+  test::DeviceLikeMemory device;
+  CpuExecutor exec{1};
+  for (MemorySpace* mem : {static_cast<MemorySpace*>(&device), &exec.memory()}) {
+    Store store(*mem);
+    store.allocate(n, 2, 1, /*slotMajor=*/true);
+    const std::size_t before = mem->bytesInUse();
+    for (int k = 0; k < kNumFields; ++k) {
+      const FieldInfo& fi = Store::kTable[k];
+      std::vector<unsigned char> host(store.fieldBytes(fi, n));
+      for (std::size_t b = 0; b < host.size(); ++b) host[b] = tag(k, b, 1);
+      if (!host.empty()) mem->copyFromHost(store.buffer(fi.id).data(), host.data(), host.size());
+    }
+    const std::size_t peakBefore = mem->peakBytes();
+    store.resize(grown);
+    EXPECT_EQ(store.size(), grown);
+    EXPECT_GE(store.capacity(), grown);
+    EXPECT_GT(mem->bytesInUse(), before);
+    if (mem == &device) EXPECT_EQ(mem->peakBytes(), std::max(peakBefore, mem->bytesInUse()));
+    else EXPECT_GT(mem->peakBytes(), mem->bytesInUse());
+    for (int k = 0; k < kNumFields; ++k) {
+      const FieldInfo& fi = Store::kTable[k];
+      const std::size_t values = store.valuesPerParticle(fi), oldColumn = fi.elementBytes * std::size_t(n);
+      if (!values) continue;
+      std::vector<unsigned char> host(store.fieldBytes(fi, store.capacity()));
+      mem->copyToHost(host.data(), store.buffer(fi.id).data(), host.size());
+      std::size_t bad = 0;
+      if (fi.multiplicity == Multiplicity::kOne) {
+        for (std::size_t b = 0; b < oldColumn; ++b) bad += host[b] != tag(k, b, 1);
+      } else {
+        for (std::size_t c = 0; c < values; ++c)
+          for (std::size_t b = 0; b < oldColumn; ++b) bad += host[c * store.columnBytes(fi) + b] != tag(k, c * oldColumn + b, 1);
+      }
+      EXPECT_EQ(bad, 0u) << fi.name;
+    }
   }
 }
 
