@@ -65,6 +65,14 @@ std::vector<unsigned char> contents(pflow::compute::Buffer& b, std::size_t bytes
   return out;
 }
 
+// Fills the whole block with byte k = a k + c and returns what it wrote.
+std::vector<unsigned char> fill(pflow::compute::Buffer& b, unsigned a, unsigned c) {
+  std::vector<unsigned char> pattern(b.bytes());
+  for (std::size_t k = 0; k < pattern.size(); ++k) pattern[k] = static_cast<unsigned char>(a * k + c);
+  b.space()->copyFromHost(b.data(), pattern.data(), pattern.size());
+  return pattern;
+}
+
 }  // namespace
 
 // A slot field growing on a device never holds the old and the grown block at once: a 60-byte block grows to 100
@@ -72,9 +80,7 @@ std::vector<unsigned char> contents(pflow::compute::Buffer& b, std::size_t bytes
 TEST(BufferGrowth, ThroughTheHostNeverHoldsBothBlocks) {
   DeviceLikeMemory mem(100);
   pflow::compute::Buffer b(mem, 60);
-  std::vector<unsigned char> pattern(60);
-  for (std::size_t k = 0; k < pattern.size(); ++k) pattern[k] = static_cast<unsigned char>(7 * k + 1);
-  mem.copyFromHost(b.data(), pattern.data(), pattern.size());
+  const std::vector<unsigned char> pattern = fill(b, 7, 1);
   b.growKeep(100);
   EXPECT_EQ(b.bytes(), 100u);
   EXPECT_EQ(contents(b, 60), pattern);
@@ -88,9 +94,7 @@ TEST(BufferGrowth, ThroughTheHostNeverHoldsBothBlocks) {
 TEST(BufferGrowth, PlacedPiecesMoveThroughTheHostAndComeBackOnFailure) {
   DeviceLikeMemory mem(100);
   pflow::compute::Buffer b(mem, 40);
-  std::vector<unsigned char> pattern(40);
-  for (std::size_t k = 0; k < pattern.size(); ++k) pattern[k] = static_cast<unsigned char>(5 * k + 3);
-  mem.copyFromHost(b.data(), pattern.data(), pattern.size());
+  const std::vector<unsigned char> pattern = fill(b, 5, 3);
   // Two columns of 20 bytes, 15 of them kept, to columns of 40.
   const std::vector<pflow::compute::Buffer::Move> moves{{0, 0, 15}, {20, 40, 15}};
   EXPECT_THROW(b.growPlaced(120, moves), pflow::compute::OutOfDeviceMemory);
@@ -110,9 +114,7 @@ TEST(BufferGrowth, PlacedPiecesMoveThroughTheHostAndComeBackOnFailure) {
 TEST(BufferGrowth, AGrowthThatDoesNotFitKeepsTheBlock) {
   DeviceLikeMemory mem(100);
   pflow::compute::Buffer b(mem, 60);
-  std::vector<unsigned char> pattern(60);
-  for (std::size_t k = 0; k < pattern.size(); ++k) pattern[k] = static_cast<unsigned char>(255 - 3 * k);
-  mem.copyFromHost(b.data(), pattern.data(), pattern.size());
+  const std::vector<unsigned char> pattern = fill(b, 253, 255);  // 255 - 3 k modulo 256
   EXPECT_THROW(b.growKeep(120), pflow::compute::OutOfDeviceMemory);
   EXPECT_EQ(b.bytes(), 60u);
   EXPECT_EQ(contents(b, 60), pattern);
