@@ -193,8 +193,7 @@ simulation:
 )",
                 z0, D / 2, R, cone, fill + 0.01, -D, -D, z0 - 0.004, D, D, z0 - 0.0001, o.settle,
                 o.settle + o.pour + o.rest + 0.01, o.precision.c_str());
-  return withPlate(beadsYaml(o, z0 + cone + 0.001, rIn, fill) + buf, "repose-pour", o,
-                   o.plateHalfWidth > 0 ? o.plateHalfWidth : 4 * R);
+  return withPlate(beadsYaml(o, z0 + cone + 0.001, rIn, fill) + buf, "repose-pour", o, plateHalfWidth(o));
 }
 
 // The lifted cylinder's scene: the beads on a lattice in a cylinder (open at both ends) standing on the plate,
@@ -215,13 +214,14 @@ simulation:
 )",
                 R, base + fill + o.rMax + 0.005, v, tLift, v, tLift + 1e-4, o.settle, o.settle + tLift + o.rest + 0.01,
                 o.precision.c_str());
-  return withPlate(beadsYaml(o, base, rIn, fill) + buf, "repose-lift", o, o.plateHalfWidth > 0 ? o.plateHalfWidth : 6 * R);
+  return withPlate(beadsYaml(o, base, rIn, fill) + buf, "repose-lift", o, plateHalfWidth(o));
 }
 
 }  // namespace
 
 ReposeResult runRepose(const ReposeOptions& o, compute::ExecutorKind kind) {
   ReposeResult res;
+  res.plateHalfWidth = plateHalfWidth(o);
   auto scene = o.method == "pour" ? pourScene(o) : liftScene(o);
   if (!scene) {
     res.error = scene.status().toString();

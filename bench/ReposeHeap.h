@@ -59,6 +59,11 @@ struct ReposeOptions {
   std::function<void(double time, std::int64_t steps, double wallSeconds)> onProgress;
 };
 
+// The plate's half-width a run uses [m]: ReposeOptions::plateHalfWidth, or its default for the method (0 there).
+inline double plateHalfWidth(const ReposeOptions& o) {
+  return o.plateHalfWidth > 0 ? o.plateHalfWidth : (o.method == "pour" ? 4 : 6) * o.cylinderRadius;
+}
+
 // The surface of the heap: the highest bead top (z + r) in rings of width `bin` about the axis.
 struct ReposeProfile {
   double bin = 0;
@@ -75,6 +80,7 @@ struct ReposeResult {
   std::size_t particles = 0;
   std::size_t floorBeads = 0;          // glued beads of a bead floor (ReposeOptions::floor)
   std::size_t onPlate = 0;             // beads at the end above the plate's underside (the rest fell off its edge)
+  double plateHalfWidth = 0;           // the plate's half-width the run used [m] (plateHalfWidth(options))
   double lowest = 0;                   // the lowest bead centre at the end [m] (a poured pile's tray: 20 mm under the plate)
   double wall = 0;                     // [s]
   std::string error;

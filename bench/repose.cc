@@ -86,7 +86,7 @@ int main(int argc, char** argv) {
                      {"spread_deg", r.spread}, {"heap_radius_m", r.heapRadius}, {"heap_height_m", r.heapHeight},
                      {"kinetic_energy_J", r.kineticEnergy}, {"particles", r.particles}, {"wall_s", r.wall},
                      {"executor", executor}, {"precision", o.precision}, {"method", o.method},
-                     {"floor", o.floor}, {"floor_beads", r.floorBeads}, {"pour_height_m", o.pourHeight}, {"plate_half_width_m", o.plateHalfWidth}};
+                     {"floor", o.floor}, {"floor_beads", r.floorBeads}, {"pour_height_m", o.pourHeight}, {"plate_half_width_m", r.plateHalfWidth}};
     if (!r.error.empty()) j["error"] = r.error, ++failed;
     if (r.unfinished) {  // the heap is not measured: the run goes on from the checkpoint
       std::printf("%s\n", nlohmann::json{{"unfinished", true}, {"time_s", r.time}, {"wall_s", r.wall}, {"steps", r.steps}, {"rebuilds", r.rebuilds}, {"phases", r.phases}, {"triangles", r.triangles}, {"cell_m", r.cellSize}, {"contact_slots", r.contactSlots}, {"wall_slots", r.wallSlots}, {"checkpoint", o.checkpoint}}.dump().c_str());
@@ -101,11 +101,11 @@ int main(int argc, char** argv) {
       rows << mr << "," << o.wallRolling << "," << o.friction << "," << r.angle << "," << r.quadrant[0] << "," << r.quadrant[1] << "," << r.quadrant[2]
            << "," << r.quadrant[3] << "," << r.spread << "," << r.heapRadius << "," << r.heapHeight << "," << r.fitFrom << ","
            << r.fitTo << "," << r.kineticEnergy << "," << r.particles << "," << executor << "," << o.precision << "," << r.wall << "," << o.floor
-           << "," << o.pourHeight << "," << o.plateHalfWidth << "\n";
+           << "," << o.pourHeight << "," << r.plateHalfWidth << "\n";
     if (surf.is_open())
       for (std::size_t k = 0; k < r.profile.height.size(); ++k)
         if (r.profile.height[k] == r.profile.height[k]) surf << mr << "," << o.wallRolling << "," << r.profile.radius[k] << "," << r.profile.height[k] << "," << o.floor << "," << o.pourHeight << ","
-                                                    << o.precision << "," << o.plateHalfWidth << "\n";
+                                                    << o.precision << "," << r.plateHalfWidth << "\n";
   }
   return failed ? 1 : unfinished ? 3 : 0;
 }

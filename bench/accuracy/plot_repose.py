@@ -16,17 +16,17 @@ MEASURED, SPREAD = 25.2, 0.8
 
 
 def run_key(r):
-    """A run's rolling coefficients, floor, pour height [mm], precision and plate half-width [mm] (0: the default;
-    40 mm, float and 0 where a CSV predates those columns)."""
-    return (r["rolling"], r.get("wall_rolling", r["rolling"]), r.get("floor") or "field",
-            round(float(r.get("pour_height_m") or 0.04) * 1e3, 3), r.get("precision") or "float",
-            round(float(r.get("plate_half_width_m") or 0) * 1e3, 3))
+    """A run's rolling coefficients, floor, pour height [mm], precision and plate half-width [mm]: what tells the runs
+    of one CSV apart, and joins a row to its surface."""
+    return (r["rolling"], r["wall_rolling"], r["floor"], round(float(r["pour_height_m"]) * 1e3, 3), r["precision"],
+            round(float(r["plate_half_width_m"]) * 1e3, 3))
 
 
-def label(key, angle):
+def label(key, angle, usual):
+    """The legend's line: what sets the run apart from the usual pour (40 mm, float, the most common plate)."""
     rolling, wall, floor, height, precision, plate = key
     more = [", bead floor" if floor == "beads" else "", "" if height == 40 else ", poured from %g mm" % height,
-            "" if precision == "float" else ", " + precision, "" if plate == 0 else ", %g mm platform" % (2 * plate)]
+            "" if precision == "float" else ", " + precision, "" if plate == usual else ", %g mm plate" % (2 * plate)]
     return "μr %s / %s%s: %.1f°" % (rolling, wall, "".join(more), angle)
 
 
@@ -35,6 +35,8 @@ def main():
     rows = list(csv.DictReader(open(rows_path)))
     profiles = list(csv.DictReader(open(profiles_path)))
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    plates = [run_key(r)[5] for r in rows]
+    usual = max(set(plates), key=plates.count)
     colours = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink", "tab:olive")
     for row, colour in zip(rows, colours):
         key = run_key(row)
@@ -42,7 +44,7 @@ def main():
         radius, lo, hi = float(row["heap_radius_m"]), float(row["fit_from_m"]), float(row["fit_to_m"])
         pts = [(r, h) for r, h in pts if r <= 1.3 * radius and h > -0.002]
         ax.plot([r * 1e3 for r, _ in pts], [h * 1e3 for _, h in pts], ".", ms=3, color=colour,
-                label=label(key, float(row["angle_deg"])))
+                label=label(key, float(row["angle_deg"]), usual))
         fit = [(r, h) for r, h in pts if lo <= r <= hi]
         n = len(fit)
         sx, sy = sum(r for r, _ in fit), sum(h for _, h in fit)
