@@ -61,6 +61,23 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE bool atomicCasU64(std::uint64_t* addr, std::u
 #endif
 }
 
+// Adds v to a float (the GPU's pairs-once forces: a pair's reaction to its partner, ComputeForces' kHalf).
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void atomicAddF32(float* addr, float v) {
+#if defined(__CUDA_ARCH__)
+  atomicAdd(addr, v);
+#else
+  std::uint32_t cur = __atomic_load_n(reinterpret_cast<std::uint32_t*>(addr), __ATOMIC_RELAXED);
+  for (;;) {
+    float f;
+    __builtin_memcpy(&f, &cur, sizeof f);
+    f += v;
+    std::uint32_t next;
+    __builtin_memcpy(&next, &f, sizeof f);
+    if (__atomic_compare_exchange_n(reinterpret_cast<std::uint32_t*>(addr), &cur, next, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) return;
+  }
+#endif
+}
+
 // Adds v to a double (wall loads: a few addresses, on the steps that record them only).
 PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void atomicAddF64(double* addr, double v) {
 #if defined(__CUDA_ARCH__)

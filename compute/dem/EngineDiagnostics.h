@@ -269,7 +269,8 @@ ContactStats EngineImpl<Exec, R>::contactStats() const {
     m_mem.copyToHost(triVerts.data(), m_triVerts.data(), triVerts.size() * sizeof(Vec3d));
   }
   ContactStats st;
-  for (Index i = 0; i < n; ++i) st.candidatesPerParticle += double(rows.count[i]) / std::max<Index>(n, 1);
+  const double listed = halfPairs() ? 2.0 : 1.0;  // the GPU's pairs once lists each pair in one row
+  for (Index i = 0; i < n; ++i) st.candidatesPerParticle += listed * double(rows.count[i]) / std::max<Index>(n, 1);
   for (Index i = 0; i < n; ++i) {
     st.translationalEnergy += 0.5 * mass[i] * norm2(vel[i]);
     st.kineticEnergy += 0.5 * mass[i] * norm2(vel[i]) + 0.5 * 0.4 * mass[i] * rad[i] * rad[i] * norm2(om[i]);
@@ -307,9 +308,9 @@ ContactStats EngineImpl<Exec, R>::contactStats() const {
       for (std::size_t k = 0; k < m_particles.valuesPerParticle(info); ++k)
         st.historyEntries += weight * (keys[std::size_t(i) * layout.row + k * layout.col] != empty);
   };
-  occupied(Field::HistoryPartner, kNoPartner, m_numSlabs ? 2 : 1);  // pairs once: the owner's stands for both
+  occupied(Field::HistoryPartner, kNoPartner, m_numSlabs || halfPairs() ? 2 : 1);  // pairs once: the owner's stands for both
   occupied(Field::WallKey, kNoGid, 1);
-  st.historyEntries += m_pool.entries().size();  // the histories beyond the inline slots (HistoryPool.h)
+  st.historyEntries += (halfPairs() ? 2 : 1) * m_pool.entries().size();  // beyond the inline slots (HistoryPool.h)
   return st;
 }
 

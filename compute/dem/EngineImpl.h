@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "compute/dem/contact/ForceKernel.h"
+#include "compute/dem/contact/HalfPairs.h"
 #include "compute/dem/HistoryPoolStore.h"
 #include "compute/dem/geometry/MeshKernels.h"
 #include "compute/dem/integrate/VelocityVerlet.h"
@@ -148,6 +149,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
                                      m_particles.layout(Multiplicity::kContactSlots), m_setup.skin, {},
                                      nullptr, nullptr, rowCounts(), m_cond.as<Conditions>()};
     build.canonicalOrder = m_setup.canonicalOrder;
+    build.upperOnly = halfPairs();
     if (m_n > m_owned) {
       build.ghostCellStart = m_rows.ghostCellStart();
       build.ghostItems = m_rows.ghostItems();
@@ -184,11 +186,12 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
       m_pool.resolve(kernels::ResolvePool<R>{m_particles.template ptr<Field::Position>(), m_particles.template ptr<Field::Radius>(),
                                              m_particles.template ptr<Field::Gid>(), m_nbr.as<Index>(), m_nbrSlot.as<std::int8_t>(),
                                              nbrLayout(), m_particles.template ptr<Field::HistoryPooled>(), {}, {},
-                                             m_cond.as<Conditions>()},
+                                             m_cond.as<Conditions>(), halfPairs()},
                      m_owned);
     if (readConditions().flags & kNeighborMismatch)
       return Status(StatusCode::kInternal, "a candidate walk found other counts when filling its rows than when counting them");
     splitBoundary();
+    if (Status st = pullHistoryToOwners(); !st.ok()) return st;
     return buildSlabs();
   }
   std::size_t boundaryParticles() const override { return m_numBoundary; }
@@ -450,6 +453,12 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   void launchForcesWith(double dt, double time, ForceSet set, bool storeOnly) {
     const kernels::ForceArgs<R> args = forceArgs(dt, time, storeOnly);
     if (set == ForceSet::kAll || (m_numBoundary == 0 && set == ForceSet::kInterior)) {
+      if (halfPairs()) {  // each pair once, by its lower index, the reactions by atomic adds
+        if (!storeOnly) m_exec.forEach(m_owned, kernels::ZeroSums<R>{args.force, args.torque});
+        m_exec.forEach(m_owned, kernels::ComputeForces<R, kC, kF, true, true>{args});
+        if (m_anyWalls) m_exec.forEach(m_owned, kernels::ComputeWallForces<R, kC>{args});
+        return;
+      }
       if constexpr (Exec::kPairsOnce) {
         if (m_numSlabs) {
           m_exec.forEachTwoColours(m_numSlabs, kernels::ComputePairsOnce<R, kC, kF>{{args}, m_slabStart.as<Index>(), m_slabItems.as<Index>(),
@@ -472,53 +481,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   // After the candidate lists, where each pair is evaluated once (EngineSetup::pairsOnce): the particles by
   // slab, one cell layer thick along the slower of y and z with more layers (x when both have fewer than 4:
   // a slab's particles are then runs of one cell, poor for the caches), ascending within each slab.
-  Status buildSlabs() {
-    m_numSlabs = 0;
-    if constexpr (Exec::kPairsOnce) {
-      const CellGrid& g = m_setup.grid;
-      if (!m_setup.pairsOnce || m_setup.canonicalOrder || m_n != m_owned || m_owned == 0) return Status::ok();
-      // The particles' extent in cell layers along each axis (a bed fills the bottom of a tall domain).
-      const Vec3d* x = m_particles.template ptr<Field::Position>();
-      double span[3];
-      for (int k = 0; k < 3; ++k) {
-        const double hi = m_exec.maxOf(m_owned, [x, k](Index i) { return (&x[i].x)[k]; });
-        const double lo = -m_exec.maxOf(m_owned, [x, k](Index i) { return -(&x[i].x)[k]; });
-        span[k] = (hi - lo) * g.invCellSize;
-      }
-      int axis = span[2] >= span[1] ? 2 : 1;
-      if (span[axis] < 4 && span[0] >= 4) axis = 0;
-      const Index layers = Index(axis == 0 ? g.nx : axis == 1 ? g.ny : g.nz);
-      if (layers < 2) return Status::ok();  // one slab: every pair would be evaluated by one task
-      if (m_slabOf.bytes() < m_owned * sizeof(std::uint32_t)) {
-        m_slabOf.resize(m_owned * sizeof(std::uint32_t));
-        m_slabItems.resize(m_owned * sizeof(Index));
-        m_owned1.resize(m_owned * sizeof(std::uint32_t));
-      }
-      if (m_slabStart.bytes() < (layers + 1) * sizeof(Index)) m_slabStart.resize((layers + 1) * sizeof(Index));
-      m_exec.forEach(m_owned, kernels::SlabKey{g, m_particles.template ptr<Field::Position>(), axis, m_slabOf.as<std::uint32_t>()});
-      m_exec.sortByKey(m_slabOf.as<std::uint32_t>(), m_owned, std::uint32_t(layers), m_slabItems.as<Index>(),
-                       m_slabStart.as<Index>());
-      const bool slots = m_setup.model.tangential;
-      m_exec.forEach(m_owned, kernels::OwnedFirst{m_slabOf.as<std::uint32_t>(), m_nbr.as<Index>(),
-                                                  slots ? m_nbrSlot.as<std::int8_t>() : nullptr, nbrLayout(),
-                                                  m_owned1.as<std::uint32_t>()});
-      while (slots) {  // histories of pairs that changed owner move to the new owner
-        resetConditions();
-        m_exec.forEachTwoColours(layers, kernels::PullHistory<R>{
-            m_slabStart.as<Index>(), m_slabItems.as<Index>(), m_owned1.as<std::uint32_t>(), m_nbr.as<Index>(),
-            m_nbrSlot.as<std::int8_t>(), nbrLayout(), m_particles.template ptr<Field::HistoryPartner>(),
-            m_particles.template ptr<Field::HistoryDisp>(), m_particles.layout(Multiplicity::kContactSlots),
-            m_particles.contactSlots(), m_particles.template ptr<Field::Gid>(), m_cond.as<Conditions>()});
-        const Conditions c = readConditions();
-        if (!(c.flags & kHistoryOverflow)) break;
-        const int grown = m_particles.contactSlots() + 1;
-        if (grown > std::min(127, m_setup.maxContacts)) return slotOverflowError(m_setup.dt);
-        m_particles.resizeSlots(Multiplicity::kContactSlots, grown);
-      }
-      m_numSlabs = layers;
-    }
-    return Status::ok();
-  }
+  Status buildSlabs();  // EnginePairsOnce.h
   // After the candidate lists: which owned particles have a ghost candidate (their forces wait for the
   // halo), as one list with those first. Without ghosts nothing is boundary.
   void splitBoundary() {
@@ -688,6 +651,11 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   // buildSlabs (pairs evaluated once): slab per particle, particles by slab, slab starts, owned candidates per row
   Buffer m_slabOf{m_mem, 0}, m_slabItems{m_mem, 0}, m_slabStart{m_mem, 0}, m_owned1{m_mem, 0};
   Index m_numSlabs = 0;  // 0: every particle evaluates all its pairs (ComputeForces)
+  // The GPU's pairs once (PFLOW_GPU_HALF_PAIRS=1, measurements; ComputeForces' kHalf): one rank, no history pool.
+  bool m_halfPairs = false;
+  bool halfPairs() const { return m_halfPairs && m_n == m_owned; }
+  Status pullHistoryToOwners();  // EnginePairsOnce.h
+  template <class Pass> Status untilSlotsSuffice(Pass pass);  // EnginePairsOnce.h
   bool m_twoPhase = false;  // ComputeForces' kTwoPhase: lockstep lanes or the GPU's layout (init); the same sums
   Index m_numBoundary = 0;
   HistoryPoolStore<Exec, R> m_pool;  // histories beyond the inline slots (HistoryPool.h)
@@ -711,7 +679,9 @@ void EngineImpl<Exec, R>::init() {
   if (const char* shift = std::getenv("PFLOW_ROW_SLICE_SHIFT")) m_nbrShift = std::uint32_t(std::clamp(std::atoi(shift), 0, 5));
   m_twoPhase = Exec::kLockstepLanes || s.layout == EngineSetup::Layout::kGpu;  // PFLOW_TWO_PHASE_PAIRS=0|1 overrides
   if (const char* two = std::getenv("PFLOW_TWO_PHASE_PAIRS")) m_twoPhase = std::atoi(two) != 0;
-  m_pool.configure(s, Exec::kPairsOnce);
+  if (const char* half = std::getenv("PFLOW_GPU_HALF_PAIRS"); half && s.pairsOnce && m_twoPhase)
+    m_halfPairs = std::atoi(half) != 0;
+  m_pool.configure(s, Exec::kPairsOnce && !m_halfPairs, m_halfPairs);
   const int slots = m_pool.inlineSlots(s.historySlots);
   m_particles.allocate(m_n, slots, s.wallHistorySlots, slotMajor);
   m_pool.enableAt(slots, m_n);
@@ -797,3 +767,5 @@ void EngineImpl<Exec, R>::binTriangles() {
 #include "compute/dem/EngineDiagnostics.h"
 // The history pool's host side: checkpoints in memory and in files.
 #include "compute/dem/EnginePool.h"
+// Each pair once: the CPU's slabs, the GPU's histories moved to the pairs' owners.
+#include "compute/dem/EnginePairsOnce.h"

@@ -37,8 +37,11 @@ class HistoryPoolStore {
   // Whether this run may pool, and its inline cap: the setup's (PFLOW_INLINE_SLOTS overrides a nonzero one), where
   // each pair is evaluated from both sides in one process (not by a pairs-once executor), with friction, without
   // adhesion.
-  void configure(const EngineSetup& s, bool pairsOnceExecutor) {
+  // The GPU's pairs once (`half`: each particle keeps the histories of the pairs it owns, about half its contacts)
+  // pools too, beyond half the cap.
+  void configure(const EngineSetup& s, bool pairsOnceExecutor, bool half = false) {
     int cap = s.inlineHistorySlots;
+    if (half) cap = (cap + 1) / 2;
     if (const char* env = std::getenv("PFLOW_INLINE_SLOTS"); env && cap > 0) cap = std::clamp(std::atoi(env), 0, 126);
     const bool allowed = s.model.tangential && !s.model.cohesion && !s.canonicalOrder && !(pairsOnceExecutor && s.pairsOnce);
     m_cap = allowed ? cap : 0;

@@ -180,6 +180,18 @@ struct GatherBytes {
 };
 
 
+// Frees the history slots of `partners` that no entry of the row (nbrSlot, `count` entries `col` apart) refers to: the
+// partner is no longer a candidate, so the contact has ended.
+PFLOW_HOSTDEVICE inline void clearUnlistedSlots(SlotRow<PartnerId> partners, int slots, const std::int8_t* nbrSlot,
+                                                std::size_t col, std::uint32_t count) {
+  for (int k = 0; k < slots; ++k) {
+    if (partners[k] == kNoPartner) continue;
+    bool candidate = false;
+    for (std::uint32_t e = 0; e < count && !candidate; ++e) candidate = nbrSlot[e * col] == k;
+    if (!candidate) partners[k] = kNoPartner;
+  }
+}
+
 // Candidates j of particle i with |x_i - x_j| < r_i + r_j + skin, in two passes over the same walk: the first
 // (countOnly) counts each row, the host lays the rows out from the counts (SliceWidths, a scan: RowSlices), and
 // the second fills them. Each candidate's history slot (the slot of i holding j's gid, or -1) is resolved in
@@ -212,6 +224,9 @@ struct BuildNeighbors {
   // Candidates in ascending global id, not in row order: a particle's forces are then summed in the same
   // order whatever the rows' order, so a distributed run reproduces one process bit for bit.
   bool canonicalOrder = false;
+  // Only the candidates above i (j > i): the rows of the GPU's pairs once, where the lower index evaluates a pair
+  // (ComputeForces' kHalf). Cells whose particles all lie at or below i are not walked.
+  bool upperOnly = false;
 
   PFLOW_HOSTDEVICE void operator()(Index i) const {
     const Vec3d xi = pos[i];
@@ -234,6 +249,7 @@ struct BuildNeighbors {
           const int x = cx + dx;
           if (x < 0 || x >= grid.nx) continue;
           const std::uint32_t c = grid.index(x, y, z);
+          if (upperOnly && cellStart[c + 1] <= i + 1) continue;
           auto consider = [&](Index j) {
             const double cut = ri + double(radius[j]);
             if (norm2(pos[j] - xi) >= cut * cut) return;
@@ -251,7 +267,7 @@ struct BuildNeighbors {
             }
             ++count;
           };
-          for (Index j = cellStart[c]; j < cellStart[c + 1]; ++j)
+          for (Index j = upperOnly && cellStart[c] <= i ? i + 1 : cellStart[c]; j < cellStart[c + 1]; ++j)
             if (j != i) consider(j);
           if (ghostCellStart)
             for (Index k = ghostCellStart[c]; k < ghostCellStart[c + 1]; ++k) consider(ghostBase + ghostItems[k]);
@@ -279,12 +295,9 @@ struct BuildNeighbors {
         nbr[row + k * col] = j;
         nbrSlot[row + k * col] = slot;
       }
-    for (int k = 0; k < slots; ++k) {
-      if (partners[k] == kNoPartner) continue;
-      bool candidate = false;
-      for (std::uint32_t e = 0; e < count && !candidate; ++e) candidate = nbrSlot[row + e * col] == k;
-      if (!candidate) partners[k] = kNoPartner;
-    }
+    // The upper rows of the GPU's pairs once keep their other histories until the pairs' owners have taken
+    // theirs (PullHistoryHalf, then ClearUnlistedSlots).
+    if (!upperOnly) clearUnlistedSlots(partners, slots, nbrSlot + row, col, count);
   }
 };
 

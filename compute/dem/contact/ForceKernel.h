@@ -31,6 +31,15 @@ PFLOW_HOSTDEVICE inline void flagDeepOverlap(Conditions* cond, Index i) {
   atomicMinU32(&cond->deepParticle, i);
 }
 
+// v added to *p component by component, atomically (ComputeForces' kHalf).
+template <class R> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void atomicAddVec(Vec3<R>* p, Vec3<R> v) {
+  if constexpr (std::is_same_v<R, float>) {
+    atomicAddF32(&p->x, v.x), atomicAddF32(&p->y, v.y), atomicAddF32(&p->z, v.z);
+  } else {
+    atomicAddF64(&p->x, v.x), atomicAddF64(&p->y, v.y), atomicAddF64(&p->z, v.z);
+  }
+}
+
 // A centre behind a plane, or carried through a triangle's face within the step:
 // the particle passed through a wall. The run stops, naming the lowest such particle.
 PFLOW_HOSTDEVICE inline void flagTunnelled(Conditions* cond, Index i) {
@@ -159,8 +168,13 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE contact::ContactState<R> pairState(Vec3d d, d
 // arithmetic for every candidate any lane touched (14.5 of 32 lanes active, ncu, H200): now a warp runs as many
 // evaluations as its busiest lane has contacts. The unmarked candidates are those the one-phase loop passes over
 // without effect, so the sums, the slots claimed and the pool's entries are the same bit for bit.
-template <class R, bool kCohesion = false, bool kFixed = false, bool kTwoPhase = false>
+// kHalf (with kTwoPhase; the GPU's pairs once, EngineImpl::m_halfPairs, measurements): each pair is evaluated by its
+// lower index only, whose row holds only its candidates above it (BuildNeighbors::upperOnly); it adds the reaction to its partner's sums and its own by atomic adds (the sums start at zero:
+// ZeroSums); the owner alone keeps the history (PullHistoryHalf). Float atomics add in no fixed order: a run is
+// not bit-reproducible this way.
+template <class R, bool kCohesion = false, bool kFixed = false, bool kTwoPhase = false, bool kHalf = false>
 struct ComputeForces {
+  static_assert(!kHalf || kTwoPhase, "the pairs-once loop is the two-phase one");
   static constexpr bool kVariableCost = true;  // work per particle varies (CpuExecutor::forEach)
   // Held to 80 registers a thread in float and 128 in double in the two-phase loop (the GPU's), against the compiler's
   // own 88-92 and 130-136. In float 80 keeps 24 warps an SM for 56 B of spill loads; 96 (20 warps, no spills) made
@@ -196,6 +210,7 @@ struct ComputeForces {
   template <bool kTangential, bool kRolling, bool kAdhesion, bool kOnce>
   PFLOW_HOSTDEVICE void row(Index i, const std::uint32_t* owned) const {
     constexpr bool kSpin = kTangential || kRolling;
+    constexpr bool kReact = kOnce || kHalf;  // i adds the reaction to its partner
     // Local restrict copies: the int8 slot stores could otherwise alias every pointer in `a` and
     // force the compiler to reload them after each store.
     const Vec3d* __restrict__ pos = a.pos;
@@ -285,7 +300,7 @@ struct ComputeForces {
                                                              kRolling && pp.rollingFriction > 0, kFixed ? pp.fixedSide : 0);
       if (s.overlap > R(a.maxOverlap) * (ri < rj ? ri : rj)) {
         flagDeepOverlap(a.cond, i);
-        if (kOnce) flagDeepOverlap(a.cond, j);  // as j's own evaluation would
+        if (kReact) flagDeepOverlap(a.cond, j);  // as j's own evaluation would
       }
       const auto out = contact::hertzMindlin<kTangential, kRolling, kAdhesion>(pp, s, xiOld, dt);
       if constexpr (kTangential) {
@@ -298,7 +313,12 @@ struct ComputeForces {
       }
       f += out.force;
       if constexpr (kSpin) tq += out.torque;
-      if constexpr (kOnce) {
+      if constexpr (kHalf) {
+        if (!storeOnly) {
+          atomicAddVec(&force[j], -out.force);
+          if constexpr (kSpin) atomicAddVec(&torque[j], contact::partnerTorque(out, s.n, rj - R(0.5) * s.overlap));
+        }
+      } else if constexpr (kOnce) {
         if (!storeOnly) {
           force[j] -= out.force;
           if constexpr (kSpin) torque[j] += contact::partnerTorque(out, s.n, rj - R(0.5) * s.overlap);
@@ -335,7 +355,7 @@ struct ComputeForces {
     if (overflow) {
       // Slots are sized, and held to simulation.max_contacts, by all of i's contacts in both ways of
       // evaluating: the limit means the same, and a pair changing owner finds a free slot.
-      if constexpr (kOnce) contacts += touchingNotOwned(i, owned);
+      if constexpr (kOnce) contacts += touchingNotOwned(i, owned);  // kHalf: the slots hold the owned ones only
       atomicOrU32(&a.cond->flags, kHistoryOverflow);
       atomicMaxU32(&a.cond->neededHistory, contacts);
     }
@@ -347,7 +367,10 @@ struct ComputeForces {
       }
     }
     if (storeOnly) return;
-    if constexpr (kOnce) {
+    if constexpr (kHalf) {
+      atomicAddVec(&force[i], f);
+      atomicAddVec(&torque[i], tq);
+    } else if constexpr (kOnce) {
       force[i] += f;
       torque[i] += tq;
     } else {

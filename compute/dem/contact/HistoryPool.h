@@ -84,8 +84,12 @@ struct ResolvePool {
   std::int32_t* pooled;
   HistoryPool<R> from, to;
   Conditions* cond;
+  // The GPU's pairs once (ComputeForces' kHalf): a pair's owner, its lower index, changes with the rows' order, so
+  // every particle looks, and a history its partner pooled as the pair's owner before is taken over, negated (the
+  // displacement seen from the other side).
+  bool half = false;
   PFLOW_HOSTDEVICE void operator()(Index i) const {
-    if (pooled[i] == 0) return;
+    if (pooled[i] == 0 && !half) return;
     const PartnerId gi = PartnerId(gid[i]);
     const double ri = double(radius[i]);
     int n = 0;
@@ -97,14 +101,16 @@ struct ResolvePool {
       const double rs = ri + double(radius[j]);
       if (norm2(pos[j] - pos[i]) >= rs * rs) continue;
       const std::uint64_t k = HistoryPool<R>::keyOf(gi, PartnerId(gid[j]));
-      const std::int32_t old = from.find(k);
+      std::int32_t old = from.find(k);
+      const bool turned = old < 0 && half;
+      if (turned) old = from.find(HistoryPool<R>::keyOf(PartnerId(gid[j]), gi));
       if (old < 0) continue;
       const std::int32_t now = to.insert(k);
       if (now < 0) {  // sized by the host for every live entry: cannot happen
         atomicOrU32(&cond->flags, kNeighborMismatch);
         continue;
       }
-      to.disp[now] = from.disp[old];
+      to.disp[now] = turned ? -from.disp[old] : from.disp[old];
       nbrSlot[at] = kPoolSlot;
       ++n;
     }
