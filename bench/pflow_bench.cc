@@ -62,6 +62,9 @@ int main(int argc, char** argv) {
                  "and resettle those for --resettle-steps (0: settle every size itself)");
   app.add_option("--resettle-steps", resettleSteps, "steps a tiled bed settles before timing")->capture_default_str();
   std::string baseCache;
+  bool notReproducible = false;
+  app.add_flag("--not-reproducible", notReproducible,
+               "simulation.reproducible: false (one GPU: each contact evaluated once, the sums by atomic adds)");
   int historySlots = 0, wallHistorySlots = 0;
   app.add_option("--wall-history-slots", wallHistorySlots,
                  "initial wall-contact slots per particle (simulation.wall_history_slots; 0: the default, 1)");
@@ -161,6 +164,7 @@ int main(int argc, char** argv) {
     }
     if (historySlots > 0) cfg.sim.historySlots = historySlots;
     if (wallHistorySlots > 0) cfg.sim.wallHistorySlots = wallHistorySlots;
+    cfg.sim.reproducible = !notReproducible;
     std::unique_ptr<pflow::compute::Simulation> last;
     std::vector<std::pair<std::string, double>> rates;
     for (const std::string& precision : precisions) {
@@ -209,7 +213,7 @@ int main(int argc, char** argv) {
                      {"coordination", before.coordinationNumber},
                      {"candidates_per_particle", before.candidatesPerParticle},
                      {"rebuilds", s.rebuilds() - rebuilds0},
-                     {"history_slots", s.engine().historySlots()},
+                     {"history_slots", s.engine().historySlots()}, {"reproducible", cfg.sim.reproducible},
                      {"wall_history_slots", s.engine().wallHistorySlots()},
                      {"device_bytes_per_particle", double(s.deviceBytes()) / double(s.numParticles())},
                      {"device_peak_bytes_per_particle", double(s.devicePeakBytes()) / double(s.numParticles())},

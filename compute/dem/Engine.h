@@ -68,6 +68,10 @@ struct EngineSetup {
   // its reaction added to the partner (kernels::ComputePairsOnce), half the arithmetic of evaluating it from
   // both sides. The sums then depend on the cell grid (the slabs), not on the thread count.
   bool pairsOnce = true;
+  // simulation.reproducible: false lets a one-rank GPU run evaluate each contact once, by its lower index, with the
+  // reactions added by atomic adds (ComputeForces' kHalf): the sums in no fixed order. PFLOW_GPU_HALF_PAIRS=1 does
+  // the same on any executor that evaluates pairs from both sides (tests of it on the CPU, measurements).
+  bool reproducible = true;
   // What to compute (deriveModel): 2D, tangential history, rolling torque, wall phases. Default: everything.
   ModelFlags model;
   // Data layouts: the executor's own, or forced to the GPU's (column-major candidate rows, slot-major

@@ -651,7 +651,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   // buildSlabs (pairs evaluated once): slab per particle, particles by slab, slab starts, owned candidates per row
   Buffer m_slabOf{m_mem, 0}, m_slabItems{m_mem, 0}, m_slabStart{m_mem, 0}, m_owned1{m_mem, 0};
   Index m_numSlabs = 0;  // 0: every particle evaluates all its pairs (ComputeForces)
-  // The GPU's pairs once (PFLOW_GPU_HALF_PAIRS=1, measurements; ComputeForces' kHalf): one rank, no history pool.
+  // The GPU's pairs once (EngineSetup::reproducible false; ComputeForces' kHalf): while the rank holds no ghosts.
   bool m_halfPairs = false;
   bool halfPairs() const { return m_halfPairs && m_n == m_owned; }
   Status pullHistoryToOwners();  // EnginePairsOnce.h
@@ -679,8 +679,11 @@ void EngineImpl<Exec, R>::init() {
   if (const char* shift = std::getenv("PFLOW_ROW_SLICE_SHIFT")) m_nbrShift = std::uint32_t(std::clamp(std::atoi(shift), 0, 5));
   m_twoPhase = Exec::kLockstepLanes || s.layout == EngineSetup::Layout::kGpu;  // PFLOW_TWO_PHASE_PAIRS=0|1 overrides
   if (const char* two = std::getenv("PFLOW_TWO_PHASE_PAIRS")) m_twoPhase = std::atoi(two) != 0;
-  if (const char* half = std::getenv("PFLOW_GPU_HALF_PAIRS"); half && s.pairsOnce && m_twoPhase)
-    m_halfPairs = std::atoi(half) != 0;
+  // The GPU's pairs once: one process, pairs not summed in a canonical order (distributed runs sum theirs so).
+  if (s.pairsOnce && m_twoPhase && !s.canonicalOrder) {
+    m_halfPairs = !s.reproducible && !Exec::kPairsOnce;
+    if (const char* half = std::getenv("PFLOW_GPU_HALF_PAIRS")) m_halfPairs = std::atoi(half) != 0;
+  }
   m_pool.configure(s, Exec::kPairsOnce && !m_halfPairs, m_halfPairs);
   const int slots = m_pool.inlineSlots(s.historySlots);
   m_particles.allocate(m_n, slots, s.wallHistorySlots, slotMajor);

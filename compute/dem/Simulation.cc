@@ -524,6 +524,7 @@ Result<EngineSetup> prepareEngineSetup(const RunConfig& c) {
   s.threads = c.sim.threads;
   s.maxOverlap = c.sim.maxOverlap;
   s.maxContacts = c.sim.maxContacts;
+  s.reproducible = c.sim.reproducible;
   if (c.sim.domain) {  // only a domain the scene states is a boundary (a derived one is just the grid's extent)
     s.checkDomain = true;
     s.domainLo = c.sim.domain->lo;

@@ -321,6 +321,7 @@ void Loader::parseSimulation(const Fields& top) {
   get(*f, "seed", s.seed);
   get(*f, "max_overlap", s.maxOverlap);
   get(*f, "max_contacts", s.maxContacts);
+  get(*f, "reproducible", s.reproducible);
   get(*f, "checkpoint_steps", s.checkpointSteps);
   if (const Entry* a = f->find("on_instability")) {
     std::string name;

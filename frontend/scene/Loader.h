@@ -95,7 +95,7 @@ constexpr std::string_view kVibrationKeys[] = {"amplitude", "frequency", "phase"
 constexpr std::string_view kSimulationKeys[] = {"gravity", "duration", "dt", "dt_fraction", "skin", "snapshot_interval",
                                                 "domain", "precision", "decomposition", "history_slots", "wall_history_slots", "threads", "seed", "physics",
                                                 "max_overlap", "max_contacts", "on_instability", "checkpoint_steps",
-                                                "model", "accuracy"};
+                                                "model", "accuracy", "reproducible"};
 constexpr std::string_view kModelModes[] = {"auto", "full"};
 constexpr std::string_view kAccuracyKeys[] = {"quantity", "tolerance"};
 constexpr std::string_view kPhysicsKeys[] = {"friction", "rolling_resistance", "cohesion"};

@@ -79,6 +79,7 @@ simulation:
   wall_history_slots: 6
   threads: 2
   seed: 42
+  reproducible: false
 output:
   file: out.h5
 )";
@@ -209,6 +210,7 @@ TEST(SceneLoader, FullSceneRoundTrip) {
   EXPECT_EQ(s.wallHistorySlots, 6);
   EXPECT_EQ(s.threads, 2);
   EXPECT_EQ(s.seed, 42u);
+  EXPECT_FALSE(s.reproducible);
 }
 
 TEST(SceneLoader, DefaultsOfAMinimalScene) {
@@ -228,6 +230,7 @@ TEST(SceneLoader, DefaultsOfAMinimalScene) {
   EXPECT_EQ(c.sim.precision, compute::Precision::kDouble);
   EXPECT_EQ(c.sim.decomposition, compute::DecompositionKind::kSfc);
   EXPECT_EQ(c.sim.seed, 1u);
+  EXPECT_TRUE(c.sim.reproducible);
   EXPECT_TRUE(r->outputFile.empty());
 
   const auto fixed = loadSceneFromString(minimalScene("", "  duration: 0.1\n  dt: 1.0e-6\n  skin: auto\n"));
@@ -341,7 +344,8 @@ TEST(SceneLoader, WrongTypesAreErrors) {
                                                   "      - {position: [0, 0], radius: \"0.001\"}\n"
                                                   "      - {position: 5, radius: [1]}\n"
                                                   "      - {position: [0, x, 0.1], radius: 0.001}\n",
-                                                  "  duration: 0.1s\n  history_slots: 2.5\n  dt: fast\n  precision: duble\n  decomposition: morton\n"));
+                                                  "  duration: 0.1s\n  history_slots: 2.5\n  dt: fast\n  precision: duble\n  decomposition: morton\n"
+                                                  "  reproducible: maybe\n"));
   ASSERT_FALSE(r.isOk());
   const std::string m = r.status().message();
   EXPECT_HAS(m, "particles[0].list[0].position: expected a list of 3 numbers [x, y, z], got a list of 2 items");
@@ -354,9 +358,10 @@ TEST(SceneLoader, WrongTypesAreErrors) {
   EXPECT_HAS(m, "simulation.dt: expected a number (s) or 'auto', got 'fast'");
   EXPECT_HAS(m, "simulation.precision: unknown precision 'duble'; did you mean 'double'?");
   EXPECT_HAS(m, "simulation.decomposition: unknown decomposition 'morton'");
+  EXPECT_HAS(m, "simulation.reproducible: expected true or false, got 'maybe'");
   // Placeholders for broken values do not produce validate() noise (e.g. radius 0 "must be > 0").
   EXPECT_FALSE(contains(m, "must be > 0")) << m;
-  EXPECT_HAS(m, "10 error(s)");
+  EXPECT_HAS(m, "11 error(s)");
 }
 
 TEST(SceneLoader, StructuralErrors) {
