@@ -651,7 +651,8 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   // buildSlabs (pairs evaluated once): slab per particle, particles by slab, slab starts, owned candidates per row
   Buffer m_slabOf{m_mem, 0}, m_slabItems{m_mem, 0}, m_slabStart{m_mem, 0}, m_owned1{m_mem, 0};
   Index m_numSlabs = 0;  // 0: every particle evaluates all its pairs (ComputeForces)
-  // The GPU's pairs once (EngineSetup::reproducible false; ComputeForces' kHalf): while the rank holds no ghosts.
+  // The GPU's pairs once (EngineSetup::reproducible false; ComputeForces' kHalf): one process (MpiDomain::partition
+  // keeps several ranks reproducible), no ghosts.
   bool m_halfPairs = false;
   bool halfPairs() const { return m_halfPairs && m_n == m_owned; }
   Status pullHistoryToOwners();  // EnginePairsOnce.h

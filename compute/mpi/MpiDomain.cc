@@ -109,6 +109,7 @@ Status MpiDomain::partitionPoints(const CellGrid& grid, const std::vector<Vec3d>
 Status MpiDomain::partition(EngineSetup& s) {
   s.canonicalOrder = m_options.canonicalOrder;  // forces independent of the rows' order: one process's bits
   if (m_size > 1) s.inlineHistorySlots = 0;      // no history pool: migration carries the inline slots only
+  if (m_size > 1) s.reproducible = true;         // ghosts: each pair from both sides (simulation.reproducible)
   std::vector<std::size_t> mine;
   if (Status st = partitionPoints(s.grid, s.position, mine); !st.isOk()) return st;
   // Keep this rank's particles, with their scene index as global id.

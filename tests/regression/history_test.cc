@@ -325,17 +325,25 @@ TEST(History, TwoPhasePairLoopOverLongRowsChangesNoResult) {
 // the runs by far more, 6e-5 m when the rows' build freed the slots before their owners had taken them), and the
 // positions stay within 1e-9 m. With one inline slot the owners' other histories go to the pool, and those of pairs
 // whose owner changes are taken over from the pool too.
+std::unique_ptr<Simulation> makePairsOnce(bool half, const char* inlineSlots) {
+  pool::TwoPhase phases(half ? "1" : nullptr);
+  pool::InlineSlots scope(inlineSlots);
+  if (half) setenv("PFLOW_GPU_HALF_PAIRS", "1", 1);
+  auto sim = Simulation::create(test::pouredHeap(kR, 2), compute::SimulationOptions{});
+  unsetenv("PFLOW_GPU_HALF_PAIRS");
+  EXPECT_TRUE(sim.isOk()) << sim.status().toString();
+  return sim.isOk() ? std::move(sim).value() : nullptr;
+}
+double farthestApart(const Simulation& a, const Simulation& b) {
+  const auto x = pool::byGid(a, "position"), y = pool::byGid(b, "position");
+  EXPECT_EQ(x.size(), y.size());
+  double most = 0;
+  for (const auto& [g, v] : x)
+    if (y.count(g)) most = std::max(most, norm(v - y.at(g)));
+  return most;
+}
 void pairsOnceFollowsTheCpu(const char* inlineSlots) {
-  auto make = [&](bool half) -> std::unique_ptr<Simulation> {
-    pool::TwoPhase phases(half ? "1" : nullptr);
-    pool::InlineSlots scope(inlineSlots);
-    if (half) setenv("PFLOW_GPU_HALF_PAIRS", "1", 1);
-    auto sim = Simulation::create(test::pouredHeap(kR, 2), compute::SimulationOptions{});
-    unsetenv("PFLOW_GPU_HALF_PAIRS");
-    EXPECT_TRUE(sim.isOk()) << sim.status().toString();
-    return sim.isOk() ? std::move(sim).value() : nullptr;
-  };
-  auto half = make(true), cpu = make(false);
+  auto half = makePairsOnce(true, inlineSlots), cpu = makePairsOnce(false, inlineSlots);
   ASSERT_TRUE(half && cpu);
   for (int k = 0; k < 3; ++k) {
     ASSERT_TRUE(half->runSteps(1000).isOk());
@@ -354,15 +362,31 @@ void pairsOnceFollowsTheCpu(const char* inlineSlots) {
     EXPECT_GT(pool::beyond(*cpu, std::atoi(inlineSlots)), 100u);
     EXPECT_EQ(half->engine().historySlots(), std::atoi(inlineSlots));
   }
-  const auto x = pool::byGid(*half, "position"), y = pool::byGid(*cpu, "position");
-  ASSERT_EQ(x.size(), y.size());
-  double most = 0;
-  for (const auto& [g, v] : x) most = std::max(most, norm(v - y.at(g)));
+  const double most = farthestApart(*half, *cpu);
   std::printf("positions apart by at most %.3g m\n", most);
   EXPECT_LT(most, 1e-9);
 }
 TEST(History, GpuPairsOnceFollowsTheCpuPairsOnce) { pairsOnceFollowsTheCpu("0"); }
 TEST(History, GpuPairsOnceWithThePoolFollowsTheCpuPairsOnce) { pairsOnceFollowsTheCpu("1"); }
+
+// A checkpoint of the GPU's pairs once (the owners' histories, pooled ones merged into the file's rows) resumes into
+// a run that follows the uninterrupted one: to rounding, not bit for bit (its atomic sums have no fixed order).
+TEST(History, GpuPairsOnceResumesFromACheckpoint) {
+  auto straight = makePairsOnce(true, "1"), first = makePairsOnce(true, "1"), resumed = makePairsOnce(true, "1");
+  ASSERT_TRUE(straight && first && resumed);
+  ASSERT_TRUE(straight->runSteps(3000).isOk());
+  ASSERT_TRUE(first->runSteps(2000).isOk());
+  while (!first->justRebuilt()) ASSERT_TRUE(first->runSteps(1).isOk());
+  auto state = first->state();
+  ASSERT_TRUE(state.isOk()) << state.status().toString();
+  EXPECT_GT(state.value().contactSlots, 1);  // the pooled histories went into the file's rows
+  ASSERT_TRUE(resumed->resume(state.value()).isOk());
+  ASSERT_TRUE(resumed->runSteps(3000 - resumed->stepCount()).isOk());
+  EXPECT_EQ(resumed->contactStats().historyEntries, straight->contactStats().historyEntries);
+  const double most = farthestApart(*straight, *resumed);
+  std::printf("resumed and uninterrupted apart by at most %.3g m\n", most);
+  EXPECT_LT(most, 1e-9);
+}
 
 }  // namespace
 }  // namespace pflow::test
