@@ -2,6 +2,7 @@
 // GCC/Clang builtins on the host, which nvcc's host pass also accepts).
 #pragma once
 #include <cstdint>
+#include <type_traits>
 
 #include "compute/core/Types.h"
 
@@ -61,38 +62,35 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE bool atomicCasU64(std::uint64_t* addr, std::u
 #endif
 }
 
-// Adds v to a float (the GPU's pairs-once forces: a pair's reaction to its partner, ComputeForces' kHalf).
-PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void atomicAddF32(float* addr, float v) {
-#if defined(__CUDA_ARCH__)
-  atomicAdd(addr, v);
-#else
-  std::uint32_t cur = __atomic_load_n(reinterpret_cast<std::uint32_t*>(addr), __ATOMIC_RELAXED);
+#if !defined(__CUDA_ARCH__)
+namespace detail {
+// Host: adds v to the T at addr (its bits a Bits) by compare-and-swap.
+template <class T, class Bits>
+inline void atomicAddByCas(T* addr, T v) {
+  Bits cur = __atomic_load_n(reinterpret_cast<Bits*>(addr), __ATOMIC_RELAXED);
   for (;;) {
-    float f;
-    __builtin_memcpy(&f, &cur, sizeof f);
-    f += v;
-    std::uint32_t next;
-    __builtin_memcpy(&next, &f, sizeof f);
-    if (__atomic_compare_exchange_n(reinterpret_cast<std::uint32_t*>(addr), &cur, next, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) return;
+    T x;
+    __builtin_memcpy(&x, &cur, sizeof x);
+    x += v;
+    Bits next;
+    __builtin_memcpy(&next, &x, sizeof x);
+    if (__atomic_compare_exchange_n(reinterpret_cast<Bits*>(addr), &cur, next, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) return;
   }
-#endif
 }
+}  // namespace detail
+#endif
 
-// Adds v to a double (wall loads: a few addresses, on the steps that record them only).
-PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void atomicAddF64(double* addr, double v) {
+// Adds v to a float or a double: wall loads (a few addresses, on the steps that record them only) and the GPU's pairs
+// once (a pair's reaction to its partner, ComputeForces' kHalf).
+template <class T>
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void atomicAddReal(T* addr, T v) {
+  static_assert(std::is_same_v<T, float> || std::is_same_v<T, double>);
 #if defined(__CUDA_ARCH__)
   atomicAdd(addr, v);
 #else
-  std::uint64_t cur = __atomic_load_n(reinterpret_cast<std::uint64_t*>(addr), __ATOMIC_RELAXED);
-  for (;;) {
-    double d;
-    __builtin_memcpy(&d, &cur, sizeof d);
-    d += v;
-    std::uint64_t next;
-    __builtin_memcpy(&next, &d, sizeof d);
-    if (__atomic_compare_exchange_n(reinterpret_cast<std::uint64_t*>(addr), &cur, next, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) return;
-  }
+  detail::atomicAddByCas<T, std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>>(addr, v);
 #endif
 }
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void atomicAddF64(double* addr, double v) { atomicAddReal(addr, v); }
 
 }  // namespace pflow

@@ -656,6 +656,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   bool m_halfPairs = false;
   bool halfPairs() const { return m_halfPairs && m_n == m_owned; }
   Status pullHistoryToOwners();  // EnginePairsOnce.h
+  kernels::HistoryRows<R> historyRows();  // EnginePairsOnce.h: the rows and slots the history moves see
   template <class Pass> Status untilSlotsSuffice(Pass pass);  // EnginePairsOnce.h
   bool m_twoPhase = false;  // ComputeForces' kTwoPhase: lockstep lanes or the GPU's layout (init); the same sums
   Index m_numBoundary = 0;

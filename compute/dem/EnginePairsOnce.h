@@ -34,15 +34,19 @@ Status EngineImpl<Exec, R>::untilSlotsSuffice(Pass pass) {
 }
 
 template <class Exec, class R>
+kernels::HistoryRows<R> EngineImpl<Exec, R>::historyRows() {
+  return {m_nbr.as<Index>(), m_nbrSlot.as<std::int8_t>(), nbrLayout(), m_particles.template ptr<Field::HistoryPartner>(),
+          m_particles.template ptr<Field::HistoryDisp>(), m_particles.layout(Multiplicity::kContactSlots),
+          m_particles.contactSlots(), m_particles.template ptr<Field::Gid>()};
+}
+
+template <class Exec, class R>
 Status EngineImpl<Exec, R>::pullHistoryToOwners() {
   if (!halfPairs() || !m_setup.model.tangential) return Status::ok();
   const Status st = untilSlotsSuffice([&] {
-    m_exec.forEach(m_owned, kernels::PullHistoryHalf<R>{
-        m_nbr.as<Index>(), m_nbrSlot.as<std::int8_t>(), nbrLayout(), m_particles.template ptr<Field::HistoryPartner>(),
-        m_particles.template ptr<Field::HistoryDisp>(), m_particles.layout(Multiplicity::kContactSlots),
-        m_particles.contactSlots(), m_particles.template ptr<Field::Gid>(),
-        m_pool.active() ? m_pool.view() : HistoryPool<R>{},
-        m_particles.template ptr<Field::HistoryPooled>(), m_cond.as<Conditions>()});
+    m_exec.forEach(m_owned, kernels::PullHistoryHalf<R>{historyRows(), m_pool.active() ? m_pool.view() : HistoryPool<R>{},
+                                                        m_particles.template ptr<Field::HistoryPooled>(),
+                                                        m_cond.as<Conditions>()});
   });
   if (st.ok())
     m_exec.forEach(m_owned, kernels::ClearUnlistedSlots{m_nbrSlot.as<std::int8_t>(), nbrLayout(),
@@ -85,11 +89,9 @@ Status EngineImpl<Exec, R>::buildSlabs() {
                                                 m_owned1.as<std::uint32_t>()});
     if (slots) {  // histories of pairs that changed owner move to the new owner
       const Status st = untilSlotsSuffice([&] {
-        m_exec.forEachTwoColours(layers, kernels::PullHistory<R>{
-            m_slabStart.as<Index>(), m_slabItems.as<Index>(), m_owned1.as<std::uint32_t>(), m_nbr.as<Index>(),
-            m_nbrSlot.as<std::int8_t>(), nbrLayout(), m_particles.template ptr<Field::HistoryPartner>(),
-            m_particles.template ptr<Field::HistoryDisp>(), m_particles.layout(Multiplicity::kContactSlots),
-            m_particles.contactSlots(), m_particles.template ptr<Field::Gid>(), m_cond.as<Conditions>()});
+        m_exec.forEachTwoColours(layers, kernels::PullHistory<R>{m_slabStart.as<Index>(), m_slabItems.as<Index>(),
+                                                                 m_owned1.as<std::uint32_t>(), historyRows(),
+                                                                 m_cond.as<Conditions>()});
       });
       if (!st.ok()) return st;
     }

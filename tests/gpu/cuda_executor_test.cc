@@ -465,7 +465,9 @@ void pairsOnceOnTheGpuMatchesCpu(const char* inlineSlots) {
     EXPECT_EQ(g.historyEntries, h.historyEntries) << "after " << gpu->stepCount();
   }
   EXPECT_GT(gpu->rebuilds(), 5);
-  if (std::atoi(inlineSlots) > 0) EXPECT_EQ(gpu->engine().historySlots(), std::atoi(inlineSlots));
+  if (std::atoi(inlineSlots) > 0) {
+    EXPECT_EQ(gpu->engine().historySlots(), std::atoi(inlineSlots));
+  }
   const auto a = byGid(cpu->snapshot({"id", "position"}), "position");
   const auto b = byGid(gpu->snapshot({"id", "position"}), "position");
   ASSERT_EQ(a.size(), b.size());

@@ -253,18 +253,33 @@ TEST(History, PoolBeyondInlineSlotsChangesNoResult) {
   pool::expectIdentical(*pooled, *all);
 }
 
-TEST(History, PooledCheckpointResumesBitForBit) {
-  auto straight = pool::make("2"), first = pool::make("2"), resumed = pool::make("2");
-  ASSERT_TRUE(straight && first && resumed);
-  ASSERT_TRUE(straight->runSteps(3000).isOk());
+// `make`'s run straight to 3 000 steps; another checkpointed at the first rebuild after 2 000 and resumed to 3 000 in a
+// third; `fileSlots`: the checkpoint's slots a particle.
+struct StraightAndResumed {
+  std::unique_ptr<Simulation> straight, resumed;
+  int fileSlots = 0;
+};
+template <class Make>
+void runAndResume(Make make, StraightAndResumed& out) {
+  out.straight = make();
+  auto first = make();
+  out.resumed = make();
+  ASSERT_TRUE(out.straight && first && out.resumed);
+  ASSERT_TRUE(out.straight->runSteps(3000).isOk());
   ASSERT_TRUE(first->runSteps(2000).isOk());
   while (!first->justRebuilt()) ASSERT_TRUE(first->runSteps(1).isOk());
   auto state = first->state();
   ASSERT_TRUE(state.isOk()) << state.status().toString();
-  EXPECT_GT(state.value().contactSlots, 2);  // the pooled histories went into the file's rows
-  ASSERT_TRUE(resumed->resume(state.value()).isOk());
-  ASSERT_TRUE(resumed->runSteps(3000 - resumed->stepCount()).isOk());
-  pool::expectIdentical(*straight, *resumed);
+  out.fileSlots = state.value().contactSlots;
+  ASSERT_TRUE(out.resumed->resume(state.value()).isOk());
+  ASSERT_TRUE(out.resumed->runSteps(3000 - out.resumed->stepCount()).isOk());
+}
+
+TEST(History, PooledCheckpointResumesBitForBit) {
+  StraightAndResumed r;
+  ASSERT_NO_FATAL_FAILURE(runAndResume([] { return pool::make("2"); }, r));
+  EXPECT_GT(r.fileSlots, 2);  // the pooled histories went into the file's rows
+  pool::expectIdentical(*r.straight, *r.resumed);
 }
 
 // The pair kernel's two-phase loop (ComputeForces' kTwoPhase, the GPU's: a piece of candidates tested, then the
@@ -372,18 +387,11 @@ TEST(History, GpuPairsOnceWithThePoolFollowsTheCpuPairsOnce) { pairsOnceFollowsT
 // A checkpoint of the GPU's pairs once (the owners' histories, pooled ones merged into the file's rows) resumes into
 // a run that follows the uninterrupted one: to rounding, not bit for bit (its atomic sums have no fixed order).
 TEST(History, GpuPairsOnceResumesFromACheckpoint) {
-  auto straight = makePairsOnce(true, "1"), first = makePairsOnce(true, "1"), resumed = makePairsOnce(true, "1");
-  ASSERT_TRUE(straight && first && resumed);
-  ASSERT_TRUE(straight->runSteps(3000).isOk());
-  ASSERT_TRUE(first->runSteps(2000).isOk());
-  while (!first->justRebuilt()) ASSERT_TRUE(first->runSteps(1).isOk());
-  auto state = first->state();
-  ASSERT_TRUE(state.isOk()) << state.status().toString();
-  EXPECT_GT(state.value().contactSlots, 1);  // the pooled histories went into the file's rows
-  ASSERT_TRUE(resumed->resume(state.value()).isOk());
-  ASSERT_TRUE(resumed->runSteps(3000 - resumed->stepCount()).isOk());
-  EXPECT_EQ(resumed->contactStats().historyEntries, straight->contactStats().historyEntries);
-  const double most = farthestApart(*straight, *resumed);
+  StraightAndResumed r;
+  ASSERT_NO_FATAL_FAILURE(runAndResume([] { return makePairsOnce(true, "1"); }, r));
+  EXPECT_GT(r.fileSlots, 1);  // the pooled histories went into the file's rows
+  EXPECT_EQ(r.resumed->contactStats().historyEntries, r.straight->contactStats().historyEntries);
+  const double most = farthestApart(*r.straight, *r.resumed);
   std::printf("resumed and uninterrupted apart by at most %.3g m\n", most);
   EXPECT_LT(most, 1e-9);
 }

@@ -33,11 +33,7 @@ PFLOW_HOSTDEVICE inline void flagDeepOverlap(Conditions* cond, Index i) {
 
 // v added to *p component by component, atomically (ComputeForces' kHalf).
 template <class R> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void atomicAddVec(Vec3<R>* p, Vec3<R> v) {
-  if constexpr (std::is_same_v<R, float>) {
-    atomicAddF32(&p->x, v.x), atomicAddF32(&p->y, v.y), atomicAddF32(&p->z, v.z);
-  } else {
-    atomicAddF64(&p->x, v.x), atomicAddF64(&p->y, v.y), atomicAddF64(&p->z, v.z);
-  }
+  atomicAddReal(&p->x, v.x), atomicAddReal(&p->y, v.y), atomicAddReal(&p->z, v.z);
 }
 
 // A centre behind a plane, or carried through a triangle's face within the step:
@@ -480,43 +476,57 @@ struct OwnedFirst {
 // seen from the other side), and the slot of j is freed. Runs once at each rebuild; a pair keeps its
 // owner until the next. When the owner has no free slot it raises the overflow flag; the host grows the
 // slots and runs the pass again (what moved already is found in place).
+// The candidate rows and the history slots, as the passes that move histories between partners see them.
 template <class R>
-struct PullHistory {
-  using V = Vec3<R>;
-  const Index* slabStart;
-  const Index* slabItems;
-  const std::uint32_t* owned;
+struct HistoryRows {
   const Index* nbr;
   std::int8_t* nbrSlot;
   RowSlices layout;
   PartnerId* histPartner;
-  V* histDisp;
+  Vec3<R>* histDisp;
   SlotLayout histLayout;
   int slots;
   const Gid* gid;
+  // The slot of particle j that holds partner g's history, or -1.
+  PFLOW_HOSTDEVICE int heldBy(Index j, PartnerId g) const {
+    const SlotRow<PartnerId> theirs = histLayout.at(histPartner, j);
+    int from = -1;
+    for (int s = 0; s < slots; ++s)
+      if (theirs[s] == g) from = s;
+    return from;
+  }
+  // An owner found no free slot: the host grows the slots by one and runs the pass again.
+  PFLOW_HOSTDEVICE void overflow(Conditions* cond) const {
+    atomicOrU32(&cond->flags, kHistoryOverflow);
+    atomicMaxU32(&cond->neededHistory, std::uint32_t(slots) + 1);
+  }
+};
+
+template <class R>
+struct PullHistory {
+  const Index* slabStart;
+  const Index* slabItems;
+  const std::uint32_t* owned;
+  HistoryRows<R> rows;
   Conditions* cond;
   void operator()(Index slab) const {
+    const HistoryRows<R>& h = rows;
     for (Index k = slabStart[slab]; k < slabStart[slab + 1]; ++k) {
       const Index i = slabItems[k];
-      const PartnerId gi = PartnerId(gid[i]);
-      const SlotRow<PartnerId> mine = histLayout.at(histPartner, i);
+      const PartnerId gi = PartnerId(h.gid[i]);
       for (std::uint32_t e = 0; e < owned[i]; ++e) {
-        if (nbrSlot[layout.at(i, e)] >= 0) continue;  // i holds it already (or the pair has none)
-        const Index j = nbr[layout.at(i, e)];
-        const SlotRow<PartnerId> theirs = histLayout.at(histPartner, j);
-        int from = -1;
-        for (int s = 0; s < slots; ++s)
-          if (theirs[s] == gi) from = s;
+        if (h.nbrSlot[h.layout.at(i, e)] >= 0) continue;  // i holds it already (or the pair has none)
+        const Index j = h.nbr[h.layout.at(i, e)];
+        const int from = h.heldBy(j, gi);
         if (from < 0) continue;  // no history: not in contact
-        const int to = ComputeForces<R>::claimSlot(mine, slots, gid[j]);
+        const int to = ComputeForces<R>::claimSlot(h.histLayout.at(h.histPartner, i), h.slots, h.gid[j]);
         if (to < 0) {
-          atomicOrU32(&cond->flags, kHistoryOverflow);
-          atomicMaxU32(&cond->neededHistory, std::uint32_t(slots) + 1);
+          h.overflow(cond);
           continue;
         }
-        histLayout.at(histDisp, i)[to] = -histLayout.at(histDisp, j)[from];
-        theirs[from] = kNoPartner;
-        nbrSlot[layout.at(i, e)] = std::int8_t(to);
+        h.histLayout.at(h.histDisp, i)[to] = -h.histLayout.at(h.histDisp, j)[from];
+        h.histLayout.at(h.histPartner, j)[from] = kNoPartner;
+        h.nbrSlot[h.layout.at(i, e)] = std::int8_t(to);
       }
     }
   }

@@ -35,44 +35,33 @@ template <class R>
 struct PullHistoryHalf {
   static constexpr bool kVariableCost = true;
   using V = Vec3<R>;
-  const Index* nbr;
-  std::int8_t* nbrSlot;
-  RowSlices layout;
-  PartnerId* histPartner;
-  V* histDisp;
-  SlotLayout histLayout;
-  int slots;
-  const Gid* gid;
+  HistoryRows<R> rows;
   HistoryPool<R> pool;   // key null: no pool
   std::int32_t* pooled;  // [i]: i's contacts held in the pool
   Conditions* cond;
   PFLOW_HOSTDEVICE void operator()(Index i) const {
-    const PartnerId gi = PartnerId(gid[i]);
-    const SlotRow<PartnerId> mine = histLayout.at(histPartner, i);
-    const std::uint32_t count = layout.count(i);
+    const HistoryRows<R>& h = rows;
+    const PartnerId gi = PartnerId(h.gid[i]);
+    const std::uint32_t count = h.layout.count(i);
     int pooledHere = pool.key ? pooled[i] : 0;
     for (std::uint32_t e = 0; e < count; ++e) {
-      const Index j = nbr[layout.at(i, e)];
-      const SlotRow<PartnerId> theirs = histLayout.at(histPartner, j);
-      int from = -1;
-      for (int s = 0; s < slots; ++s)
-        if (theirs[s] == gi) from = s;
+      const Index j = h.nbr[h.layout.at(i, e)];
+      const int from = h.heldBy(j, gi);
       if (from < 0) continue;  // j holds nothing inline for this pair
-      if (nbrSlot[layout.at(i, e)] < 0) {
-        const V moved = -histLayout.at(histDisp, j)[from];
-        const int to = ComputeForces<R>::claimSlot(mine, slots, gid[j]);
+      if (h.nbrSlot[h.layout.at(i, e)] < 0) {
+        const V moved = -h.histLayout.at(h.histDisp, j)[from];
+        const int to = ComputeForces<R>::claimSlot(h.histLayout.at(h.histPartner, i), h.slots, h.gid[j]);
         if (to >= 0) {
-          histLayout.at(histDisp, i)[to] = moved;
-          nbrSlot[layout.at(i, e)] = std::int8_t(to);
+          h.histLayout.at(h.histDisp, i)[to] = moved;
+          h.nbrSlot[h.layout.at(i, e)] = std::int8_t(to);
         } else {
-          const std::int32_t entry = pool.key ? pool.insert(HistoryPool<R>::keyOf(gi, PartnerId(gid[j]))) : -1;
+          const std::int32_t entry = pool.key ? pool.insert(HistoryPool<R>::keyOf(gi, PartnerId(h.gid[j]))) : -1;
           if (entry < 0) {
-            atomicOrU32(&cond->flags, kHistoryOverflow);
-            atomicMaxU32(&cond->neededHistory, std::uint32_t(slots) + 1);
+            h.overflow(cond);
             continue;
           }
           pool.disp[entry] = moved;
-          nbrSlot[layout.at(i, e)] = kPoolSlot;
+          h.nbrSlot[h.layout.at(i, e)] = kPoolSlot;
           ++pooledHere;
         }
       }
@@ -81,7 +70,7 @@ struct PullHistoryHalf {
 #else
       __atomic_thread_fence(__ATOMIC_SEQ_CST);
 #endif
-      theirs[from] = kNoPartner;
+      h.histLayout.at(h.histPartner, j)[from] = kNoPartner;
     }
     if (pool.key) pooled[i] = pooledHere;
   }
