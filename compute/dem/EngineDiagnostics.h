@@ -269,8 +269,7 @@ ContactStats EngineImpl<Exec, R>::contactStats() const {
     m_mem.copyToHost(triVerts.data(), m_triVerts.data(), triVerts.size() * sizeof(Vec3d));
   }
   ContactStats st;
-  const double listed = halfPairs() ? 2.0 : 1.0;  // the GPU's pairs once lists each pair in one row
-  for (Index i = 0; i < n; ++i) st.candidatesPerParticle += listed * double(rows.count[i]) / std::max<Index>(n, 1);
+  for (Index i = 0; i < n; ++i) st.candidatesPerParticle += double(rows.count[i]) / std::max<Index>(n, 1);
   for (Index i = 0; i < n; ++i) {
     st.translationalEnergy += 0.5 * mass[i] * norm2(vel[i]);
     st.kineticEnergy += 0.5 * mass[i] * norm2(vel[i]) + 0.5 * 0.4 * mass[i] * rad[i] * rad[i] * norm2(om[i]);

@@ -401,6 +401,25 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     if (m_nbrShift) m_mem.copyToHost(h.count.data(), m_nbrCount.data(), h.count.size() * sizeof(std::uint32_t));
     else
       for (Index i = 0; i < m_owned; ++i) h.count[i] = h.start[i + 1] - h.start[i];
+    return halfPairs() ? bothWays(h) : h;
+  }
+  // The GPU's pairs once lists each pair in its lower index's row only: the diagnostics (energy, statistics, the
+  // error path) read every particle's candidates, so the host copy lists each pair in both rows.
+  HostRows bothWays(const HostRows& upper) const {
+    HostRows h;
+    h.count = upper.count;
+    for (Index i = 0; i < m_owned; ++i)
+      for (std::uint32_t e = 0; e < upper.count[i]; ++e) ++h.count[upper.at(i, e)];
+    h.start.assign(std::size_t(m_owned) + 1, 0);
+    for (Index i = 0; i < m_owned; ++i) h.start[i + 1] = h.start[i] + h.count[i];
+    h.nbr.resize(h.start[m_owned]);
+    std::vector<std::uint32_t> next(h.start.begin(), h.start.end() - 1);
+    for (Index i = 0; i < m_owned; ++i)
+      for (std::uint32_t e = 0; e < upper.count[i]; ++e) {
+        const Index j = upper.at(i, e);
+        h.nbr[next[i]++] = j;
+        h.nbr[next[j]++] = i;
+      }
     return h;
   }
   // Triangle candidates: rows of exact length (WallCandidates), none in a scene without triangles (planes are a

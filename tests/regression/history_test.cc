@@ -369,6 +369,10 @@ void pairsOnceFollowsTheCpu(const char* inlineSlots) {
                 half->engine().historySlots());
     EXPECT_EQ(h.particleContacts, c.particleContacts);
     EXPECT_EQ(h.historyEntries, c.historyEntries);
+    // The diagnostics read every pair from both rows (the host's copy of the upper rows made whole): the stored
+    // elastic energy that the energy check allows for, and the candidates a particle.
+    EXPECT_NEAR(half->engine().elasticEnergy(), cpu->engine().elasticEnergy(), 1e-9 * cpu->engine().elasticEnergy());
+    EXPECT_DOUBLE_EQ(h.candidatesPerParticle, c.candidatesPerParticle);
   }
   EXPECT_GT(half->rebuilds(), 5);
   EXPECT_GT(half->contactStats().historyEntries, 600u);

@@ -223,7 +223,8 @@ TEST(Instability, SettlingBedDoesNotTrip) {
   std::printf("settled: %lld steps, kinetic energy %.3g J\n", (long long)sim->stepCount(), sim->contactStats().kineticEnergy);
 
   const RunConfig block = compressedBlock(0.2);  // the recommended step, elastic
-  EXPECT_TRUE(runToEnd(block).isOk());
+  const Status b = runToEnd(block);
+  EXPECT_TRUE(b.isOk()) << b.toString();
 }
 
 // A mesh plate moving into a row of particles on a floor pushes them (work done on them): no detector trips.
