@@ -473,8 +473,15 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     const kernels::ForceArgs<R> args = forceArgs(dt, time, storeOnly);
     if (set == ForceSet::kAll || (m_numBoundary == 0 && set == ForceSet::kInterior)) {
       if (halfPairs()) {  // each pair once, by its lower index, the reactions by atomic adds
-        if (!storeOnly) m_exec.forEach(m_owned, kernels::ZeroSums<R>{args.force, args.torque});
-        m_exec.forEach(m_owned, kernels::ComputeForces<R, kC, kF, true, true>{args});
+        kernels::ForceArgs<R> half = args;
+        if constexpr (std::is_same_v<R, float>) {  // the sums as 16-byte rows: one vector atomic add a reaction
+          if (m_sums.bytes() < std::size_t(m_owned) * 2 * sizeof(kernels::Sum4))
+            m_sums.resize(std::size_t(m_owned) * 2 * sizeof(kernels::Sum4));
+          half.sums = m_sums.as<kernels::Sum4>();
+        }
+        if (!storeOnly) m_exec.forEach(m_owned, kernels::ZeroSums<R>{args.force, args.torque, half.sums});
+        m_exec.forEach(m_owned, kernels::ComputeForces<R, kC, kF, true, true>{half});
+        if (half.sums && !storeOnly) m_exec.forEach(m_owned, kernels::FinishSums<R>{args.force, args.torque, half.sums});
         if (m_anyWalls) m_exec.forEach(m_owned, kernels::ComputeWallForces<R, kC>{args});
         return;
       }
@@ -673,6 +680,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   // The GPU's pairs once (EngineSetup::reproducible false; ComputeForces' kHalf): one process (MpiDomain::partition
   // keeps several ranks reproducible), no ghosts.
   bool m_halfPairs = false;
+  Buffer m_sums{m_mem, 0};  // float pairs once: force and torque sums as 16-byte rows (kernels::Sum4)
   bool halfPairs() const { return m_halfPairs && m_n == m_owned; }
   Status pullHistoryToOwners();  // EnginePairsOnce.h
   kernels::HistoryRows<R> historyRows();  // EnginePairsOnce.h: the rows and slots the history moves see

@@ -445,9 +445,11 @@ TEST(CudaExecutor, SettledBedStatisticsMatchCpu) {
 // or double atomics, the histories moved to the owners at each rebuild) follows the CPU's pairs once through a poured
 // heap's 3 000 steps: the same contacts, one history each, positions within 1e-9 m (the sums are added in another
 // order, so the runs part by rounding only). With all histories inline, and with one inline slot and the pool.
-void pairsOnceOnTheGpuMatchesCpu(const char* inlineSlots) {
+void pairsOnceOnTheGpuMatchesCpu(const char* inlineSlots, compute::Precision precision = compute::Precision::kDouble,
+                                 int chunks = 3, double apart = 1e-9) {
   SKIP_WITHOUT_GPU();
   compute::RunConfig c = pouredHeap(1e-3, 2);
+  c.sim.precision = precision;
   c.sim.reproducible = false;  // the GPU's pairs once (PFLOW_GPU_HALF_PAIRS=1 on the CPU under test)
   if (underTest() == ExecutorKind::kCpu) setenv("PFLOW_GPU_HALF_PAIRS", "1", 1);
   setenv("PFLOW_INLINE_SLOTS", inlineSlots, 1);
@@ -457,14 +459,14 @@ void pairsOnceOnTheGpuMatchesCpu(const char* inlineSlots) {
   c.sim.reproducible = true;
   auto cpu = make(c, ExecutorKind::kCpu);
   ASSERT_TRUE(cpu && gpu);
-  for (int k = 0; k < 3; ++k) {
+  for (int k = 0; k < chunks; ++k) {
     ASSERT_TRUE(gpu->runSteps(1000).isOk());
     ASSERT_TRUE(cpu->runSteps(1000).isOk());
     const auto g = gpu->contactStats(), h = cpu->contactStats();
     EXPECT_EQ(g.particleContacts, h.particleContacts) << "after " << gpu->stepCount();
     EXPECT_EQ(g.historyEntries, h.historyEntries) << "after " << gpu->stepCount();
   }
-  EXPECT_GT(gpu->rebuilds(), 5);
+  EXPECT_GT(gpu->rebuilds(), 2 * chunks - 1);
   if (std::atoi(inlineSlots) > 0) {
     EXPECT_EQ(gpu->engine().historySlots(), std::atoi(inlineSlots));
   }
@@ -474,9 +476,14 @@ void pairsOnceOnTheGpuMatchesCpu(const char* inlineSlots) {
   double most = 0;
   for (const auto& [g, v] : a) most = std::max(most, norm(v - b.at(g)));
   std::printf("positions apart by at most %.3g m\n", most);
-  EXPECT_LT(most, 1e-9);
+  EXPECT_LT(most, apart);
 }
 TEST(CudaExecutor, PairsOnceOnTheGpuMatchesCpu) { pairsOnceOnTheGpuMatchesCpu("0"); }
+// In float (the sums as 16-byte rows, vector atomic adds): float's rounding, and the GPU's approximate float
+// quotients, part the runs sooner; over the first 1 000 steps.
+TEST(CudaExecutor, PairsOnceOnTheGpuInFloatMatchesCpu) {
+  pairsOnceOnTheGpuMatchesCpu("0", compute::Precision::kFloat, 1, 1e-7);
+}
 TEST(CudaExecutor, PairsOnceOnTheGpuWithThePoolMatchesCpu) { pairsOnceOnTheGpuMatchesCpu("1"); }
 
 // A blow-up on the GPU is caught and reported like on the CPU: the particle, the step, the cause.

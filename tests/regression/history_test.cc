@@ -340,11 +340,14 @@ TEST(History, TwoPhasePairLoopOverLongRowsChangesNoResult) {
 // the runs by far more, 6e-5 m when the rows' build freed the slots before their owners had taken them), and the
 // positions stay within 1e-9 m. With one inline slot the owners' other histories go to the pool, and those of pairs
 // whose owner changes are taken over from the pool too.
-std::unique_ptr<Simulation> makePairsOnce(bool half, const char* inlineSlots) {
+std::unique_ptr<Simulation> makePairsOnce(bool half, const char* inlineSlots,
+                                          compute::Precision precision = compute::Precision::kDouble) {
   pool::TwoPhase phases(half ? "1" : nullptr);
   pool::InlineSlots scope(inlineSlots);
   if (half) setenv("PFLOW_GPU_HALF_PAIRS", "1", 1);
-  auto sim = Simulation::create(test::pouredHeap(kR, 2), compute::SimulationOptions{});
+  RunConfig c = test::pouredHeap(kR, 2);
+  c.sim.precision = precision;
+  auto sim = Simulation::create(c, compute::SimulationOptions{});
   unsetenv("PFLOW_GPU_HALF_PAIRS");
   EXPECT_TRUE(sim.isOk()) << sim.status().toString();
   return sim.isOk() ? std::move(sim).value() : nullptr;
@@ -357,10 +360,12 @@ double farthestApart(const Simulation& a, const Simulation& b) {
     if (y.count(g)) most = std::max(most, norm(v - y.at(g)));
   return most;
 }
-void pairsOnceFollowsTheCpu(const char* inlineSlots) {
-  auto half = makePairsOnce(true, inlineSlots), cpu = makePairsOnce(false, inlineSlots);
+// `chunks` of 1 000 steps; positions within `apart`, the stored elastic energy within `energy` (relative).
+void pairsOnceFollowsTheCpu(const char* inlineSlots, compute::Precision precision = compute::Precision::kDouble,
+                            int chunks = 3, double apart = 1e-9, double energy = 1e-9) {
+  auto half = makePairsOnce(true, inlineSlots, precision), cpu = makePairsOnce(false, inlineSlots, precision);
   ASSERT_TRUE(half && cpu);
-  for (int k = 0; k < 3; ++k) {
+  for (int k = 0; k < chunks; ++k) {
     ASSERT_TRUE(half->runSteps(1000).isOk());
     ASSERT_TRUE(cpu->runSteps(1000).isOk());
     const auto h = half->contactStats(), c = cpu->contactStats();
@@ -371,11 +376,11 @@ void pairsOnceFollowsTheCpu(const char* inlineSlots) {
     EXPECT_EQ(h.historyEntries, c.historyEntries);
     // The diagnostics read every pair from both rows (the host's copy of the upper rows made whole): the stored
     // elastic energy that the energy check allows for, and the candidates a particle.
-    EXPECT_NEAR(half->engine().elasticEnergy(), cpu->engine().elasticEnergy(), 1e-9 * cpu->engine().elasticEnergy());
+    EXPECT_NEAR(half->engine().elasticEnergy(), cpu->engine().elasticEnergy(), energy * cpu->engine().elasticEnergy());
     EXPECT_DOUBLE_EQ(h.candidatesPerParticle, c.candidatesPerParticle);
   }
-  EXPECT_GT(half->rebuilds(), 5);
-  EXPECT_GT(half->contactStats().historyEntries, 600u);
+  EXPECT_GT(half->rebuilds(), 2 * chunks - 1);
+  EXPECT_GT(half->contactStats().historyEntries, chunks * 200u);
   if (std::atoi(inlineSlots) > 0) {  // owners with more histories than the inline slots: the pool holds the rest
     std::printf("the CPU's owners hold %zu histories beyond %s a particle\n", pool::beyond(*cpu, std::atoi(inlineSlots)), inlineSlots);
     EXPECT_GT(pool::beyond(*cpu, std::atoi(inlineSlots)), 100u);
@@ -383,10 +388,15 @@ void pairsOnceFollowsTheCpu(const char* inlineSlots) {
   }
   const double most = farthestApart(*half, *cpu);
   std::printf("positions apart by at most %.3g m\n", most);
-  EXPECT_LT(most, 1e-9);
+  EXPECT_LT(most, apart);
 }
 TEST(History, GpuPairsOnceFollowsTheCpuPairsOnce) { pairsOnceFollowsTheCpu("0"); }
 TEST(History, GpuPairsOnceWithThePoolFollowsTheCpuPairsOnce) { pairsOnceFollowsTheCpu("1"); }
+// In float the sums are 16-byte rows (Sum4), added to and copied out (FinishSums). Float's rounding parts the runs
+// sooner: over the first 1 000 steps.
+TEST(History, GpuPairsOnceInFloatFollowsTheCpuPairsOnce) {
+  pairsOnceFollowsTheCpu("0", compute::Precision::kFloat, 1, 2e-9, 1e-6);
+}
 
 // A checkpoint of the GPU's pairs once (the owners' histories, pooled ones merged into the file's rows) resumes into
 // a run that follows the uninterrupted one: to rounding, not bit for bit (its atomic sums have no fixed order).

@@ -31,6 +31,18 @@ PFLOW_HOSTDEVICE inline void flagDeepOverlap(Conditions* cond, Index i) {
   atomicMinU32(&cond->deepParticle, i);
 }
 
+// A float sum of three components in a 16-byte row: the GPU adds to it with one vector atomic add (red.v4.f32,
+// sm_90) where three float adds took twice as long (bench/RESULTS.md, "The GPU's pairs once").
+struct alignas(16) Sum4 {
+  float x, y, z, w;
+};
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void atomicAddSum4(Sum4* p, float x, float y, float z) {
+#if defined(__CUDA_ARCH__)
+  atomicAdd(reinterpret_cast<float4*>(p), make_float4(x, y, z, 0.f));
+#else
+  atomicAddReal(&p->x, x), atomicAddReal(&p->y, y), atomicAddReal(&p->z, z);
+#endif
+}
 // v added to *p component by component, atomically (ComputeForces' kHalf).
 template <class R> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void atomicAddVec(Vec3<R>* p, Vec3<R> v) {
   atomicAddReal(&p->x, v.x), atomicAddReal(&p->y, v.y), atomicAddReal(&p->z, v.z);
@@ -96,6 +108,9 @@ struct ForceArgs {
   bool tangential;  // ModelFlags: false = every friction is 0: normal forces only, no history slots (slots == 0)
   bool rolling;     // ModelFlags: false = every rolling friction is 0: no rolling torque
   Conditions* cond;
+  // The float pairs once (kHalf): each particle's force and torque sums as two 16-byte rows, so that a reaction is
+  // one vector atomic add (FinishSums copies them to force and torque); null: into force and torque directly.
+  Sum4* sums = nullptr;
 };
 
 struct WallContact {
@@ -311,6 +326,16 @@ struct ComputeForces {
       if constexpr (kSpin) tq += out.torque;
       if constexpr (kHalf) {
         if (!storeOnly) {
+          if constexpr (std::is_same_v<R, float>) {
+            if (a.sums) {
+              atomicAddSum4(&a.sums[2 * std::size_t(j)], -out.force.x, -out.force.y, -out.force.z);
+              if constexpr (kSpin) {
+                const V t = contact::partnerTorque(out, s.n, rj - R(0.5) * s.overlap);
+                atomicAddSum4(&a.sums[2 * std::size_t(j) + 1], t.x, t.y, t.z);
+              }
+              return;
+            }
+          }
           atomicAddVec(&force[j], -out.force);
           if constexpr (kSpin) atomicAddVec(&torque[j], contact::partnerTorque(out, s.n, rj - R(0.5) * s.overlap));
         }
@@ -364,6 +389,13 @@ struct ComputeForces {
     }
     if (storeOnly) return;
     if constexpr (kHalf) {
+      if constexpr (std::is_same_v<R, float>) {
+        if (a.sums) {
+          atomicAddSum4(&a.sums[2 * std::size_t(i)], f.x, f.y, f.z);
+          atomicAddSum4(&a.sums[2 * std::size_t(i) + 1], tq.x, tq.y, tq.z);
+          return;
+        }
+      }
       atomicAddVec(&force[i], f);
       atomicAddVec(&torque[i], tq);
     } else if constexpr (kOnce) {

@@ -13,14 +13,32 @@
 
 namespace pflow::compute::kernels {
 
-// Force and torque to zero: the pairs-once loop adds into them.
+// The sums to zero before the pairs-once loop: force and torque, or the 16-byte rows that stand for them (float).
 template <class R>
 struct ZeroSums {
   Vec3<R>* force;
   Vec3<R>* torque;
+  Sum4* sums = nullptr;
   PFLOW_HOSTDEVICE void operator()(Index i) const {
+    if (sums) {
+      sums[2 * std::size_t(i)] = Sum4{0, 0, 0, 0};
+      sums[2 * std::size_t(i) + 1] = Sum4{0, 0, 0, 0};
+      return;
+    }
     force[i] = zero3<R>();
     torque[i] = zero3<R>();
+  }
+};
+// After the float pairs-once loop: the 16-byte sum rows into force and torque.
+template <class R>
+struct FinishSums {
+  Vec3<R>* force;
+  Vec3<R>* torque;
+  const Sum4* sums;
+  PFLOW_HOSTDEVICE void operator()(Index i) const {
+    const Sum4 f = sums[2 * std::size_t(i)], t = sums[2 * std::size_t(i) + 1];
+    force[i] = Vec3<R>{R(f.x), R(f.y), R(f.z)};
+    torque[i] = Vec3<R>{R(t.x), R(t.y), R(t.z)};
   }
 };
 
