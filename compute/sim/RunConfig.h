@@ -154,7 +154,7 @@ struct SimulationSettings {
   double maxOverlap = 0.5;
   int maxContacts = 64;              // simultaneous particle contacts of one particle; more is a collapse
   // false: a one-rank GPU run evaluates each contact once, by its lower index, adding the reactions by atomic adds
-  // (EngineSetup::reproducible): 20 % less memory and faster, but the sums are added in no fixed order, so reruns and
+  // (EngineSetup::reproducible): 10-20 % less memory and faster, but the sums are added in no fixed order, so reruns and
   // resumes agree to rounding only. The CPU's pairs once is reproducible either way.
   bool reproducible = true;
   OnInstability onInstability = OnInstability::kStop;
