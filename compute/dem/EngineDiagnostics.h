@@ -313,4 +313,23 @@ ContactStats EngineImpl<Exec, R>::contactStats() const {
   return st;
 }
 
+template <class Exec, class R>
+typename EngineImpl<Exec, R>::HostRows EngineImpl<Exec, R>::bothWays(const HostRows& upper) const {
+  HostRows h;
+  h.count = upper.count;
+  for (Index i = 0; i < m_owned; ++i)
+    for (std::uint32_t e = 0; e < upper.count[i]; ++e) ++h.count[upper.at(i, e)];
+  h.start.assign(std::size_t(m_owned) + 1, 0);
+  for (Index i = 0; i < m_owned; ++i) h.start[i + 1] = h.start[i] + h.count[i];
+  h.nbr.resize(h.start[m_owned]);
+  std::vector<std::uint32_t> next(h.start.begin(), h.start.end() - 1);
+  for (Index i = 0; i < m_owned; ++i)
+    for (std::uint32_t e = 0; e < upper.count[i]; ++e) {
+      const Index j = upper.at(i, e);
+      h.nbr[next[i]++] = j;
+      h.nbr[next[j]++] = i;
+    }
+  return h;
+}
+
 }  // namespace pflow::compute

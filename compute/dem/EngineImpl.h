@@ -405,23 +405,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   }
   // The GPU's pairs once lists each pair in its lower index's row only: the diagnostics (energy, statistics, the
   // error path) read every particle's candidates, so the host copy lists each pair in both rows.
-  HostRows bothWays(const HostRows& upper) const {
-    HostRows h;
-    h.count = upper.count;
-    for (Index i = 0; i < m_owned; ++i)
-      for (std::uint32_t e = 0; e < upper.count[i]; ++e) ++h.count[upper.at(i, e)];
-    h.start.assign(std::size_t(m_owned) + 1, 0);
-    for (Index i = 0; i < m_owned; ++i) h.start[i + 1] = h.start[i] + h.count[i];
-    h.nbr.resize(h.start[m_owned]);
-    std::vector<std::uint32_t> next(h.start.begin(), h.start.end() - 1);
-    for (Index i = 0; i < m_owned; ++i)
-      for (std::uint32_t e = 0; e < upper.count[i]; ++e) {
-        const Index j = upper.at(i, e);
-        h.nbr[next[i]++] = j;
-        h.nbr[next[j]++] = i;
-      }
-    return h;
-  }
+  HostRows bothWays(const HostRows& upper) const;  // EngineDiagnostics.h
   // Triangle candidates: rows of exact length (WallCandidates), none in a scene without triangles (planes are a
   // mask a particle). The starts: one a particle and the end of the last row, the counts scanned in place.
   std::uint32_t* wallCandStarts(Index rows) {
@@ -475,9 +459,9 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
       if (halfPairs()) {  // each pair once, by its lower index, the reactions by atomic adds
         kernels::ForceArgs<R> half = args;
         if constexpr (std::is_same_v<R, float>) {  // the sums as 16-byte rows: one vector atomic add a reaction
-          if (m_sums.bytes() < std::size_t(m_owned) * 2 * sizeof(kernels::Sum4))
-            m_sums.resize(std::size_t(m_owned) * 2 * sizeof(kernels::Sum4));
-          half.sums = m_sums.as<kernels::Sum4>();
+          if (m_sums.bytes() < std::size_t(m_owned) * 2 * sizeof(Sum4))
+            m_sums.resize(std::size_t(m_owned) * 2 * sizeof(Sum4));
+          half.sums = m_sums.as<Sum4>();
         }
         if (!storeOnly) m_exec.forEach(m_owned, kernels::ZeroSums<R>{args.force, args.torque, half.sums});
         m_exec.forEach(m_owned, kernels::ComputeForces<R, kC, kF, true, true>{half});
@@ -680,7 +664,7 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   // The GPU's pairs once (EngineSetup::reproducible false; ComputeForces' kHalf): one process (MpiDomain::partition
   // keeps several ranks reproducible), no ghosts.
   bool m_halfPairs = false;
-  Buffer m_sums{m_mem, 0};  // float pairs once: force and torque sums as 16-byte rows (kernels::Sum4)
+  Buffer m_sums{m_mem, 0};  // float pairs once: force and torque sums as 16-byte rows (Sum4)
   bool halfPairs() const { return m_halfPairs && m_n == m_owned; }
   Status pullHistoryToOwners();  // EnginePairsOnce.h
   kernels::HistoryRows<R> historyRows();  // EnginePairsOnce.h: the rows and slots the history moves see

@@ -31,18 +31,6 @@ PFLOW_HOSTDEVICE inline void flagDeepOverlap(Conditions* cond, Index i) {
   atomicMinU32(&cond->deepParticle, i);
 }
 
-// A float sum of three components in a 16-byte row: the GPU adds to it with one vector atomic add (red.v4.f32,
-// sm_90) where three float adds took twice as long (bench/RESULTS.md, "The GPU's pairs once").
-struct alignas(16) Sum4 {
-  float x, y, z, w;
-};
-PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void atomicAddSum4(Sum4* p, float x, float y, float z) {
-#if defined(__CUDA_ARCH__)
-  atomicAdd(reinterpret_cast<float4*>(p), make_float4(x, y, z, 0.f));
-#else
-  atomicAddReal(&p->x, x), atomicAddReal(&p->y, y), atomicAddReal(&p->z, z);
-#endif
-}
 // v added to *p component by component, atomically (ComputeForces' kHalf).
 template <class R> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void atomicAddVec(Vec3<R>* p, Vec3<R> v) {
   atomicAddReal(&p->x, v.x), atomicAddReal(&p->y, v.y), atomicAddReal(&p->z, v.z);
