@@ -10,6 +10,7 @@
 #include "compute/core/VectorMath.h"
 #include "compute/dem/contact/ForceKernel.h"
 #include "compute/dem/contact/HistoryPool.h"
+#include "compute/dem/contact/PairsOnceKernels.h"
 
 namespace pflow::compute::kernels {
 
