@@ -1,7 +1,10 @@
 // Bit and arithmetic helpers of the pair loops. Square roots and quotients where float on the GPU may use the special-function unit's approximations instead of
 // the correctly rounded sequences (a few instructions instead of about ten, and no slow path): the SPH pair terms,
-// whose float runs are accurate to far less than these roundings (docs/sph.md, "Performance"). On the CPU, and in
-// double everywhere, they are the plain operations, so double runs agree across executors as before.
+// whose float runs are accurate to far less than these roundings (docs/sph.md, "Performance"), and the DEM contact
+// law's roots and quotients of well-scaled operands (the effective radius, mass and inertia, sqrt(R* delta), the
+// dashpot's sqrt(S_n m*), the history's rotation, the Coulomb cap's norm, the rolling spin's norm and limit): the float
+// forces phase 8 % shorter on an H200 (docs/performance.md). On the CPU, and in double everywhere, they are the plain
+// operations, so double runs agree across executors as before; float runs agree to a few roundings (2^-22, not 2^-24).
 #pragma once
 #include <cmath>
 #include <cstdint>

@@ -129,7 +129,7 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T hertzNormal(const ContactParams& p, T overl
   const T E = T(p.effYoung), c = T(p.dampingCoeff);
   const T sn = T(2) * E * sqrtRd;
   T fn = T(4) / T(3) * E * sqrtRd * overlap;
-  dampN = c * std::sqrt(sn * effMass);
+  dampN = c * sqrtFast(sn * effMass);
   touch = T(1);
   if (c > T(0)) {
     // The factor in float, by operations that round alike on every executor in double runs (as stepDashpot's series).
@@ -160,7 +160,7 @@ template <class T> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE Vec3<T> rotateHistory(Vec3
   const T p2 = norm2(p);
   // Nearly parallel to the normal: the direction is round-off, so forget it rather than amplify it.
   if (p2 <= T(1e-12) * len2) return zero3<T>();
-  return std::sqrt(len2 / p2) * p;
+  return sqrtFast(len2 / p2) * p;
 }
 // Mindlin spring S_t = 8 G* sqrt(R* delta).
 template <class T> PFLOW_HOSTDEVICE PFLOW_FORCEINLINE T mindlinStiffness(T effShear, T effRadius, T overlap) {
@@ -177,7 +177,7 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE Vec3<T> mindlinForce(T stiffness, T dampCoeff
   const T ft2 = norm2(ft);
   sliding = ft2 > cap * cap;
   if (sliding) {
-    ft = (ft2 > T(0) ? cap / std::sqrt(ft2) : T(0)) * ft;
+    ft = (ft2 > T(0) ? cap / sqrtFast(ft2) : T(0)) * ft;
     xi = stiffness > T(0) ? (T(-1) / stiffness) * ft : zero3<T>();
   }
   return ft;
@@ -191,10 +191,10 @@ namespace rolling {
 template <class T>
 PFLOW_HOSTDEVICE PFLOW_FORCEINLINE Vec3<T> constantTorque(T rollingFriction, T normalForce, T effRadius,
                                                           Vec3<T> omegaRel, T effInertia, T dt) {
-  const T w = norm(omegaRel);
+  const T w = sqrtFast(norm2(omegaRel));
   if (rollingFriction <= T(0) || w == T(0)) return zero3<T>();
   T mag = rollingFriction * normalForce * effRadius;
-  const T limit = effInertia * w / dt;
+  const T limit = divFast(effInertia * w, dt);
   if (mag > limit) mag = limit;
   return (-mag / w) * omegaRel;
 }
@@ -294,7 +294,7 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE NormalPart<T> normalPart(const ContactParams&
       out.damp = T(0);
       out.touch = T(1);
       if (overlap > T(0)) {  // Hertz and its dashpot, clipped; the dashpot's share kept
-        sqrtRd = std::sqrt(effRadius * overlap);
+        sqrtRd = sqrtFast(effRadius * overlap);
         fd = normal::hertzNormal(p, overlap, sqrtRd, vn, effMass, dt, out.damp, out.touch);
       }
       if (p.cohesion == cohesion::kJkr) {
@@ -313,7 +313,7 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE NormalPart<T> normalPart(const ContactParams&
       return out;
     }
   }
-  const T sqrtRd = std::sqrt(effRadius * overlap);
+  const T sqrtRd = sqrtFast(effRadius * overlap);
   out.force = normal::hertzNormal(p, overlap, sqrtRd, vn, effMass, dt, out.damp, out.touch);
   out.contactRadius = sqrtRd;
   out.load = out.force;

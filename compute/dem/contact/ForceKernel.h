@@ -128,8 +128,8 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE contact::ContactState<R> pairState(Vec3d d, d
   contact::ContactState<R> s;
   s.n = n;
   s.overlap = overlap;
-  s.effRadius = ri * rj / (ri + rj);
-  const R pairMass = mi * mj / (mi + mj);
+  s.effRadius = divFast(ri * rj, ri + rj);
+  const R pairMass = divFast(mi * mj, mi + mj);
   s.effMass = fixedSide == 2 ? mi : fixedSide == 1 ? mj : pairMass;
   if constexpr (kSpin) {
     const R li = ri - R(0.5) * overlap, lj = rj - R(0.5) * overlap;
@@ -138,7 +138,7 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE contact::ContactState<R> pairState(Vec3d d, d
     s.leverArm = li;
     if (rollingPair) {
       const R Ij = R(0.4) * mj * rj * rj;
-      const R pairInertia = Ii * (Ij / (Ii + Ij));  // not Ii*Ij/(Ii+Ij): that product underflows in float below ~10 um
+      const R pairInertia = Ii * divFast(Ij, Ii + Ij);  // not Ii*Ij/(Ii+Ij): that product underflows in float below ~10 um
       s.effInertia = fixedSide == 2 ? Ii : fixedSide == 1 ? Ij : pairInertia;
     } else {
       s.effInertia = R(0);  // unused without rolling resistance
