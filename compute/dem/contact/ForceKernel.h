@@ -42,7 +42,8 @@ PFLOW_HOSTDEVICE inline void flagTunnelled(Conditions* cond, Index i) {
 }
 
 // R: the run's precision. Positions are double at both precisions and the contact geometry (separation,
-// distance, overlap, closest point on a wall) is computed in double from them; the physics (relative
+// distance, overlap, closest point on a wall) is computed in double from them (the float pairs once on the GPU: the
+// separation and rs^2 - d^2 in double, the rest in float, pairState's kFloatOverlap); the physics (relative
 // velocities, forces, torques, history) runs in R.
 template <class R>
 struct ForceArgs {
@@ -118,16 +119,29 @@ struct WallContact {
 // `rollingPair`: this pair has rolling resistance (its effective inertia is needed). `fixedSide`
 // (ContactParams::fixedSide, 0 unless a material is fixed): a pair with one fixed particle is damped as the other's
 // contact with a wall, its effective mass and inertia the moving particle's own (both fixed: neither moves).
-template <class R, bool kSpin>
+// kFloatOverlap (float only; the GPU's pairs once, ComputeForces' kHalf): the overlap as (rs^2 - d^2) / (rs + d), the
+// difference in double (what needs the positions' precision, without the cancellation of rs - d), the rest in float,
+// root and quotients approximate on the GPU (FastMath.h): no double root or quotient left. That loop spends most of its
+// time evaluating contacts, and its forces phase took 10 % less on an H200 (1.02 -> 0.92 s per 1 000 steps); the
+// both-sides loop took about 3 % more (1.08 -> 1.10, at its 80 registers), so it keeps the distance in double
+// (docs/performance.md).
+template <class R, bool kSpin, bool kFloatOverlap = false>
 PFLOW_HOSTDEVICE PFLOW_FORCEINLINE contact::ContactState<R> pairState(Vec3d d, double d2, double rs, Vec3<R> vi, Vec3<R> wi,
                                                                     R ri, R mi, R Ii, Vec3<R> vj, Vec3<R> wj, R rj, R mj,
                                                                     bool rollingPair, int fixedSide = 0) {
-  const double dist = std::sqrt(d2);
-  const Vec3<R> n = vcast<R>((1.0 / dist) * d);
-  const R overlap = R(rs - dist);
   contact::ContactState<R> s;
-  s.n = n;
-  s.overlap = overlap;
+  if constexpr (kFloatOverlap) {
+    static_assert(std::is_same_v<R, float>);
+    const float dist = sqrtFast(float(d2));
+    s.n = divFast(1.0f, dist) * vcast<float>(d);
+    s.overlap = divFast(float(rs * rs - d2), float(rs) + dist);
+  } else {
+    const double dist = std::sqrt(d2);
+    s.n = vcast<R>((1.0 / dist) * d);
+    s.overlap = R(rs - dist);
+  }
+  const R overlap = s.overlap;
+  const Vec3<R> n = s.n;
   s.effRadius = divFast(ri * rj, ri + rj);
   const R pairMass = divFast(mi * mj, mi + mj);
   s.effMass = fixedSide == 2 ? mi : fixedSide == 1 ? mj : pairMass;
@@ -292,7 +306,7 @@ struct ComputeForces {
       }
       const R mj = mass[j];
       const ContactParams& pp = params[material[j]];
-      const contact::ContactState<R> s = pairState<R, kSpin>(d, d2, rs, vi, wi, ri, mi, Ii, vel[j],
+      const contact::ContactState<R> s = pairState<R, kSpin, kHalf && std::is_same_v<R, float>>(d, d2, rs, vi, wi, ri, mi, Ii, vel[j],
                                                              kSpin ? omega[j] : zero3<R>(), rj, mj,
                                                              kRolling && pp.rollingFriction > 0, kFixed ? pp.fixedSide : 0);
       if (s.overlap > R(a.maxOverlap) * (ri < rj ? ri : rj)) {
