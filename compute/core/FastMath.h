@@ -1,4 +1,4 @@
-// Bit and arithmetic helpers of the pair loops. Square roots and quotients where float on the GPU may use the special-function unit's approximations instead of
+// Arithmetic helpers of the pair loops (the lowest set bit of a mask: lowestBit, core/Types.h). Square roots and quotients where float on the GPU may use the special-function unit's approximations instead of
 // the correctly rounded sequences (a few instructions instead of about ten, and no slow path): the SPH pair terms,
 // whose float runs are accurate to far less than these roundings (docs/sph.md, "Performance"), and the DEM contact
 // law's roots and quotients of well-scaled operands (the effective radius, mass and inertia, sqrt(R* delta), the
@@ -34,15 +34,6 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE R divFast(R a, R b) {
   if constexpr (std::is_same_v<R, float>) return __fdividef(a, b);
 #endif
   return a / b;
-}
-
-// The index of the lowest set bit of x != 0.
-PFLOW_HOSTDEVICE PFLOW_FORCEINLINE int lowestSetBit(std::uint32_t x) {
-#if defined(__CUDA_ARCH__)
-  return __ffs(int(x)) - 1;
-#else
-  return __builtin_ctz(x);
-#endif
 }
 
 }  // namespace pflow::compute

@@ -244,7 +244,7 @@ struct Interact {
           ++piece;
           if (piece >= kMaskPieces && base + Index(32 * piece) >= end) {  // the next row with marks
             if (rowsLeft == 0) break;
-            code = lowestSetBit(rowsLeft);  // (dz + 2) * 5 + dy + 2: the walk's order
+            code = lowestBit(rowsLeft);  // (dz + 2) * 5 + dy + 2: the walk's order
             rowsLeft &= rowsLeft - 1;
             const int dz = code / 5 - 2, dy = code % 5 - 2;
             zRow = ra.z - R(dz) * cs;  // the walk's row offsets, rounded the same way
@@ -262,7 +262,7 @@ struct Interact {
           }
         }
         if (bits == 0) break;
-        const Index b = base + Index(32 * piece + lowestSetBit(bits));
+        const Index b = base + Index(32 * piece + lowestBit(bits));
         bits &= bits - 1;
         const RateRow<R> rb = row[b];
         if (norm2(separation(rb)) < cut2) add(b, rb);
@@ -298,7 +298,7 @@ struct Interact {
           ++w;
         }
         if (bits == 0) break;
-        const Index b = base + Index(lowestSetBit(bits));
+        const Index b = base + Index(lowestBit(bits));
         bits &= bits - 1;
         add(b, row[b]);
       }
@@ -357,7 +357,7 @@ struct Interact {
             std::uint32_t hits = 0;
             for (int j = 0; j < len; ++j) hits |= std::uint32_t(isNeighbour(piece + j, row[piece + j])) << j;
             for (; hits != 0; hits &= hits - 1) {
-              const Index b = piece + Index(lowestSetBit(hits));
+              const Index b = piece + Index(lowestBit(hits));
               add(b, row[b]);
             }
           }
@@ -388,7 +388,7 @@ struct Interact {
             any |= marks;
           }
           for (; hits != 0; hits &= hits - 1) {
-            const Index b = piece + Index(lowestSetBit(hits));
+            const Index b = piece + Index(lowestBit(hits));
             add(b, row[b]);
           }
         }

@@ -96,7 +96,8 @@ struct ForceArgs {
   bool rolling;     // ModelFlags: false = every rolling friction is 0: no rolling torque
   Conditions* cond;
   // The float pairs once (kHalf): each particle's force and torque sums as two 16-byte rows, so that a reaction is
-  // one vector atomic add (FinishSums copies them to force and torque); null: into force and torque directly.
+  // one vector atomic add (FinishSums copies them to force and torque). The engine gives every float pairs-once pass
+  // them; the double one adds into force and torque (no 64-bit vector add); null elsewhere.
   Sum4* sums = nullptr;
 };
 
@@ -123,7 +124,7 @@ struct WallContact {
 // difference in double (what needs the positions' precision, without the cancellation of rs - d), the rest in float,
 // root and quotients approximate on the GPU (FastMath.h): no double root or quotient left. That loop spends most of its
 // time evaluating contacts, and its forces phase took 10 % less on an H200 (1.02 -> 0.92 s per 1 000 steps); the
-// both-sides loop took about 3 % more (1.08 -> 1.10, at its 80 registers), so it keeps the distance in double
+// both-sides loop took about 3 % more (1.08 -> 1.10 in separate calls, at its 80 registers), so it keeps the distance in double
 // (docs/performance.md).
 template <class R, bool kSpin, bool kFloatOverlap = false>
 PFLOW_HOSTDEVICE PFLOW_FORCEINLINE contact::ContactState<R> pairState(Vec3d d, double d2, double rs, Vec3<R> vi, Vec3<R> wi,
@@ -326,18 +327,14 @@ struct ComputeForces {
       if constexpr (kSpin) tq += out.torque;
       if constexpr (kHalf) {
         if (!storeOnly) {
+          const V tj = kSpin ? contact::partnerTorque(out, s.n, rj - R(0.5) * s.overlap) : zero3<R>();
           if constexpr (std::is_same_v<R, float>) {
-            if (a.sums) {
-              atomicAddSum4(&a.sums[2 * std::size_t(j)], -out.force.x, -out.force.y, -out.force.z);
-              if constexpr (kSpin) {
-                const V t = contact::partnerTorque(out, s.n, rj - R(0.5) * s.overlap);
-                atomicAddSum4(&a.sums[2 * std::size_t(j) + 1], t.x, t.y, t.z);
-              }
-              return;
-            }
+            atomicAddSum4(&a.sums[2 * std::size_t(j)], -out.force.x, -out.force.y, -out.force.z);
+            if constexpr (kSpin) atomicAddSum4(&a.sums[2 * std::size_t(j) + 1], tj.x, tj.y, tj.z);
+          } else {
+            atomicAddVec(&force[j], -out.force);
+            if constexpr (kSpin) atomicAddVec(&torque[j], tj);
           }
-          atomicAddVec(&force[j], -out.force);
-          if constexpr (kSpin) atomicAddVec(&torque[j], contact::partnerTorque(out, s.n, rj - R(0.5) * s.overlap));
         }
       } else if constexpr (kOnce) {
         if (!storeOnly) {
@@ -388,16 +385,14 @@ struct ComputeForces {
       }
     }
     if (storeOnly) return;
-    if constexpr (kHalf) {
+    if constexpr (kHalf) {  // the sums start at zero (ZeroSums): without spins i's torque stays so
       if constexpr (std::is_same_v<R, float>) {
-        if (a.sums) {
-          atomicAddSum4(&a.sums[2 * std::size_t(i)], f.x, f.y, f.z);
-          atomicAddSum4(&a.sums[2 * std::size_t(i) + 1], tq.x, tq.y, tq.z);
-          return;
-        }
+        atomicAddSum4(&a.sums[2 * std::size_t(i)], f.x, f.y, f.z);
+        if constexpr (kSpin) atomicAddSum4(&a.sums[2 * std::size_t(i) + 1], tq.x, tq.y, tq.z);
+      } else {
+        atomicAddVec(&force[i], f);
+        if constexpr (kSpin) atomicAddVec(&torque[i], tq);
       }
-      atomicAddVec(&force[i], f);
-      atomicAddVec(&torque[i], tq);
     } else if constexpr (kOnce) {
       force[i] += f;
       torque[i] += tq;
