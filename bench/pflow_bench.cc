@@ -65,6 +65,10 @@ int main(int argc, char** argv) {
   bool notReproducible = false;
   app.add_flag("--not-reproducible", notReproducible,
                "simulation.reproducible: false (one GPU: each contact evaluated once, the sums by atomic adds)");
+  bool noDefer = false;
+  app.add_flag("--no-deferred-half", noDefer,
+               "every step ends with its own second half kick (SimulationOptions::deferSecondHalf off: the A/B of the "
+               "combined pass)");
   int historySlots = 0, wallHistorySlots = 0;
   app.add_option("--wall-history-slots", wallHistorySlots,
                  "initial wall-contact slots per particle (simulation.wall_history_slots; 0: the default, 1)");
@@ -101,6 +105,7 @@ int main(int argc, char** argv) {
   pflow::compute::SimulationOptions so;
   so.executor = kind.value();
   so.device = gpu;
+  so.deferSecondHalf = !noDefer;
   auto settleKind = pflow::compute::parseExecutorKind(settleExecutor.empty() ? executor : settleExecutor);
   if (!settleKind) {
     std::fprintf(stderr, "%s\n", settleKind.status().toString().c_str());
@@ -175,7 +180,7 @@ int main(int argc, char** argv) {
     auto& s = *simPtr;
     const auto before = s.contactStats();
     s.timers().reset();
-    const auto rebuilds0 = s.rebuilds();
+    const auto rebuilds0 = s.rebuilds(), fused0 = s.fusedHalves();
     const auto t1 = std::chrono::steady_clock::now();
     if (auto st = s.runSteps(steps); !st.isOk()) {
       std::fprintf(stderr, "timed run failed: %s\n", st.toString().c_str());
@@ -212,7 +217,7 @@ int main(int argc, char** argv) {
                      {"copy_bandwidth_gb_per_s", copyBandwidth},
                      {"coordination", before.coordinationNumber},
                      {"candidates_per_particle", before.candidatesPerParticle},
-                     {"rebuilds", s.rebuilds() - rebuilds0},
+                     {"rebuilds", s.rebuilds() - rebuilds0}, {"fused_halves", s.fusedHalves() - fused0},
                      {"history_slots", s.engine().historySlots()}, {"reproducible", cfg.sim.reproducible},
                      {"wall_history_slots", s.engine().wallHistorySlots()},
                      {"device_bytes_per_particle", double(s.deviceBytes()) / double(s.numParticles())},

@@ -153,6 +153,10 @@ class Engine : public DistributedRows {
   // Owned particles with a ghost candidate (the kBoundary pass), as of the last buildContacts.
   virtual std::size_t boundaryParticles() const = 0;
   virtual Status integrateSecondHalf(double dt) = 0;
+  // The last step's second half kick (deferred by Simulation, with its checks) and this step's first half in one
+  // pass: the same bits as integrateSecondHalf then integrateFirstHalf, one read and write of the particles fewer.
+  // The largest squared displacement in `moved2`; the status is the second half's checks'.
+  virtual Status integrateBothHalves(double dt, double& moved2) = 0;
 
   // Explicit host copies for output and diagnostics (snapshot(): DistributedRows; the fields named, every
   // kSnapshot field when empty, unknown names ignored: only those are copied off the device).

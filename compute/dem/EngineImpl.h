@@ -250,6 +250,14 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
   Status integrateSecondHalf(double dt) override {
     resetConditions();
     m_exec.forEach(m_owned, kernels::IntegrateSecondHalf<R>{integrateArgs(dt)});
+    return integrationChecks(dt);
+  }
+  Status integrateBothHalves(double dt, double& moved2) override {
+    resetConditions();
+    moved2 = m_exec.maxOf(m_owned, kernels::IntegrateBothHalves<R>{integrateArgs(dt)});
+    return integrationChecks(dt);
+  }
+  Status integrationChecks(double dt) {
     const Conditions c = readConditions();
     if (c.flags & kNonFinite) return nonFiniteError(c.badParticle, dt);
     if (c.flags & kLeftDomain) return leftDomainError(c.outsideParticle, dt);

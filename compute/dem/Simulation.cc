@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <utility>
 
 #include "common/Log.h"
 #include "compute/core/Memory.h"
@@ -27,7 +28,7 @@ Status fromException();  // the exception in flight as a Status (below)
 Status Simulation::stepPhases() {
   const double dt = m_timeStep.dt, tNext = timeAt(m_step + 1);
   double moved, meshMoved;
-  { auto t = m_timers.time(Phase::kIntegrate1); moved = std::sqrt(m_engine->integrateFirstHalf(dt)); }
+  if (Status st = firstHalf(dt, moved); !st.isOk()) return st;  // with the last step's second half if it waited
   { auto t = m_timers.time(Phase::kMeshes);     m_drives.beginStep(m_time, dt, *m_engine);  // driven walls' half kick
                                                  meshMoved = std::sqrt(m_engine->moveMeshes(tNext)); }
   Status s;
@@ -41,15 +42,16 @@ Status Simulation::stepPhases() {
   if (rebuildNow) s = rebuild(), m_rebuiltAt = m_step + 1;
   if (!rebuildNow && m_domain->ranks() > 1) s = haloAndForces(dt, tNext);  // ghosts refreshed (ranks)
   else if (s.isOk()) { auto t = m_timers.time(Phase::kForces);     s = m_engine->computeForces(dt, tNext); }
-  if (s.isOk()) { auto t = m_timers.time(Phase::kIntegrate2); s = m_engine->integrateSecondHalf(dt); }
+  const std::int64_t next = m_step + 1;
+  const bool outputStep = (m_nextOutput >= 0 && next >= m_nextOutput) || next == m_endOutput;
+  if (s.isOk() && secondHalfCanWait(next, tNext, outputStep)) m_secondHalfPending = true;  // done with the next first
+  else if (s.isOk()) { auto t = m_timers.time(Phase::kIntegrate2); s = m_engine->integrateSecondHalf(dt); }
   if (s.isOk() && !m_drives.empty()) { auto t = m_timers.time(Phase::kMeshes); driveWalls(tNext, dt); }
   PFLOW_RETURN_IF_ERROR(m_domain->agree(s));  // every rank stops on any rank's error
   // reduce_dt checkpoints: every checkpointSteps, at outputs (a reduction never goes back past one) and
   // when slots grew (a checkpoint holds rows of one slot count); the energy is checked there too, so a
   // checkpoint never holds a state the detector would reject.
-  const std::int64_t next = m_step + 1;
   const bool slotsGrew = reportSlotGrowth();  // logged in every mode
-  const bool outputStep = (m_nextOutput >= 0 && next >= m_nextOutput) || next == m_endOutput;
   m_checkpointDue = m_onInstability == OnInstability::kReduceDt &&
                     (slotsGrew || outputStep || next - m_checkpoint.step >= m_checkpointSteps);
   // The energy detector: every kEnergyCheckSteps, at checkpoints, and at every output and the run's end, so that no
@@ -62,6 +64,29 @@ Status Simulation::stepPhases() {
   m_time = tNext;
   if (loads) m_loadsStep = m_step;
   return Status::ok();
+}
+
+// The first half kick and drift, with the last step's second half when it waited (secondHalfCanWait): one pass for
+// both, its checks' error named at that step.
+Status Simulation::firstHalf(double dt, double& moved) {
+  auto t = m_timers.time(Phase::kIntegrate1);
+  if (!m_secondHalfPending) return moved = std::sqrt(m_engine->integrateFirstHalf(dt)), Status::ok();
+  m_secondHalfPending = false;
+  ++m_fusedHalves;
+  const Status s = m_engine->integrateBothHalves(dt, moved);
+  moved = std::sqrt(moved);
+  return s.isOk() ? s : atStep(s, m_step);
+}
+
+// A step's second half kick may wait for the next step's first half unless something reads the state between the
+// two: the last step of the runSteps/runUntil call, outputs and series samples, the energy detector's steps,
+// reduce_dt's checkpoints (those runs never defer); one process only (a distributed step agrees on its errors once,
+// after its second half). Anything else that reads the state in between (an observer's checkpoint, a test) goes
+// through settle().
+bool Simulation::secondHalfCanWait(std::int64_t next, double tNext, bool outputStep) const {
+  return m_deferSecondHalf && next < m_lastStepOfCall && m_domain->ranks() == 1 &&
+         m_onInstability != OnInstability::kReduceDt && !outputStep && !seriesSampleDue(m_time, tNext, m_loadsInterval) &&
+         !(m_energyCheck && next % kEnergyCheckSteps == 0);
 }
 
 // Driven walls (WallDrive.h): their contact loads of this step, summed over ranks (every rank moves them alike),
@@ -123,6 +148,7 @@ Status Simulation::guardedStep() {
 
 // A step; with reduce_dt, checkpoints and the recovery from a detector's error.
 Status Simulation::step() {
+  if (!m_deferredError.isOk()) return std::exchange(m_deferredError, Status::ok());  // from settle()
   const bool reduce = m_onInstability == OnInstability::kReduceDt;
   try {
     if (reduce && !m_checkpoint.valid) takeCheckpoint();
@@ -183,6 +209,7 @@ Status Simulation::restoreCheckpoint(const Status& cause) {
     return Status(cause.code(), cause.message() + "; gave up after " + std::to_string(m_reductions) +
                                     " time-step reductions (simulation.on_instability: reduce_dt)");
   const Checkpoint& c = m_checkpoint;
+  m_secondHalfPending = false;  // (never set in reduce_dt runs) the checkpoint's state is a whole step's
   const double oldDt = m_timeStep.dt;
   m_timeStep.dt = 0.5 * oldDt;
   ++m_reductions;
@@ -260,6 +287,10 @@ bool Simulation::reportSlotGrowth() {
   return grew;
 }
 
+Status Simulation::atStep(Status s, std::int64_t step) const {
+  return Status(s.code(), s.message() + " at step " + std::to_string(step) + " (t = " + std::to_string(timeAt(step)) + " s)");
+}
+
 Status Simulation::withStep(Status s) const {
   if (s.isOk()) return s;
   if (!m_started) return Status(s.code(), s.message() + " at step 0 (t = " + std::to_string(m_time) + " s, the start)");
@@ -294,6 +325,8 @@ Status Simulation::initialise() {
 }
 
 Result<SimulationState> Simulation::state() const {
+  settle();
+  if (!m_deferredError.isOk()) return m_deferredError;
   if (!justRebuilt())
     return Status(StatusCode::kFailedPrecondition, "a checkpoint is taken just after a neighbour rebuild (step " +
                                                        std::to_string(m_rebuiltAt) + " was the last; this is " + std::to_string(m_step) + ")");
@@ -325,6 +358,8 @@ Result<SimulationState> Simulation::state() const {
 Status Simulation::resume(const SimulationState& state) {
   SimulationState s;  // distributed: rank 0's scalars on every rank (its particles below)
   s.setScalars(state.scalars());
+  m_secondHalfPending = false;  // the loaded state is a whole step's
+  m_deferredError = Status::ok();
   try {
     if (m_domain->ranks() > 1) {
       // Rank 0's state on every rank, split as a new run's scene is, each rank keeping its share.
@@ -356,9 +391,17 @@ Status Simulation::resume(const SimulationState& state) {
 }
 
 Status Simulation::runSteps(std::int64_t steps) {
+  m_lastStepOfCall = m_step + steps;
   for (std::int64_t k = 0; k < steps; ++k)
     if (Status s = step(); !s.isOk()) return s;
   return Status::ok();
+}
+
+void Simulation::settle() const {
+  if (!m_secondHalfPending) return;
+  m_secondHalfPending = false;
+  Status s = m_engine->integrateSecondHalf(m_timeStep.dt);
+  if (!s.isOk() && m_deferredError.isOk()) m_deferredError = atStep(s, m_step);
 }
 
 // The end of a run: the whole energy balance, mechanical plus the elastic energy stored in the contacts, against the
@@ -367,6 +410,8 @@ Status Simulation::runSteps(std::int64_t steps) {
 // at 1.5 Rayleigh times of a compressed block took the total from 14.2 J to 18.0 J with the mechanical part below
 // its bound. Collective; host copies once.
 Status Simulation::finishRun() {
+  settle();
+  if (!m_deferredError.isOk()) return std::exchange(m_deferredError, Status::ok());
   if (!m_energyCheck || m_step == 0) return Status::ok();
   const double mechanical = m_domain->sum(m_engine->mechanicalEnergy()), elastic = m_domain->sum(m_engine->elasticEnergy());
   const double excess = (mechanical + elastic) - (m_energyStart + m_elasticStart);
@@ -384,6 +429,7 @@ Status Simulation::finishRun() {
 Status Simulation::runUntil(double time, const std::function<Status(const Simulation&)>& observer) {
   // The last step recomputed each time: a reduce_dt recovery changes dt and the steps left.
   while (m_step < m_stepBase + std::llround((time - m_timeBase) / m_timeStep.dt)) {
+    m_lastStepOfCall = m_stepBase + std::llround((time - m_timeBase) / m_timeStep.dt);
     if (Status s = step(); !s.isOk()) return s;
     if (observer)
       if (Status s = observer(*this); !s.isOk()) return s;
@@ -430,6 +476,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const RunConfig& config, 
   sim->m_drives = std::move(drives).value();
   sim->m_domain = std::move(domain);
   sim->m_overlapHalo = options.overlapHalo;
+  sim->m_deferSecondHalf = options.deferSecondHalf;
   sim->m_onInstability = config.sim.onInstability;
   sim->m_checkpointSteps = config.sim.checkpointSteps;
   if (sim->m_onInstability == OnInstability::kReduceDt && sim->m_domain->ranks() > 1)

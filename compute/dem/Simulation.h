@@ -32,6 +32,10 @@ struct SimulationOptions {
   // The CPU executor in one process evaluates each contact once (EngineSetup::pairsOnce); false: from both
   // sides, as the GPU does (tests compare the two).
   bool pairsOnce = true;
+  // One process: a step's second half kick waits for the next step's first, both done in one pass over the
+  // particles (the same bits, one read and write of them fewer), where nothing looks at the state in between
+  // (Simulation::stepPhases says when). false: every step ends with its own (tests compare the two).
+  bool deferSecondHalf = true;
 };
 
 class Simulation {
@@ -81,16 +85,19 @@ class Simulation {
   double skin() const { return m_skin; }
   std::size_t numParticles() const { return m_engine->size(); }  // on this rank
   std::int64_t rebuilds() const { return m_rebuilds; }
+  // Steps whose second half kick was done with the next step's first (SimulationOptions::deferSecondHalf).
+  std::int64_t fusedHalves() const { return m_fusedHalves; }
 
   // Host copy of the particles now: the fields named (scene output.fields), or every snapshot field. In a
   // distributed run every rank calls it and rank 0 gets all particles, ordered by id; `localOnly`: this
   // rank's own particles, no communication.
   ParticleSnapshot snapshot(const std::vector<std::string>& fields = {}, bool localOnly = false) const {
+    settle();
     ParticleSnapshot s = m_engine->snapshot(m_step, m_time, fields);
     return localOnly ? s : m_domain->gather(std::move(s));
   }
   GeometrySnapshot geometry() const { return m_engine->geometry(); }
-  ContactStats contactStats() const { return m_engine->contactStats(); }
+  ContactStats contactStats() const { return settle(), m_engine->contactStats(); }
   // Wall loads (Engine::recordWallLoads) summed during the forces of the steps a series samples at the end of:
   // every output step (atOutputs) and each step reaching a multiple of `interval` s (seriesSampleDue; 0: none).
   // wallLoads(): 6 per surface number from the last such step, wallLoadsStep() (-1: none yet).
@@ -105,8 +112,8 @@ class Simulation {
   ExecutorKind executorKind() const { return m_executor; }
   std::size_t deviceBytes() const { return m_engine->deviceBytes(); }
   std::size_t devicePeakBytes() const { return m_engine->devicePeakBytes(); }
-  Engine& engine() { return *m_engine; }
-  const Engine& engine() const { return *m_engine; }
+  Engine& engine() { return settle(), *m_engine; }
+  const Engine& engine() const { return settle(), *m_engine; }
   // Distributed runs: overlap the halo with the interior forces (SimulationOptions::overlapHalo).
   void setOverlapHalo(bool on) { m_overlapHalo = on; }
 
@@ -117,7 +124,13 @@ class Simulation {
   Status rebuild(bool keepForces = false);
   Status haloAndForces(double dt, double time);
   void driveWalls(double tNext, double dt);
+  Status firstHalf(double dt, double& moved);
+  bool secondHalfCanWait(std::int64_t next, double tNext, bool outputStep) const;
   Status withStep(Status s) const;
+  Status atStep(Status s, std::int64_t step) const;  // s named at `step` (done), not at the step in progress
+  // A deferred second half kick (deferSecondHalf) done now, before the state is read: every accessor of particle
+  // state calls it. Its checks' error, if any, is kept for the next step() to return (a read cannot).
+  void settle() const;
   bool reportSlotGrowth();  // true when slots grew
   Status guardedStep();      // stepPhases, exceptions as errors
   Status checkEnergy();
@@ -171,6 +184,14 @@ class Simulation {
   int m_rebuildInterval = 0;  // SimulationSettings::rebuildInterval (0 = automatic)
   ExecutorKind m_executor = ExecutorKind::kCpu;
   bool m_overlapHalo = true;
+  // The deferred second half (SimulationOptions::deferSecondHalf): allowed, pending (the last step's is not done
+  // yet), and the last step of the runSteps/runUntil call in progress (its own is never deferred: the caller reads
+  // the state after it). An error of a second half done by settle() waits in m_deferredError.
+  bool m_deferSecondHalf = true;
+  mutable bool m_secondHalfPending = false;
+  mutable Status m_deferredError;
+  std::int64_t m_lastStepOfCall = -1;
+  std::int64_t m_fusedHalves = 0;
   int m_historySlots = 0, m_wallHistorySlots = 0;  // last reported
 };
 
