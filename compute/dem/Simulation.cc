@@ -294,8 +294,7 @@ Status Simulation::atStep(Status s, std::int64_t step) const {
 Status Simulation::withStep(Status s) const {
   if (s.isOk()) return s;
   if (!m_started) return Status(s.code(), s.message() + " at step 0 (t = " + std::to_string(m_time) + " s, the start)");
-  return Status(s.code(), s.message() + " at step " + std::to_string(m_step + 1) + " (t = " +
-                              std::to_string(timeAt(m_step + 1)) + " s)");
+  return atStep(s, m_step + 1);
 }
 
 Status Simulation::initialise() {
