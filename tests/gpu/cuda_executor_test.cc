@@ -190,17 +190,22 @@ TEST_P(CudaVsCpu, SameCandidatesForcesAndTrajectories) {
   const auto [dw, sw] = maxDiff(byGid(sg, "angular_velocity"), byGid(sc, "angular_velocity"));
   std::printf("after %lld steps: |dx| %.3g m, |dv| %.3g of %.3g m/s, |dw| %.3g of %.3g rad/s, rebuilds %lld\n",
               (long long)cpu->stepCount(), dx, dv, sv, dw, sw, (long long)cpu->rebuilds());
-  double px = 0, pv = 0, pw = 0;  // the CPU's parting from itself (float only)
-  if (single) {
+  // The CPU's parting from itself (float only): the largest over three perturbations, one velocity component each
+  // (one alone is a draw of the cluster's chaos: the same 2^-22 on x gave 2.2e-6 m with one rounding of the contact
+  // law and 1.7e-7 m with another).
+  double px = 0, pv = 0, pw = 0;
+  for (int axis = 0; single && axis < 3; ++axis) {
     auto perturbed = cfg;
-    for (auto& v : perturbed.particles.velocity) v.x *= 1 + std::ldexp(1.0, -22);
+    for (auto& v : perturbed.particles.velocity) (&v.x)[axis] *= 1 + std::ldexp(1.0, -22);
     auto again = make(perturbed, ExecutorKind::kCpu);
     ASSERT_TRUE(again && again->runSteps(cpu->stepCount()).isOk());
     const auto sp = again->snapshot();
-    px = maxDiff(byGid(sp, "position"), byGid(sc, "position")).first;
-    pv = maxDiff(byGid(sp, "velocity"), byGid(sc, "velocity")).first;
-    pw = maxDiff(byGid(sp, "angular_velocity"), byGid(sc, "angular_velocity")).first;
-    std::printf("the CPU against itself perturbed: |dx| %.3g m, |dv| %.3g m/s, |dw| %.3g rad/s\n", px, pv, pw);
+    const double ax = maxDiff(byGid(sp, "position"), byGid(sc, "position")).first;
+    const double av = maxDiff(byGid(sp, "velocity"), byGid(sc, "velocity")).first;
+    const double aw = maxDiff(byGid(sp, "angular_velocity"), byGid(sc, "angular_velocity")).first;
+    std::printf("the CPU against itself, velocity component %d perturbed: |dx| %.3g m, |dv| %.3g m/s, |dw| %.3g rad/s\n",
+                axis, ax, av, aw);
+    px = std::max(px, ax), pv = std::max(pv, av), pw = std::max(pw, aw);
   }
   EXPECT_LE(dx, single ? std::max(1e-6, 10 * px) : 1e-12);  // on a 1 mm sphere
   EXPECT_LE(dv, single ? std::max(5e-4 * sv, 10 * pv) : 1e-8 * sv);

@@ -87,16 +87,18 @@ TEST(SphMirror, TankAtRestKeepsThePressureProfileAndStaysStill) {
 
 // The dam break of SphDamBreak.SurgeFrontFollowsMartinMoyce (40 x 80, the same parameters) with mirror walls:
 // the same tolerances (times within 8 % after the gate's 0.175, speed within 5 %), and the front reaches the far
-// wall without passing it.
+// wall (at about 0.4 s) without passing it, through the impact and the first 0.15 s of the run-up (until
+// 2026-11-29 to 0.8 s, which took two thirds of the test's 65 s on two cores).
 TEST(SphMirror, DamBreakFollowsMartinMoyce) {
   const double dp = 0.005;
   RunConfig c = test::withMirrorWalls(test::damBreak2D(dp));
   auto sim = SphSimulation::create(c, {});
   ASSERT_TRUE(sim.isOk()) << sim.status().message();
   test::expectFrontFollowsMartinMoyce(*sim.value(), dp, "mirror ");
-  ASSERT_TRUE(sim.value()->runUntil(0.8).isOk());
+  ASSERT_TRUE(sim.value()->runUntil(0.55).isOk());
   EXPECT_LE(sim.value()->fluidReach({1, 0, 0}), 1.0);  // at the far wall, not through it
   EXPECT_GT(sim.value()->fluidReach({1, 0, 0}), 0.98);
+  std::printf("mirror reach at 0.55 s: %.4f m\n", sim.value()->fluidReach({1, 0, 0}));
 }
 
 }  // namespace
