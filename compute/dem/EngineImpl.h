@@ -257,12 +257,6 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     moved2 = m_exec.maxOf(m_owned, kernels::IntegrateBothHalves<R>{integrateArgs(dt)});
     return integrationChecks(dt);
   }
-  Status integrationChecks(double dt) {
-    const Conditions c = readConditions();
-    if (c.flags & kNonFinite) return nonFiniteError(c.badParticle, dt);
-    if (c.flags & kLeftDomain) return leftDomainError(c.outsideParticle, dt);
-    return Status::ok();
-  }
 
   ParticleSnapshot snapshot(std::int64_t step, double time, const std::vector<std::string>& fields) const override {
     return m_rows.snapshot(step, time, m_owned, fields);
@@ -529,6 +523,13 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
     Conditions c;
     m_mem.copyToHost(&c, m_cond.data(), sizeof c);
     return c;
+  }
+  // The second half kick's checks (IntegrateSecondHalf, IntegrateBothHalves): its flags read, an error for them.
+  Status integrationChecks(double dt) const {
+    const Conditions c = readConditions();
+    if (c.flags & kNonFinite) return nonFiniteError(c.badParticle, dt);
+    if (c.flags & kLeftDomain) return leftDomainError(c.outsideParticle, dt);
+    return Status::ok();
   }
   Status nonFiniteError(Index i, double dt) const;
   Status deepOverlapError(Index i, double dt) const;

@@ -34,7 +34,7 @@ struct SimulationOptions {
   bool pairsOnce = true;
   // One process: a step's second half kick waits for the next step's first, both done in one pass over the
   // particles (the same bits, one read and write of them fewer), where nothing looks at the state in between
-  // (Simulation::stepPhases says when). false: every step ends with its own (tests compare the two).
+  // (Simulation::secondHalfCanWait says when). false: every step ends with its own (tests compare the two).
   bool deferSecondHalf = true;
 };
 
