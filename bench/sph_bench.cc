@@ -5,7 +5,8 @@
 // against --copy-bandwidth (pflow-gpu-bandwidth's figure). Under mpirun the scene is split across the ranks
 // (compute/mpi's MpiDomain, particle-count balance), with the halo overlapped with the interior rates or in
 // sequence (--overlap on|off: seed 003's boundary/centre overlap); rank 0 prints. bench/RESULTS.md records the rows.
-// --variants walk,masks,twophase times the rates passes one after another from the same flow (a line each); --split-steps
+// --variants walk,masks,twophase,walk_once,twophase_once times the rates passes one after another from the same flow (a line each); without it
+// the engine's own choice is timed (--not-reproducible: the pairs once on one GPU, as simulation.reproducible: false); --split-steps
 // times that many more steps one at a time, the rates pass after a sort (the marking pass) apart from the others.
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -40,7 +41,7 @@ int main(int argc, char** argv) {
   std::string overlap = "on", integrator = "scene";
   double advance = 0;
   std::optional<double> skin;
-  bool masks = false;
+  bool masks = false, notReproducible = false;
   int splitSteps = 0;
   std::vector<std::string> variants;
   std::string decomposition = "scene";
@@ -68,8 +69,11 @@ int main(int argc, char** argv) {
                  "(and marked hit masks) apart from the others")->capture_default_str();
   app.add_option("--variants", variants,
                  "rates passes timed one after another from the same flow, a JSON line each: walk (in one phase) | masks "
-                 "(instead of --masks) | twophase (the walk's tests, then its pairs in one loop: the GPU's default in float)")
-      ->delimiter(',')->check(CLI::IsMember({"walk", "masks", "twophase"}));
+                 "(instead of --masks) | twophase (the walk's tests, then its pairs in one loop: the GPU's default in float) | "
+                 "walk_once, twophase_once (either walk with each pair evaluated once, as --not-reproducible)")
+      ->delimiter(',')->check(CLI::IsMember({"walk", "masks", "twophase", "walk_once", "twophase_once"}));
+  app.add_flag("--not-reproducible", notReproducible,
+               "simulation.reproducible: false (one GPU: each pair evaluated once, the partner's share by atomic adds)");
   app.add_flag("--masks", masks, "the rates pass reads hit masks built at each sort (SphConfig::hitMasks)");
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::warn);
@@ -91,6 +95,7 @@ int main(int argc, char** argv) {
     const bool kdk = cfg.sph.integrator == compute::sph::Integrator::kVelocityVerlet;
     if (skin) cfg.sph.skin = *skin;
     cfg.sph.hitMasks = masks;
+    if (notReproducible) cfg.sim.reproducible = false;
     const compute::DecompositionKind strategy = decomposition == "scene" ? cfg.sim.decomposition
                                                 : decomposition == "sfc"  ? compute::DecompositionKind::kSfc
                                                                           : compute::DecompositionKind::kMultiSection;
@@ -122,9 +127,11 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "%s\n", s.message().c_str());
         return 3;
       }
-    if (variants.empty()) variants.push_back(masks ? "masks" : "walk");
+    const bool chosen = variants.empty();  // the engine's own passes, as a run of the scene takes them
+    if (chosen) variants.push_back(masks ? "masks" : "default");
     for (const std::string& variant : variants) {
-      sim.engine().setRatePasses(variant == "masks", variant == "twophase");
+      if (!chosen)
+        sim.engine().setRatePasses(variant == "masks", variant.rfind("twophase", 0) == 0, variant.find("_once") != std::string::npos);
       if (Status s = sim.runSteps(warmup); !s.isOk()) {
         std::fprintf(stderr, "%s\n", s.message().c_str());
         return 3;
@@ -155,7 +162,11 @@ int main(int argc, char** argv) {
       // x; writes x, v, rho, p).
       const double kickDrift = (24 + 3 * r + 3 * r + r + r + 4 + 24) + (24 + 3 * r + 3 * r + r + r + r);
       const double kick = (r + r + 3 * r + 3 * r + 4 + 24 + 24) + (24 + 3 * r + r + r);
-      const double bytesPerStep = verlet ? pass + update : kdk ? pass + kickDrift + kick : 2 * pass + halves;
+      // Each pair once: the pass adds into 16-byte rows of sums (for acceleration and density rate), which FinishRates
+      // reads with the kind, writes into the rates and zeroes, once per evaluation.
+      const double finish = sim.engine().pairsOnce() ? 4 * r + 4 + 3 * r + r + 4 * r : 0;
+      const double evaluations = verlet || kdk ? 1 : 2;
+      const double bytesPerStep = (verlet ? pass + update : kdk ? pass + kickDrift + kick : 2 * pass + halves) + evaluations * finish;
       nlohmann::json j{{"solver", "sph"},
                        {"case", scene},
                        {"executor", executor},
@@ -179,6 +190,8 @@ int main(int argc, char** argv) {
                        {"skin", cfg.sph.skin},
                        {"hit_masks", variant == "masks"},
                        {"rate_pass", variant},
+                       {"pairs_once", sim.engine().pairsOnce()},
+                       {"reproducible", cfg.sim.reproducible},
                        {"device_bytes_per_particle", double(sim.deviceBytes()) / n},
                        {"compulsory_bytes_per_particle_step", bytesPerStep},
                        {"device", device},

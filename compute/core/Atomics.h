@@ -105,5 +105,13 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void atomicAddSum4(Sum4* p, float x, float y,
   atomicAddReal(&p->x, x), atomicAddReal(&p->y, y), atomicAddReal(&p->z, z);
 #endif
 }
+// All four components (the SPH pairs once: a pair's acceleration and density rate for its partner).
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void atomicAddSum4(Sum4* p, float x, float y, float z, float w) {
+#if defined(__CUDA_ARCH__)
+  atomicAdd(reinterpret_cast<float4*>(p), make_float4(x, y, z, w));
+#else
+  atomicAddReal(&p->x, x), atomicAddReal(&p->y, y), atomicAddReal(&p->z, z), atomicAddReal(&p->w, w);
+#endif
+}
 
 }  // namespace pflow

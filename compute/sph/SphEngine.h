@@ -39,6 +39,14 @@ struct SphSetup {
   // phase's time on SPHERIC at 4.8e6 on an H100; 1.25 in double), one on the CPU. No scene key (the same sums
   // either way): for timing.
   std::optional<bool> twoPhaseWalk;
+  // simulation.reproducible: false lets a one-process GPU run evaluate each pair once (Interact's kOnce: half the
+  // candidates and pairs, the partner's share by an atomic add; sums in no fixed order, so reruns agree to rounding).
+  bool reproducible = true;
+  // The pairs once on this engine's executor or not; unset: on the GPU in float where reproducible is false (with the
+  // two-phase walk: 0.62 of its time on SPHERIC at 4.8e6, H200; in double 1.08 of the one-phase walk's, so not there),
+  // never on the CPU (its atomic adds are compare-and-swap loops: for the tests). Never with ghosts, canonical order or
+  // hit masks.
+  std::optional<bool> pairsOnce;
   int threads = 0;
   // Neighbours summed in global-id order (SortCellByGid): forces independent of the rows' order, so a
   // distributed run equals one process with this set, bit for bit. Distributed runs always set it.
@@ -115,8 +123,11 @@ class SphEngine : public DistributedRows {
   virtual std::size_t deviceBytes() const = 0;
   virtual void fence() const = 0;
   // The rates pass from the next one on (pflow-sph-bench --variants: timed one after another from the same flow):
-  // hit masks (SphSetup::hitMasks, marked at the next sort), or the walk in two phases or in one (SphSetup::twoPhaseWalk).
-  virtual void setRatePasses(bool hitMasks, bool twoPhaseWalk) = 0;
+  // hit masks (SphSetup::hitMasks, marked at the next sort), or the walk in two phases or in one (SphSetup::twoPhaseWalk),
+  // each pair from both sides or once (SphSetup::pairsOnce).
+  virtual void setRatePasses(bool hitMasks, bool twoPhaseWalk, bool pairsOnce) = 0;
+  // Whether the last rates pass evaluated each pair once (SphSetup::pairsOnce and the conditions it needs).
+  virtual bool pairsOnce() const = 0;
 };
 
 std::unique_ptr<SphEngine> makeCpuSphEngine(SphSetup setup, bool singlePrecision);

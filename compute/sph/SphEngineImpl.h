@@ -151,13 +151,28 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     const bool mirror = m_setup.mirror.any;
     if (whole) {
       using P = kernels::RatePass;
-      if (k.markMasks) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kMark>{k});
+      const bool twoPhase = m_setup.twoPhaseWalk.value_or(Exec::kLockstepLanes && sizeof(R) == 4) && m_setup.grid.reach <= 2;
+      // The pairs once (SphSetup::pairsOnce): one process, no ghosts, the walk (not the masks), any order of the sums.
+      m_pairsOnce = !k.markMasks && !k.masks && !ghosts && !m_setup.canonicalOrder &&
+                    m_setup.pairsOnce.value_or(!m_setup.reproducible && Exec::kLockstepLanes && sizeof(R) == 4);
+      if (m_pairsOnce) {
+        const std::size_t bytes = std::size_t(std::max<Index>(m_owned, 1)) * sizeof(kernels::RateSum<R>);
+        if (m_sums.bytes() < bytes) {  // zero once; FinishRates zeroes what it reads
+          m_sums.resize(bytes + bytes / 4);
+          m_mem.fillBytes(m_sums.data(), 0, m_sums.bytes());
+        }
+        k.sums = m_sums.as<kernels::RateSum<R>>();
+        if (twoPhase) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kTwoPhase, true>{k});
+        else m_exec.forEach(m_owned, kernels::InteractPass<R, P::kWalk, true>{k});
+        m_exec.forEach(m_owned, kernels::FinishRates<R>{k.sums, cptr<SphField::Kind>(), k.gravity, k.acc, k.drho});
+      } else if (k.markMasks) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kMark>{k});
       else if (k.masks) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kMasks>{k});
-      else if (m_setup.twoPhaseWalk.value_or(Exec::kLockstepLanes && sizeof(R) == 4) && m_setup.grid.reach <= 2) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kTwoPhase>{k});
+      else if (twoPhase) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kTwoPhase>{k});
       else m_exec.forEach(m_owned, kernels::InteractPass<R, P::kWalk>{k});
       if (mirror) m_exec.forEach(m_owned, kernels::MirrorImages<R>{k, f, m_setup.mirror});
       return;
     }
+    m_pairsOnce = false;
     // The list splitBoundary made: boundary rows first, then interior ones.
     const Index* list = m_split.as<Index>() + (set == RateSet::kBoundary ? 0 : m_numBoundary);
     const Index count = set == RateSet::kBoundary ? m_numBoundary : m_owned - m_numBoundary;
@@ -165,11 +180,13 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     if (mirror) m_exec.forEach(count, compute::kernels::OverList<kernels::MirrorImages<R>>{kernels::MirrorImages<R>{k, f, m_setup.mirror}, list});
   }
 
-  void setRatePasses(bool hitMasks, bool twoPhaseWalk) override {
+  void setRatePasses(bool hitMasks, bool twoPhaseWalk, bool pairsOnce) override {
     m_setup.hitMasks = hitMasks;
     m_setup.twoPhaseWalk = twoPhaseWalk;
+    m_setup.pairsOnce = pairsOnce;
     m_masksStale = true;
   }
+  bool pairsOnce() const override { return m_pairsOnce; }
 
   double maxInverseStep() const override {
     return m_exec.maxOf(m_owned, kernels::InverseStep<R>{cptr<SphField::Acceleration>(), cptr<SphField::ViscousRate>(),
@@ -440,6 +457,8 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
   Buffer m_split{m_mem, 0}, m_splitFlag{m_mem, 0};  // boundary rows, then interior ones (splitBoundary)
   Buffer m_wet{m_mem, 0};  // MarkWet, per owned particle
   Buffer m_packRow{m_mem, 0}, m_packState{m_mem, 0}, m_packPm{m_mem, 0};  // PackRates, per local row
+  Buffer m_sums{m_mem, 0};  // the pairs once's sums (RateSum), per owned row, zero between passes
+  bool m_pairsOnce = false;  // the last rates pass evaluated each pair once
   bool m_wetStale = true;
   // Hit masks (computeRates): stale after every sort, halo and load.
   Buffer m_masks{m_mem, 0}, m_maskRows{m_mem, 0};

@@ -2,7 +2,9 @@
 // walks the cells within two of a particle's (125; 25 in 2D), so there are no neighbour lists to store (opt-in: hit
 // masks, a bit for each of the first 64 places of each row): the cells are h + skin/2 wide and re-sorted when a particle may have moved
 // half the skin (docs/sph.md, "Neighbours").
-// Each kernel writes only the particle it owns: no atomics on the rates.
+// Each kernel writes only the particle it owns (no atomics on the rates), but for the pairs once (Interact's kOnce:
+// simulation.reproducible false, one process), where each pair is evaluated by one of its particles and its share
+// added to the other's row of sums by an atomic add.
 #pragma once
 #include <cmath>
 #include <cstdint>
@@ -39,6 +41,22 @@ template <class R>
 struct alignas(4 * sizeof(R)) RatePm {
   R pOverRho2, m, mOverRho, unused;
 };
+// The pairs once's sums of one particle: acceleration and density rate, added to by every pair it is in (FinishRates
+// copies them into the rates). One 16-byte vector atomic add a pair in float (red.v4.f32), four double adds in double.
+template <class R>
+struct alignas(4 * sizeof(R)) RateSum {
+  Vec3<R> a;
+  R drho;
+};
+template <class R>
+PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void addRateSum(RateSum<R>* to, Vec3<R> a, R drho) {
+  if constexpr (sizeof(R) == 4) {
+    atomicAddSum4(reinterpret_cast<Sum4*>(to), a.x, a.y, a.z, drho);
+  } else {
+    atomicAddReal(&to->a.x, a.x), atomicAddReal(&to->a.y, a.y), atomicAddReal(&to->a.z, a.z);
+    atomicAddReal(&to->drho, drho);
+  }
+}
 PFLOW_HOSTDEVICE PFLOW_FORCEINLINE bool boundaryTag(std::int32_t tag) { return tag & 1; }
 PFLOW_HOSTDEVICE PFLOW_FORCEINLINE std::int32_t cellXOfTag(std::int32_t tag) { return tag >> 1; }
 
@@ -181,6 +199,14 @@ struct Interact {
   std::uint32_t* markMasks = nullptr;
   std::uint64_t* markRows = nullptr;
   R markCut2 = R(0);
+  // The pairs once (run<P, true>; the walk in one or two phases, one process without ghosts): a particle walks the
+  // upper half of its rows only (dz > 0, or dz = 0 and dy > 0, and in its own row the particles after it), so each
+  // pair within the support is evaluated by exactly one of its particles (the walk's pruning keeps every neighbour, so
+  // the half it skips is walked by the partner), which adds the partner's share to `sums` and its own at its end;
+  // FinishRates then writes acc and drho. Half the candidates tested and half the pairs, for an atomic add a pair and
+  // sums in no fixed order (reruns agree to rounding only). visc keeps the largest viscous rate of the pairs a
+  // particle evaluates: the step's limit reads only the largest over all particles, which is every pair's either way.
+  RateSum<R>* sums = nullptr;
 
   // The pass the pointers set call for (the tests; the engine launches InteractPass).
   PFLOW_HOSTDEVICE void operator()(Index a) const {
@@ -189,11 +215,16 @@ struct Interact {
     else run<RatePass::kWalk>(a);
   }
 
-  template <RatePass P>
+  template <RatePass P, bool kOnce = false>
   PFLOW_HOSTDEVICE void run(Index a) const {
+    static_assert(!kOnce || P == RatePass::kWalk || P == RatePass::kTwoPhase, "the pairs once walk (no masks)");
     const RateRow<R> ra = row[a];
     const bool fluidA = !boundaryTag(ra.tag);
-    if (!fluidA && wet && !wet[a]) {
+    if (!fluidA && wet && !wet[a]) {  // no fluid within reach: no pair to evaluate, none to receive
+      if constexpr (kOnce) {  // FinishRates writes its zero rates
+        visc[a] = R(0);
+        return;
+      }
       acc[a] = Vec3<R>{R(0), R(0), R(0)};
       drho[a] = R(0);
       visc[a] = R(0);
@@ -201,7 +232,8 @@ struct Interact {
       return;
     }
     const RateState<R> sa = state[a];
-    const PairSide<R> sideA{sa.rho, pm[a].pOverRho2, R(0), R(0)};
+    const RatePm<R> qa = pm[a];
+    const PairSide<R> sideA{sa.rho, qa.pOverRho2, kOnce ? qa.m : R(0), kOnce ? qa.mOverRho : R(0)};
     const R cut2 = kernel.support() * kernel.support();
     const R cs = R(grid.cellSize);
     const std::int32_t cxA = cellXOfTag(ra.tag);
@@ -222,9 +254,11 @@ struct Interact {
       const R r2 = norm2(d);
       const RateState<R> sb = state[b];
       const RatePm<R> qb = pm[b];
-      const PairRates<R> out = pairRates(params, d, sa.v - sb.v, r2, kernel.f(sqrtFast(r2)), sideA,
-                                         PairSide<R>{sb.rho, qb.pOverRho2, qb.m, qb.mOverRho}, params.c0, params.c0,
-                                         fluidA && !boundaryTag(rb.tag));
+      [[maybe_unused]] PairReaction<R> toB;
+      const PairRates<R> out = pairRates<kOnce>(params, d, sa.v - sb.v, r2, kernel.f(sqrtFast(r2)), sideA,
+                                                PairSide<R>{sb.rho, qb.pOverRho2, qb.m, qb.mOverRho}, params.c0, params.c0,
+                                                fluidA && !boundaryTag(rb.tag), &toB);
+      if constexpr (kOnce) addRateSum(sums + b, toB.acceleration, toB.densityRate);
       sumAcc += out.acceleration;
       sumDrho += out.densityRate;
       maxVisc = out.viscousRate > maxVisc ? out.viscousRate : maxVisc;
@@ -304,11 +338,11 @@ struct Interact {
       }
       words = 0;
     };
-    for (int z = cz > r ? cz - r : 0; z <= (cz + r < grid.nz ? cz + r : grid.nz - 1); ++z) {
+    for (int z = kOnce ? cz : cz > r ? cz - r : 0; z <= (cz + r < grid.nz ? cz + r : grid.nz - 1); ++z) {
       const R gz = prune ? walkGap(ra.z, z - cz, cs, margin, z == 0, z == grid.nz - 1) : R(0);
       if (gz * gz >= reach2) continue;
       zRow = ra.z - R(z - cz) * cs;
-      for (int y = cy > r ? cy - r : 0; y <= (cy + r < grid.ny ? cy + r : grid.ny - 1); ++y) {
+      for (int y = kOnce && z == cz ? cy : cy > r ? cy - r : 0; y <= (cy + r < grid.ny ? cy + r : grid.ny - 1); ++y) {
         const R gy = prune ? walkGap(ra.y, y - cy, cs, margin, y == 0, y == grid.ny - 1) : R(0);
         const R g2 = gz * gz + gy * gy;
         if (g2 >= reach2) continue;
@@ -320,7 +354,7 @@ struct Interact {
           while (x1 > cx && [&] { const R g = walkGap(ra.x, x1 - cx, cs, margin, false, x1 == grid.nx - 1); return g2 + g * g >= reach2; }()) --x1;
         }
         const std::uint32_t c0 = grid.index(x0, y, z), c1 = grid.index(x1, y, z);
-        if (ghostCellStart) {  // merged by id, cell by cell
+        if (!kOnce && ghostCellStart) {  // merged by id, cell by cell
           for (std::uint32_t c = c0; c <= c1; ++c)
             forCellMergedById(c, cellStart, ghostCellStart, ghostItems, ghostBase, gid, [&](Index b) {
               const RateRow<R> rb = row[b];
@@ -331,7 +365,9 @@ struct Interact {
         // The row's range in pieces of 32 candidates: first which of them are neighbours (one bit each), then the
         // pair terms of those, in the same order. A warp's lanes evaluate pairs together instead of each lane
         // waiting through the others' pairs while its own candidate is not a neighbour (docs/sph.md, "Performance").
-        const Index from = cellStart[c0], end = cellStart[c1 + 1];
+        Index from = cellStart[c0];
+        const Index end = cellStart[c1 + 1];
+        if (kOnce && z == cz && y == cy) from = a + 1;  // a's own row: the particles after it (x0 <= cx: before a)
         if constexpr (P == RatePass::kTwoPhase) {
           const int code = (z - cz + 2) * 5 + (y - cy + 2);
           for (Index piece = from; piece < end; piece += 32) {
@@ -400,20 +436,42 @@ struct Interact {
     }
     if constexpr (mark) markRows[a] = used;
     if constexpr (P == RatePass::kTwoPhase) addBuffered();
+    if constexpr (kOnce) {
+      visc[a] = maxVisc;
+      addRateSum(sums + a, sumAcc, sumDrho);
+      return;
+    }
     acc[a] = fluidA ? sumAcc + gravity : Vec3<R>{R(0), R(0), R(0)};
     drho[a] = sumDrho;
     visc[a] = maxVisc;
   }
 };
 
-// One pass of Interact as a kernel of its own.
-template <class R, RatePass P>
+// One pass of Interact as a kernel of its own (kOnce: the pairs once).
+template <class R, RatePass P, bool kOnce = false>
 struct InteractPass {
   static constexpr bool kVariableCost = true;
   // The marking walk spills under the cap (96 bytes in float) and runs once a sort: uncapped.
   static constexpr int kMaxRegisters = P != RatePass::kMark ? Interact<R>::kMaxRegisters : 0;
   Interact<R> k;
-  PFLOW_HOSTDEVICE void operator()(Index a) const { k.template run<P>(a); }
+  PFLOW_HOSTDEVICE void operator()(Index a) const { k.template run<P, kOnce>(a); }
+};
+
+// After the pairs once: each particle's sums into its rates (gravity added to the fluid's acceleration, a boundary
+// particle's zero), and the sums zeroed for the next pass.
+template <class R>
+struct FinishRates {
+  RateSum<R>* sums;
+  const std::int32_t* kind;
+  Vec3<R> gravity;
+  Vec3<R>* acc;
+  R* drho;
+  PFLOW_HOSTDEVICE void operator()(Index i) const {
+    const RateSum<R> s = sums[i];
+    acc[i] = kind[i] == kFluid ? s.a + gravity : Vec3<R>{R(0), R(0), R(0)};
+    drho[i] = s.drho;
+    sums[i] = RateSum<R>{{R(0), R(0), R(0)}, R(0)};
+  }
 };
 
 // The field table's arrays of a rates pass, for the passes that read it directly (MirrorImages).

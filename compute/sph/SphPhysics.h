@@ -110,8 +110,16 @@ struct PairRates {
   R viscousRate;         // |h v_ab.x_ab / (r^2 + eta^2)| [1/s], for the viscous time-step limit
 };
 
-// One side of a pair as the pair terms use it: the density, p/rho^2, and (b's side) the mass and m/rho. The
-// rates pass packs them once per particle (SphKernels.h, PackRates), not once per pair.
+// What the pair adds to b's rates (the pairs once, SphKernels.h: each pair evaluated by one of its particles, the
+// other's share added to it by an atomic add). The viscous rate is the pair's own, the same from either side.
+template <class R>
+struct PairReaction {
+  Vec3<R> acceleration;  // dv_b/dt contribution [m/s^2]
+  R densityRate;         // drho_b/dt contribution [kg/m^3/s]
+};
+
+// One side of a pair as the pair terms use it: the density, p/rho^2, the mass and m/rho (a's mass and m/rho only
+// where b's reaction is formed). The rates pass packs them once per particle (SphKernels.h, PackRates), not once per pair.
 template <class R>
 struct PairSide {
   R rho, pOverRho2, m, mOverRho;
@@ -122,9 +130,13 @@ struct PairSide {
 // r = |xab| (so grad_a W_ab = fab xab). `diffuse`: both are fluid (density diffusion acts between fluid
 // particles only; walls are driven by continuity alone). Two divisions per pair: 1/(r^2 + eta^2) and, where
 // the artificial viscosity acts, the mean density (float on the GPU: the approximate quotient, FastMath.h).
-template <class R>
+// kReaction: b's share too, into *toB, from the same factors: every term is antisymmetric in (a, b) but for the
+// partner's mass, so b's is a's with m_b -> m_a (m_b/rho_b -> m_a/rho_a) and the sign of the acceleration and the
+// diffusion flipped (the continuity term keeps its sign: v_ab and grad W both flip).
+template <bool kReaction = false, class R>
 PFLOW_HOSTDEVICE PFLOW_FORCEINLINE PairRates<R> pairRates(const PairParams<R>& p, Vec3<R> xab, Vec3<R> vab, R r2, R fab,
-                                                          const PairSide<R>& a, const PairSide<R>& b, R cA, R cB, bool diffuse) {
+                                                          const PairSide<R>& a, const PairSide<R>& b, R cA, R cB, bool diffuse,
+                                                          PairReaction<R>* toB = nullptr) {
   PairRates<R> out;
   const Vec3<R> gradW = fab * xab;
   const R vdotx = dot(vab, xab);
@@ -133,17 +145,25 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE PairRates<R> pairRates(const PairParams<R>& p
   R pi = R(0);
   const R mu = p.h * vdotx * invDenom;
   if (vdotx < R(0) && p.alpha > R(0)) pi = divFast(-p.alpha * (cA + cB) * mu, a.rho + b.rho);
-  const R coef = -b.m * (a.pOverRho2 + b.pOverRho2 + pi);
+  const R s = a.pOverRho2 + b.pOverRho2 + pi;
+  const R coef = -b.m * s;
   out.acceleration = coef * gradW;
+  if constexpr (kReaction) toB->acceleration = (a.m * s) * gradW;
   // Laminar viscosity: m_b 4 nu (x_ab . grad W) / ((rho_a + rho_b)(r^2 + eta^2)) v_ab.
-  if (p.nu > R(0)) out.acceleration += divFast(b.m * R(4) * p.nu * fab * r2 * invDenom, a.rho + b.rho) * vab;
+  if (p.nu > R(0)) {
+    out.acceleration += divFast(b.m * R(4) * p.nu * fab * r2 * invDenom, a.rho + b.rho) * vab;
+    if constexpr (kReaction) toB->acceleration -= divFast(a.m * R(4) * p.nu * fab * r2 * invDenom, a.rho + b.rho) * vab;
+  }
   // Continuity: m_b v_ab . grad W.
   out.densityRate = b.m * fab * vdotx;
+  if constexpr (kReaction) toB->densityRate = a.m * fab * vdotx;
   // Density diffusion: 2 delta h c0 sum (rho_b - rho_a - hydrostatic) (x_ba . grad W)/(r^2 + eta^2) m_b/rho_b.
   if (diffuse && p.delta > R(0)) {
     R drho = b.rho - a.rho;
     if (p.hydrostatic) drho -= p.rho0 * dot(p.gOverC2, -xab);  // rho0 g.(x_b - x_a) / c0^2
-    out.densityRate += R(2) * p.delta * p.h * p.c0 * drho * (-fab * r2) * invDenom * b.mOverRho;
+    const R d = R(2) * p.delta * p.h * p.c0 * drho * (-fab * r2) * invDenom;
+    out.densityRate += d * b.mOverRho;
+    if constexpr (kReaction) toB->densityRate -= d * a.mOverRho;
   }
   out.viscousRate = std::fabs(mu);
   return out;

@@ -437,6 +437,7 @@ Result<SphSetup> prepareSphSetup(const RunConfig& config) {
   // 2h + skin, one layer across a 2D run's plane.
   s.skin = c.skin * d.h;
   s.hitMasks = c.hitMasks;
+  s.reproducible = config.sim.reproducible;
   const double reachLength = 2 * d.h + s.skin;
   const double cell = 0.5 * reachLength;
   s.grid.reach = 2;

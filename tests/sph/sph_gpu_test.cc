@@ -66,18 +66,49 @@ TEST(SphCudaVsCpu, DamBreakDoubleAgrees) {
 }
 
 // Float on the GPU against double on the CPU: the surge front's times within 1 % (the precision study's
-// question: is float harmless here?).
-TEST(SphCudaVsCpu, FloatFrontWithinOnePercentOfDouble) {
+// question: is float harmless here?), with each pair from both sides and once (simulation.reproducible: false).
+class SphCudaFloat : public ::testing::TestWithParam<bool> {};
+
+TEST_P(SphCudaFloat, FloatFrontWithinOnePercentOfDouble) {
   SKIP_WITHOUT_GPU();
   const double dp = 0.01;
   RunConfig c = test::damBreak2D(dp);
   auto cpu = make(c, ExecutorKind::kCpu);
   c.sim.precision = Precision::kFloat;
+  c.sim.reproducible = !GetParam();
   auto gpu = make(c, ExecutorKind::kCuda);
   ASSERT_TRUE(cpu && gpu);
   const std::vector<double> zs = {1.5, 2.0, 2.5, 3.0, 3.5};
   const auto t64 = test::frontTimes(*cpu, dp, zs), t32 = test::frontTimes(*gpu, dp, zs);
   for (std::size_t k = 0; k < zs.size(); ++k) EXPECT_NEAR(t32[k], t64[k], 0.01 * t64[k]) << "Z = " << zs[k];
+  EXPECT_EQ(gpu->engine().pairsOnce(), GetParam());
+}
+INSTANTIATE_TEST_SUITE_P(BothSidesAndOnce, SphCudaFloat, ::testing::Bool());
+
+// The GPU's pairs once (each pair evaluated once, the partner's share by atomic adds) against the CPU's walk from both
+// sides, double (forced: in double the scene key alone keeps the walk, faster there), the 2D dam break and a 3D one to
+// 0.1 s: every particle within 1e-6 m of its CPU position, as the GPU's walk is.
+TEST(SphCudaVsCpu, PairsOnceAgreesWithTheCpu) {
+  SKIP_WITHOUT_GPU();
+  for (RunConfig c : {test::damBreak2D(0.01, 0.1), test::damBreak3D(0.02, 0.1)}) {
+    c.sim.reproducible = false;  // ignored on the CPU and in double
+    auto cpu = make(c, ExecutorKind::kCpu);
+    auto plain = make(c, ExecutorKind::kCuda);
+    auto gpu = make(c, ExecutorKind::kCuda);
+    ASSERT_TRUE(cpu && plain && gpu);
+    gpu->engine().setRatePasses(false, true, true);  // the two-phase walk, each pair once
+    ASSERT_TRUE(cpu->runUntil(0.1).isOk());
+    ASSERT_TRUE(gpu->runUntil(0.1).isOk());
+    ASSERT_TRUE(plain->runSteps(1).isOk());
+    EXPECT_FALSE(cpu->engine().pairsOnce());
+    EXPECT_FALSE(plain->engine().pairsOnce());
+    EXPECT_TRUE(gpu->engine().pairsOnce());
+    EXPECT_EQ(cpu->stepCount(), gpu->stepCount());
+    const double worst = largestDifference(positions(cpu->snapshot()), positions(gpu->snapshot()));
+    std::printf("pairs once, %d-D, after %lld steps: largest position difference from the CPU %.3g m\n", c.sph.dimension,
+                (long long)gpu->stepCount(), worst);
+    EXPECT_LT(worst, 1e-6);
+  }
 }
 
 // Verlet on both executors (double): the dam break to 0.1 s, every particle within 1e-6 m of its CPU position.
@@ -136,8 +167,8 @@ TEST(SphCudaVsCpu, TwoPhaseWalkAgreesWithTheWalk) {
     auto walk = make(c, ExecutorKind::kCuda);
     auto gpu = make(c, ExecutorKind::kCuda);
     ASSERT_TRUE(walk && gpu);
-    walk->engine().setRatePasses(false, false);  // the GPU's default is the two-phase walk
-    gpu->engine().setRatePasses(false, true);
+    walk->engine().setRatePasses(false, false, false);  // the GPU's default is the two-phase walk
+    gpu->engine().setRatePasses(false, true, false);
     ASSERT_TRUE(walk->runUntil(0.1).isOk());
     ASSERT_TRUE(gpu->runUntil(0.1).isOk());
     EXPECT_EQ(walk->stepCount(), gpu->stepCount());

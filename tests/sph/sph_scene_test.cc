@@ -41,6 +41,21 @@ TEST(SphScene, RefinedResolutionIsOneKey) {
   EXPECT_EQ(r.value().config.sph.fluidCount(), 100u * 200u);
 }
 
+// simulation.reproducible is an SPH key too (each pair once on one GPU in float); the benchmark example sets it false.
+TEST(SphScene, ReproducibleIsRead) {
+  auto r = load(damBreak());
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_TRUE(r.value().config.sim.reproducible);
+  std::string yaml = damBreak();
+  yaml.replace(yaml.find("snapshot_interval: 0.05}"), 24, "snapshot_interval: 0.05, reproducible: false}");
+  auto off = load(yaml);
+  ASSERT_TRUE(off.isOk()) << off.status().message();
+  EXPECT_FALSE(off.value().config.sim.reproducible);
+  auto example = loadScene("examples/dam_break_3d.yaml");
+  ASSERT_TRUE(example.isOk()) << example.status().message();
+  EXPECT_FALSE(example.value().config.sim.reproducible);
+}
+
 TEST(SphScene, MissingDensityIsNamed) {
   auto r = load(damBreak("{dimension: 2, spacing: 0.01}", "sound_speed: auto"));
   ASSERT_FALSE(r.isOk());
