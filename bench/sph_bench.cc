@@ -162,9 +162,10 @@ int main(int argc, char** argv) {
       // x; writes x, v, rho, p).
       const double kickDrift = (24 + 3 * r + 3 * r + r + r + 4 + 24) + (24 + 3 * r + 3 * r + r + r + r);
       const double kick = (r + r + 3 * r + 3 * r + 4 + 24 + 24) + (24 + 3 * r + r + r);
-      // Each pair once: the pass adds into 16-byte rows of sums (for acceleration and density rate), which FinishRates
-      // reads with the kind, writes into the rates and zeroes, once per evaluation.
-      const double finish = sim.engine().pairsOnce() ? 4 * r + 4 + 3 * r + r + 4 * r : 0;
+      // Each pair once: the pass writes the viscous rate only (not acceleration and density rate: 4 r less) and adds
+      // into 16-byte rows of sums (each read and written at least once: 8 r), which FinishRates reads with the kind,
+      // writes into the rates and zeroes, once per evaluation.
+      const double finish = sim.engine().pairsOnce() ? (-4 * r + 8 * r) + (4 * r + 4 + 3 * r + r + 4 * r) : 0;
       const double evaluations = verlet || kdk ? 1 : 2;
       const double bytesPerStep = (verlet ? pass + update : kdk ? pass + kickDrift + kick : 2 * pass + halves) + evaluations * finish;
       nlohmann::json j{{"solver", "sph"},
@@ -191,6 +192,7 @@ int main(int argc, char** argv) {
                        {"hit_masks", variant == "masks"},
                        {"rate_pass", variant},
                        {"pairs_once", sim.engine().pairsOnce()},
+                       {"rate_pass_taken", sim.engine().lastRatePass()},
                        {"reproducible", cfg.sim.reproducible},
                        {"device_bytes_per_particle", double(sim.deviceBytes()) / n},
                        {"compulsory_bytes_per_particle_step", bytesPerStep},

@@ -43,9 +43,9 @@ struct SphSetup {
   // candidates and pairs, the partner's share by an atomic add; sums in no fixed order, so reruns agree to rounding).
   bool reproducible = true;
   // The pairs once on this engine's executor or not; unset: on the GPU in float where reproducible is false (with the
-  // two-phase walk: 0.62 of its time on SPHERIC at 4.8e6, H200; in double 1.08 of the one-phase walk's, so not there),
-  // never on the CPU (its atomic adds are compare-and-swap loops: for the tests). Never with ghosts, canonical order or
-  // hit masks.
+  // two-phase walk, the GPU's default in float: 0.62 of its time on SPHERIC at 4.8e6, H200; in double 1.08 of the
+  // one-phase walk's, so not there), never on the CPU (its atomic adds are compare-and-swap loops: for the tests).
+  // Never with ghosts, canonical order or hit masks (SphSetup::hitMasks set).
   std::optional<bool> pairsOnce;
   int threads = 0;
   // Neighbours summed in global-id order (SortCellByGid): forces independent of the rows' order, so a
@@ -128,6 +128,9 @@ class SphEngine : public DistributedRows {
   virtual void setRatePasses(bool hitMasks, bool twoPhaseWalk, bool pairsOnce) = 0;
   // Whether the last rates pass evaluated each pair once (SphSetup::pairsOnce and the conditions it needs).
   virtual bool pairsOnce() const = 0;
+  // The last rates pass over every row: "walk", "twophase", "mark", "masks", "walk_once" or "twophase_once" ("none"
+  // before the first; "walk" for a distributed run's two passes).
+  virtual const char* lastRatePass() const = 0;
 };
 
 std::unique_ptr<SphEngine> makeCpuSphEngine(SphSetup setup, bool singlePrecision);

@@ -153,7 +153,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
       using P = kernels::RatePass;
       const bool twoPhase = m_setup.twoPhaseWalk.value_or(Exec::kLockstepLanes && sizeof(R) == 4) && m_setup.grid.reach <= 2;
       // The pairs once (SphSetup::pairsOnce): one process, no ghosts, the walk (not the masks), any order of the sums.
-      m_pairsOnce = !k.markMasks && !k.masks && !ghosts && !m_setup.canonicalOrder &&
+      m_pairsOnce = !m_setup.hitMasks && !ghosts && !m_setup.canonicalOrder &&
                     m_setup.pairsOnce.value_or(!m_setup.reproducible && Exec::kLockstepLanes && sizeof(R) == 4);
       if (m_pairsOnce) {
         const std::size_t bytes = std::size_t(std::max<Index>(m_owned, 1)) * sizeof(kernels::RateSum<R>);
@@ -165,14 +165,25 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
         if (twoPhase) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kTwoPhase, true>{k});
         else m_exec.forEach(m_owned, kernels::InteractPass<R, P::kWalk, true>{k});
         m_exec.forEach(m_owned, kernels::FinishRates<R>{k.sums, cptr<SphField::Kind>(), k.gravity, k.acc, k.drho});
-      } else if (k.markMasks) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kMark>{k});
-      else if (k.masks) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kMasks>{k});
-      else if (twoPhase) m_exec.forEach(m_owned, kernels::InteractPass<R, P::kTwoPhase>{k});
-      else m_exec.forEach(m_owned, kernels::InteractPass<R, P::kWalk>{k});
+        m_lastPass = twoPhase ? "twophase_once" : "walk_once";
+      } else if (k.markMasks) {
+        m_exec.forEach(m_owned, kernels::InteractPass<R, P::kMark>{k});
+        m_lastPass = "mark";
+      } else if (k.masks) {
+        m_exec.forEach(m_owned, kernels::InteractPass<R, P::kMasks>{k});
+        m_lastPass = "masks";
+      } else if (twoPhase) {
+        m_exec.forEach(m_owned, kernels::InteractPass<R, P::kTwoPhase>{k});
+        m_lastPass = "twophase";
+      } else {
+        m_exec.forEach(m_owned, kernels::InteractPass<R, P::kWalk>{k});
+        m_lastPass = "walk";
+      }
       if (mirror) m_exec.forEach(m_owned, kernels::MirrorImages<R>{k, f, m_setup.mirror});
       return;
     }
     m_pairsOnce = false;
+    m_lastPass = "walk";
     // The list splitBoundary made: boundary rows first, then interior ones.
     const Index* list = m_split.as<Index>() + (set == RateSet::kBoundary ? 0 : m_numBoundary);
     const Index count = set == RateSet::kBoundary ? m_numBoundary : m_owned - m_numBoundary;
@@ -187,6 +198,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     m_masksStale = true;
   }
   bool pairsOnce() const override { return m_pairsOnce; }
+  const char* lastRatePass() const override { return m_lastPass; }
 
   double maxInverseStep() const override {
     return m_exec.maxOf(m_owned, kernels::InverseStep<R>{cptr<SphField::Acceleration>(), cptr<SphField::ViscousRate>(),
@@ -459,6 +471,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
   Buffer m_packRow{m_mem, 0}, m_packState{m_mem, 0}, m_packPm{m_mem, 0};  // PackRates, per local row
   Buffer m_sums{m_mem, 0};  // the pairs once's sums (RateSum), per owned row, zero between passes
   bool m_pairsOnce = false;  // the last rates pass evaluated each pair once
+  const char* m_lastPass = "none";  // lastRatePass()
   bool m_wetStale = true;
   // Hit masks (computeRates): stale after every sort, halo and load.
   Buffer m_masks{m_mem, 0}, m_maskRows{m_mem, 0};

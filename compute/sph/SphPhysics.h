@@ -150,7 +150,7 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE PairRates<R> pairRates(const PairParams<R>& p
   out.acceleration = coef * gradW;
   if constexpr (kReaction) toB->acceleration = (a.m * s) * gradW;
   // Laminar viscosity: m_b 4 nu (x_ab . grad W) / ((rho_a + rho_b)(r^2 + eta^2)) v_ab.
-  if (p.nu > R(0)) {
+  if (p.nu > R(0)) {  // one quotient could serve both sides: tried, it changed the float pass's spills; not timed, not kept
     out.acceleration += divFast(b.m * R(4) * p.nu * fab * r2 * invDenom, a.rho + b.rho) * vab;
     if constexpr (kReaction) toB->acceleration -= divFast(a.m * R(4) * p.nu * fab * r2 * invDenom, a.rho + b.rho) * vab;
   }
