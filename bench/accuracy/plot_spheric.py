@@ -6,7 +6,10 @@ spheric2.png: P1 and P2 pressure over 0.35-0.6 s, the heights at x = 0.992 (H2),
 (bench/accuracy/data/kleefsman_2005_spheric_test2_0-1s.csv). The record's columns H1 and H3 are read swapped
 (docs/sph.md): its H1 wets at 0.19 s, so it is the gauge 0.50 m from the gate (x = 1.488, our H3), and its H3 at
 0.92 s, behind the box (x = 0.496).
-Also prints, for each run, the first time P1 and P2 pass 500 Pa and the reservoir's lag at 0.1-0.4 s.
+spheric2_top.png: P5-P8 on the box's top (0.021-0.141 m behind its front edge) over 0.3-1 s, for the runs whose
+files have them (the example has had them since 2026-12-02).
+Also prints, for each run, the first time P1 and P2 pass 500 Pa and the reservoir's lag at 0.1-0.4 s, and for P5-P8
+the first time each passes 500 Pa and its largest reading over the record's 0-1 s.
 Usage: plot_spheric.py OUTDIR EXPERIMENT_CSV LABEL=PROBES_CSV [LABEL=PROBES_CSV ...]"""
 import csv
 import sys
@@ -100,6 +103,42 @@ def main():
     fig.tight_layout()
     fig.savefig(out + "/spheric2.png", dpi=110)
     print("wrote", out + "/spheric2.png")
+    top(out, exp, [(label, t) for label, t in data if "P5" in t])
+
+
+TOP = [("P5", 0.021), ("P6", 0.061), ("P7", 0.101), ("P8", 0.141)]  # name, distance behind the front edge [m]
+
+
+def top(out, exp, data):
+    """The box's top: the record reads under 0.1 kPa there through its first second (the water that runs up the front
+    face does not fall on the sensors); where a run reads more, the chart and the table show how much and when."""
+    print("top   " + "  ".join("%s>500Pa  %s max [Pa]" % (n, n) for n, _ in TOP))
+    for label, t in [("experiment", {"time": exp["Time"], **exp})] + data:
+        cells = []
+        for name, _ in TOP:
+            pts = [(x, y) for x, y in zip(t["time"], t[name]) if x < 1.0]
+            first = first_above([p[0] for p in pts], [p[1] for p in pts])
+            peak = max(pts, key=lambda p: p[1])
+            cells.append("%.4f  %.0f (%.3f s)" % (first, peak[1], peak[0]))
+        print("%s  %s" % (label, "  ".join(cells)))
+    if not data:
+        return
+    fig, axes = plt.subplots(1, 4, figsize=(18, 4))
+    for ax, (name, back) in zip(axes, TOP):
+        for label, t in data:
+            pts = [(x, y) for x, y in zip(t["time"], t[name]) if 0.3 <= x <= 1.0]
+            ax.plot([p[0] for p in pts], [p[1] for p in pts], lw=1, label="pflow " + label)
+        pts = [(x, y) for x, y in zip(exp["Time"], exp[name]) if 0.3 <= x <= 1.0]
+        ax.plot([p[0] for p in pts], [p[1] for p in pts], "k-", lw=0.8, label="Kleefsman et al. 2005")
+        ax.set_title("%s (box top, %.3f m behind the front edge)" % (name, back))
+        ax.set_xlabel("t [s]")
+        ax.set_ylabel("Pa")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle("SPHERIC test 2: pressure on the box's top")
+    fig.tight_layout()
+    fig.savefig(out + "/spheric2_top.png", dpi=110)
+    print("wrote", out + "/spheric2_top.png")
 
 
 if __name__ == "__main__":

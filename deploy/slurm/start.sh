@@ -28,7 +28,7 @@ for tool in slurmctld slurmd munged sbatch; do
 done
 mkdir -p "$dir"
 dir=$(cd "$dir" && pwd)
-mkdir -p "$dir"/{munge,state,spool,log}
+mkdir -p "$dir"/{munge,state,spool/pflow-node1,log}
 chmod 700 "$dir/munge"
 user=$(id -un)
 
@@ -94,14 +94,28 @@ export SLURM_CONF="$dir/slurm.conf"
 slurmctld -f "$SLURM_CONF"
 slurmd -f "$SLURM_CONF" -N pflow-node1
 
-# Ready when the node is idle (at most 30 s).
-for _ in $(seq 1 60); do
+# Ready when the node is idle: at most PFLOW_SLURM_START_WAIT seconds (default 90: a loaded CI machine can take a
+# while to bring slurmctld up and have slurmd register). A daemon that died, or a wait that ran out, prints the tails
+# of the logs, so that the reason is in the caller's output and not only in DIR/log.
+wait_s=${PFLOW_SLURM_START_WAIT:-90}
+alive() { [[ -f "$1" ]] && kill -0 "$(cat "$1")" 2>/dev/null; }
+state=
+for _ in $(seq 1 $((wait_s * 2))); do
   state=$(sinfo -h -N -n pflow-node1 -o '%t' 2>/dev/null || true)
   if [[ "$state" == idle* ]]; then
     echo "export SLURM_CONF=$SLURM_CONF"
     exit 0
   fi
   sleep 0.5
+  # slurmctld writes its pid file once it runs; give it a few seconds before calling it dead.
+  if [[ -f "$dir/slurmctld.pid" ]] && ! alive "$dir/slurmctld.pid"; then state="slurmctld exited"; break; fi
 done
-echo "start.sh: the node did not become idle within 30 s (state '${state:-?}'); logs in $dir/log" >&2
+{
+  echo "start.sh: the node did not become idle within ${wait_s} s (state '${state:-?}', ports $port_base/$((port_base + 1))); logs in $dir/log"
+  for f in "$dir"/log/slurmctld.log "$dir"/log/slurmd-*.log "$dir"/log/munged.log; do
+    [[ -f "$f" ]] || continue
+    echo "--- last lines of $f"
+    tail -n 15 "$f"
+  done
+} >&2
 exit 4

@@ -56,6 +56,32 @@ TEST(SphScene, ReproducibleIsRead) {
   EXPECT_FALSE(example.value().config.sim.reproducible);
 }
 
+// SPHERIC test 2's instruments (Kleefsman et al. 2005; the SPHERIC distribution's positions, docs/sph.md): P1-P4 up
+// the box's front face, P5-P8 along its top from the front edge, the gauges H1-H4 along the tank's centre line.
+TEST(SphScene, SphericExampleHasTheEightProbesAndFourGauges) {
+  auto example = loadScene("examples/dam_break_3d.yaml");
+  ASSERT_TRUE(example.isOk()) << example.status().message();
+  const auto& probes = example.value().config.sph.probes;
+  ASSERT_EQ(probes.size(), 12u);
+  const double face[4][3] = {{0.8245, 0.471, 0.021}, {0.8245, 0.471, 0.061}, {0.8245, 0.471, 0.101}, {0.8245, 0.471, 0.141}};
+  const double top[4][3] = {{0.8035, 0.471, 0.161}, {0.7635, 0.471, 0.161}, {0.7235, 0.471, 0.161}, {0.6835, 0.471, 0.161}};
+  for (int i = 0; i < 8; ++i) {
+    const auto& p = probes[i];
+    const double* want = i < 4 ? face[i] : top[i - 4];
+    EXPECT_EQ(p.name, "P" + std::to_string(i + 1));
+    EXPECT_FALSE(p.gauge) << p.name;
+    EXPECT_EQ(p.point.x, want[0]) << p.name;
+    EXPECT_EQ(p.point.y, want[1]) << p.name;
+    EXPECT_EQ(p.point.z, want[2]) << p.name;
+  }
+  const double gaugeX[4] = {0.496, 0.992, 1.488, 2.638};
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_EQ(probes[8 + i].name, "H" + std::to_string(i + 1));
+    EXPECT_TRUE(probes[8 + i].gauge);
+    EXPECT_EQ(probes[8 + i].point.x, gaugeX[i]);
+  }
+}
+
 TEST(SphScene, MissingDensityIsNamed) {
   auto r = load(damBreak("{dimension: 2, spacing: 0.01}", "sound_speed: auto"));
   ASSERT_FALSE(r.isOk());
