@@ -69,6 +69,10 @@ int main(int argc, char** argv) {
   app.add_flag("--no-deferred-half", noDefer,
                "every step ends with its own second half kick (SimulationOptions::deferSecondHalf off: the A/B of the "
                "combined pass)");
+  bool noBatch = false;
+  app.add_flag("--no-batched-contacts", noBatch,
+               "the CPU's pairs once evaluates one contact at a time (SimulationOptions::batchedContacts off: the A/B of "
+               "the contact law in SIMD lanes; the same bits)");
   int historySlots = 0, wallHistorySlots = 0;
   app.add_option("--wall-history-slots", wallHistorySlots,
                  "initial wall-contact slots per particle (simulation.wall_history_slots; 0: the default, 1)");
@@ -106,6 +110,7 @@ int main(int argc, char** argv) {
   so.executor = kind.value();
   so.device = gpu;
   so.deferSecondHalf = !noDefer;
+  so.batchedContacts = !noBatch;
   auto settleKind = pflow::compute::parseExecutorKind(settleExecutor.empty() ? executor : settleExecutor);
   if (!settleKind) {
     std::fprintf(stderr, "%s\n", settleKind.status().toString().c_str());
@@ -217,7 +222,7 @@ int main(int argc, char** argv) {
                      {"copy_bandwidth_gb_per_s", copyBandwidth},
                      {"coordination", before.coordinationNumber},
                      {"candidates_per_particle", before.candidatesPerParticle},
-                     {"rebuilds", s.rebuilds() - rebuilds0}, {"fused_halves", s.fusedHalves() - fused0},
+                     {"rebuilds", s.rebuilds() - rebuilds0}, {"fused_halves", s.fusedHalves() - fused0}, {"batched_contacts", !noBatch},
                      {"history_slots", s.engine().historySlots()}, {"reproducible", cfg.sim.reproducible},
                      {"wall_history_slots", s.engine().wallHistorySlots()},
                      {"device_bytes_per_particle", double(s.deviceBytes()) / double(s.numParticles())},

@@ -68,6 +68,9 @@ struct EngineSetup {
   // its reaction added to the partner (kernels::ComputePairsOnce), half the arithmetic of evaluating it from
   // both sides. The sums then depend on the cell grid (the slabs), not on the thread count.
   bool pairsOnce = true;
+  // The CPU's pairs once evaluates the contact law a batch of contacts at a time, in the core's SIMD lanes
+  // (kernels::batchedSlab, ContactBatch.h): the same bits as one contact at a time (false; tests, measurements).
+  bool batchedContacts = true;
   // simulation.reproducible: false lets a one-rank GPU run evaluate each contact once, by its lower index, with the
   // reactions added by atomic adds (ComputeForces' kHalf): the sums in no fixed order. PFLOW_GPU_HALF_PAIRS=1 does
   // the same on any executor that evaluates pairs from both sides (tests of it on the CPU, measurements).

@@ -474,7 +474,8 @@ class EngineImpl final : public ForwardDistributedRows<Engine, LocalRows<Exec, P
       if constexpr (Exec::kPairsOnce) {
         if (m_numSlabs) {
           m_exec.forEachTwoColours(m_numSlabs, kernels::ComputePairsOnce<R, kC, kF>{{args}, m_slabStart.as<Index>(), m_slabItems.as<Index>(),
-                                                                            m_owned1.as<std::uint32_t>(), m_numSlabs});
+                                                                            m_owned1.as<std::uint32_t>(), m_numSlabs,
+                                                                            m_setup.batchedContacts});
           if (m_anyWalls) m_exec.forEach(m_owned, kernels::ComputeWallForces<R, kC>{args});
           return;
         }

@@ -451,6 +451,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const RunConfig& config, 
   setup.value().layout = options.layout;
   setup.value().canonicalOrder = options.canonicalOrder;
   setup.value().pairsOnce = options.pairsOnce;
+  setup.value().batchedContacts = options.batchedContacts;
   setup.value().dt = ts.value().dt;
   std::shared_ptr<Domain> domain = options.domain ? options.domain : std::make_shared<Domain>();
   double totalMass = 0;  // the whole scene's (every rank prepares it), before the partition keeps a share

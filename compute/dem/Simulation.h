@@ -32,6 +32,9 @@ struct SimulationOptions {
   // The CPU executor in one process evaluates each contact once (EngineSetup::pairsOnce); false: from both
   // sides, as the GPU does (tests compare the two).
   bool pairsOnce = true;
+  // The CPU's pairs once evaluates the contact law by batches in SIMD lanes (EngineSetup::batchedContacts); false:
+  // one contact at a time (the same bits: tests and measurements compare the two).
+  bool batchedContacts = true;
   // One process: a step's second half kick waits for the next step's first, both done in one pass over the
   // particles (the same bits, one read and write of them fewer), where nothing looks at the state in between
   // (Simulation::secondHalfCanWait says when). false: every step ends with its own (tests compare the two).

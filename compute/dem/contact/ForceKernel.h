@@ -238,12 +238,8 @@ struct ComputeForces {
     const Index* __restrict__ nbr = a.nbr + row;
     std::int8_t* __restrict__ nbrSlot = a.nbrSlot + row;
     const std::size_t col = a.nbrLayout.stride();
-    const int slots = a.slots;
     const HistoryPool<R>& pool = a.pool;  // read from the launch's parameters where used, not held in registers
-    const PartnerId gi = pool.key ? PartnerId(gid[i]) : kNoPartner;
-    int pooledHere = pool.key ? a.pooled[i] : 0;
-    const SlotRow<PartnerId> partner = a.histLayout.at(a.histPartner, i);
-    const SlotRow<V> disp = a.histLayout.at(a.histDisp, i);
+    RowHistory h = history(i);
     const ContactParams* __restrict__ params = a.params + std::size_t(material[i]) * a.numMaterials;
     const R dt = R(a.dt);
     const bool storeOnly = a.storeOnly;
@@ -255,8 +251,6 @@ struct ComputeForces {
     V f = zero3<R>(), tq = zero3<R>();
 
     const std::uint32_t count = kOnce ? owned[i] : a.nbrLayout.count(i);
-    std::uint32_t contacts = 0;
-    bool overflow = false;
     // One candidate, as the one-phase loop sees it: tested, then (touching, or ending a contact that holds a slot)
     // evaluated, its history kept. `return` passes on to the next.
     const auto candidate = [&](std::uint32_t e) PFLOW_FORCEINLINE_LAMBDA {
@@ -268,43 +262,8 @@ struct ComputeForces {
       int slot = -1;
       std::int32_t entry = -1;  // the pool's entry when slot == kPoolSlot
       V xiOld = zero3<R>();
-      if constexpr (kTangential) {
-        // Invariant: nbrSlot[e] >= 0 exactly when slot nbrSlot[e] holds j's history, or the pool does (kPoolSlot)
-        // (set at rebuild, on claiming, cleared here when the contact ends), so the hot path never reads gid[j].
-        slot = nbrSlot[e * col];
-        // A JKR contact holds past zero overlap, to its break point; only one that exists (has its slot) does.
-        if (d2 >= rs * rs && !(kAdhesion && slot >= 0 && holds(params[material[j]], d2, rs, ri, rj))) {
-          if (slot == kPoolSlot) {  // the contact has ended: forget its history
-            entry = pool.find(HistoryPool<R>::keyOf(gi, PartnerId(gid[j])));
-            if (entry >= 0) pool.key[entry] = HistoryPool<R>::kErased;
-            --pooledHere;
-          } else if (slot >= 0) {
-            partner[slot] = kNoPartner;
-          }
-          if (slot >= 0) nbrSlot[e * col] = -1;
-          return;
-        }
-        ++contacts;
-        if (slot >= 0) {
-          if (storeOnly) return;  // stored by the first pass
-          if (slot == kPoolSlot) {
-            entry = pool.find(HistoryPool<R>::keyOf(gi, PartnerId(gid[j])));
-            if (entry >= 0) xiOld = pool.disp[entry];
-          } else {
-            xiOld = disp[slot];
-          }
-        } else {
-          slot = claimSlot(partner, slots, gid[j]);
-          if (slot < 0 && pool.key) {  // inline slots full: the pool
-            entry = pool.insert(HistoryPool<R>::keyOf(gi, PartnerId(gid[j])));
-            if (entry >= 0) slot = kPoolSlot, ++pooledHere;
-          }
-          overflow |= slot < 0;
-          if (storeOnly && slot < 0) return;
-        }
-      } else {
-        if (d2 >= rs * rs) return;
-      }
+      if (!admit<kTangential, kAdhesion>(h, nbrSlot + e * col, j, d2, rs, ri, rj, params, material, gid, slot, entry, xiOld))
+        return;
       const R mj = mass[j];
       const ContactParams& pp = params[material[j]];
       const contact::ContactState<R> s = pairState<R, kSpin, kHalf && std::is_same_v<R, float>>(d, d2, rs, vi, wi, ri, mi, Ii, vel[j],
@@ -319,7 +278,7 @@ struct ComputeForces {
         if (slot == kPoolSlot) {
           if (entry >= 0) pool.disp[entry] = out.history;
         } else if (slot >= 0) {
-          disp[slot] = out.history;
+          h.disp[slot] = out.history;
         }
         nbrSlot[e * col] = std::int8_t(slot);
       }
@@ -370,20 +329,7 @@ struct ComputeForces {
     } else {
       for (std::uint32_t e = 0; e < count; ++e) candidate(e);
     }
-    if (overflow) {
-      // Slots are sized, and held to simulation.max_contacts, by all of i's contacts in both ways of
-      // evaluating: the limit means the same, and a pair changing owner finds a free slot.
-      if constexpr (kOnce) contacts += touchingNotOwned(i, owned);  // kHalf: the slots hold the owned ones only
-      atomicOrU32(&a.cond->flags, kHistoryOverflow);
-      atomicMaxU32(&a.cond->neededHistory, contacts);
-    }
-    if constexpr (kTangential) {
-      if (pool.key) {
-        a.pooled[i] = pooledHere;
-        // The pool takes what the inline slots do not: simulation.max_contacts still holds.
-        if (contacts > std::uint32_t(a.maxContacts)) atomicMaxU32(&a.cond->neededHistory, contacts);
-      }
-    }
+    endRow<kTangential, kOnce>(i, h, owned);
     if (storeOnly) return;
     if constexpr (kHalf) {  // the sums start at zero (ZeroSums): without spins i's torque stays so
       if constexpr (std::is_same_v<R, float>) {
@@ -399,6 +345,92 @@ struct ComputeForces {
     } else {
       force[i] = f;
       torque[i] = tq;
+    }
+  }
+
+  // A row's history bookkeeping: i's slots, its key in the pool, and what its candidates found.
+  struct RowHistory {
+    SlotRow<PartnerId> partner;
+    SlotRow<V> disp;
+    PartnerId gi;            // i's gid where there is a pool
+    int pooledHere;          // i's contacts held in the pool
+    std::uint32_t contacts;  // touching candidates seen (with slots)
+    bool overflow;           // a touching candidate found no slot
+  };
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE RowHistory history(Index i) const {
+    return RowHistory{a.histLayout.at(a.histPartner, i), a.histLayout.at(a.histDisp, i),
+                      a.pool.key ? PartnerId(a.gid[i]) : kNoPartner, a.pool.key ? a.pooled[i] : 0, 0u, false};
+  }
+
+  // A candidate j of i at |d|^2 = d2 (rs = r_i + r_j) as the one-phase loop tests it, its history kept: false when
+  // the pair is passed over (apart, its history forgotten if it had one; or, redoing after slot growth, stored
+  // already), else true with the slot that holds it (kPoolSlot and the pool's `entry`; -1: none free, the overflow
+  // noted) and its stored displacement `xiOld` (zero for a new contact). `slotByte`: the candidate's slot byte.
+  // Shared by the pair loops here and the CPU's batched pairs once (ContactBatch.h).
+  template <bool kTangential, bool kAdhesion>
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE bool admit(RowHistory& h, std::int8_t* slotByte, Index j, double d2, double rs, R ri,
+                                                R rj, const ContactParams* __restrict__ params,
+                                                const std::int32_t* __restrict__ material, const Gid* __restrict__ gid,
+                                                int& slot, std::int32_t& entry, V& xiOld) const {
+    if constexpr (kTangential) {
+      const HistoryPool<R>& pool = a.pool;
+      // Invariant: the slot byte is >= 0 exactly when slot nbrSlot[e] holds j's history, or the pool does (kPoolSlot)
+      // (set at rebuild, on claiming, cleared here when the contact ends), so the hot path never reads gid[j].
+      slot = *slotByte;
+      // A JKR contact holds past zero overlap, to its break point; only one that exists (has its slot) does.
+      if (d2 >= rs * rs && !(kAdhesion && slot >= 0 && holds(params[material[j]], d2, rs, ri, rj))) {
+        if (slot == kPoolSlot) {  // the contact has ended: forget its history
+          entry = pool.find(HistoryPool<R>::keyOf(h.gi, PartnerId(gid[j])));
+          if (entry >= 0) pool.key[entry] = HistoryPool<R>::kErased;
+          --h.pooledHere;
+        } else if (slot >= 0) {
+          h.partner[slot] = kNoPartner;
+        }
+        if (slot >= 0) *slotByte = -1;
+        return false;
+      }
+      ++h.contacts;
+      if (slot >= 0) {
+        if (a.storeOnly) return false;  // stored by the first pass
+        if (slot == kPoolSlot) {
+          entry = pool.find(HistoryPool<R>::keyOf(h.gi, PartnerId(gid[j])));
+          if (entry >= 0) xiOld = pool.disp[entry];
+        } else {
+          xiOld = h.disp[slot];
+        }
+      } else {
+        slot = claimSlot(h.partner, a.slots, gid[j]);
+        if (slot < 0 && pool.key) {  // inline slots full: the pool
+          entry = pool.insert(HistoryPool<R>::keyOf(h.gi, PartnerId(gid[j])));
+          if (entry >= 0) slot = kPoolSlot, ++h.pooledHere;
+        }
+        h.overflow |= slot < 0;
+        if (a.storeOnly && slot < 0) return false;
+      }
+      return true;
+    } else {
+      (void)h, (void)slotByte, (void)j, (void)ri, (void)rj, (void)params, (void)material, (void)gid, (void)slot, (void)entry,
+          (void)xiOld;
+      return d2 < rs * rs;
+    }
+  }
+
+  // The end of i's row: the slots' overflow and the pool's count.
+  template <bool kTangential, bool kOnce>
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void endRow(Index i, RowHistory& h, const std::uint32_t* owned) const {
+    if (h.overflow) {
+      // Slots are sized, and held to simulation.max_contacts, by all of i's contacts in both ways of
+      // evaluating: the limit means the same, and a pair changing owner finds a free slot.
+      if constexpr (kOnce) h.contacts += touchingNotOwned(i, owned);  // kHalf: the slots hold the owned ones only
+      atomicOrU32(&a.cond->flags, kHistoryOverflow);
+      atomicMaxU32(&a.cond->neededHistory, h.contacts);
+    }
+    if constexpr (kTangential) {
+      if (a.pool.key) {
+        a.pooled[i] = h.pooledHere;
+        // The pool takes what the inline slots do not: simulation.max_contacts still holds.
+        if (h.contacts > std::uint32_t(a.maxContacts)) atomicMaxU32(&a.cond->neededHistory, h.contacts);
+      }
     }
   }
 

@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include "compute/dem/contact/ContactBatch.h"
 #include "compute/dem/contact/ForceKernel.h"
 
 namespace pflow::compute::kernels {
@@ -26,6 +27,9 @@ struct ComputePairsOnce {
   const Index* slabItems;        // particles by slab, ascending within each
   const std::uint32_t* owned;    // [particle]: how many candidates at the head of its row it owns (OwnedFirst)
   Index numSlabs;
+  // The contact law a batch of contacts at a time, in SIMD lanes (ContactBatch.h; the same bits): not with adhesion,
+  // nor in the store-only pass. EngineSetup::batchedContacts.
+  bool batched = true;
 
   void operator()(Index slab) const {
     const ForceArgs<R>& a = pairs.a;
@@ -35,6 +39,20 @@ struct ComputePairsOnce {
           a.force[slabItems[k]] = zero3<R>();
           a.torque[slabItems[k]] = zero3<R>();
         }
+    if constexpr (!kCohesion) {
+      if (batched && !a.storeOnly) {
+        const Index from = slabStart[slab], to = slabStart[slab + 1];
+        if (!a.tangential) {
+          if (a.rolling) batchedSlab<R, kFixed, false, true>(pairs, slabItems, from, to, owned);
+          else batchedSlab<R, kFixed, false, false>(pairs, slabItems, from, to, owned);
+        } else if (a.rolling) {
+          batchedSlab<R, kFixed, true, true>(pairs, slabItems, from, to, owned);
+        } else {
+          batchedSlab<R, kFixed, true, false>(pairs, slabItems, from, to, owned);
+        }
+        return;
+      }
+    }
     for (Index k = slabStart[slab]; k < slabStart[slab + 1]; ++k) pairs.template dispatch<true>(slabItems[k], owned);
   }
 };
