@@ -232,7 +232,11 @@ TEST_P(CudaVsCpu, LargeTableSortedInTheForcesMemoryMatchesCpu) {
     const auto [d, scale] = maxDiff(fg, fc);
     std::printf("step %lld: max |dF| = %.3g N, max |F| = %.3g N, rebuilds %lld / %lld\n", (long long)cpu->stepCount(), d,
                 scale, (long long)cpu->rebuilds(), (long long)gpu->rebuilds());
-    EXPECT_LE(d, (single ? 1e-5 : 1e-12) * scale) << "at step " << cpu->stepCount();
+    // Double: 1e-12 of the largest force at the first rebuild; after 30 steps of the dense cluster 1e-11, the last bits
+    // of the two executors' roundings grown by the contacts (nvcc fuses multiply-adds, the CPU's engine is built with
+    // -ffp-contract=off: 5e-14 at step 0, 1.0e-12 at step 30 on an H200). A row sorted wrongly costs whole forces.
+    const double bound = single ? 1e-5 : (stage == 0 ? 1e-12 : 1e-11);
+    EXPECT_LE(d, bound * scale) << "at step " << cpu->stepCount();
     if (stage == 0) {
       ASSERT_TRUE(cpu->runSteps(30).isOk());
       ASSERT_TRUE(gpu->runSteps(30).isOk());
