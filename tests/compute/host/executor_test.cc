@@ -1,11 +1,15 @@
 // Host pieces of the executor: the skin accumulator's rounding, the host memory space's parallel
-// first touch, copies and fills, and how a buffer grows in a device's memory.
+// first touch, copies and fills, how a buffer grows in a device's memory, and the order of the two colours.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <thread>
 #include <vector>
 
+#include "compute/core/CpuExecutor.h"
 #include "compute/core/Memory.h"
 #include "compute/dem/integrate/VelocityVerlet.h"
 #include "tests/support/DeviceLikeMemory.h"
@@ -118,4 +122,32 @@ TEST(BufferGrowth, AGrowthThatDoesNotFitKeepsTheBlock) {
   EXPECT_EQ(b.bytes(), 60u);
   EXPECT_EQ(contents(b, 60), pattern);
   EXPECT_EQ(mem.bytesInUse(), 60u);
+}
+
+// CpuExecutor::forEachTwoColours runs every item once, and an odd item only after both its even neighbours have
+// returned (ComputePairsOnce's slabs write their own layer and the next: an odd slab started early would race with
+// them). The even items sleep, so that an odd item started without waiting for them would be seen; and the odd items
+// do not all wait for the whole even colour (no barrier), checked where the last even item is slow.
+TEST(CpuExecutorColours, OddItemsWaitForTheirEvenNeighboursOnly) {
+  for (const pflow::Index n : {1u, 2u, 3u, 9u, 40u, 41u}) {
+    pflow::compute::CpuExecutor exec(4);
+    std::atomic<int> clock{0};
+    std::vector<int> begin(n, -1), end(n, -1), runs(n, 0);
+    exec.forEachTwoColours(n, [&](pflow::Index k) {
+      begin[k] = clock.fetch_add(1);
+      ++runs[k];
+      if (k % 2 == 0) std::this_thread::sleep_for(std::chrono::milliseconds(k + 2 >= n ? 60 : 2));
+      end[k] = clock.fetch_add(1);
+    });
+    for (pflow::Index k = 0; k < n; ++k) {
+      EXPECT_EQ(runs[k], 1) << "item " << k << " of " << n;
+      if (k % 2 == 0) continue;
+      EXPECT_GT(begin[k], end[k - 1]) << "item " << k << " of " << n;
+      if (k + 1 < n) EXPECT_GT(begin[k], end[k + 1]) << "item " << k << " of " << n;
+    }
+    if (n >= 40) {  // the first odd item ran long before the slow last even one ended
+      const pflow::Index lastEven = (n - 1) % 2 == 0 ? n - 1 : n - 2;
+      EXPECT_LT(end[1], end[lastEven]) << n;
+    }
+  }
 }
