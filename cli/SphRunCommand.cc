@@ -64,7 +64,7 @@ Result<RunSummary> runSphScene(const RunOptions& o, const frontend::LoadedScene&
   }
   const double duration = cfg.sim.duration;
   sim.scheduleOutput(cfg.sim.snapshotInterval, duration);
-  backend::ProbeRecorder probes(sim, cfg.sph.probeInterval);
+  backend::ProbeRecorder probes(sim, cfg.sph.probeInterval, cfg.sph.probeMean);
   spdlog::info("running to t = {} s, a snapshot every {} s, output {}", duration,
                cfg.sim.snapshotInterval > 0 ? cfg.sim.snapshotInterval : duration, sum.outputPath);
   const auto wallStart = std::chrono::steady_clock::now();
@@ -144,6 +144,13 @@ int validateSphScene(const std::string& scenePath, const frontend::LoadedScene& 
   std::printf("  sound speed %.4g m/s: %s\n", d.c0, d.soundSpeedReason.c_str());
   std::printf("  time step   %.4g s at the start (CFL %.3g; adapted every step), %.4g s simulated\n", dt0, c.sph.cfl, c.sim.duration);
   std::printf("  cells       %d x %d x %d of %.4g m\n", g.nx, g.ny, g.nz, g.cellSize);
+  if (!c.sph.probes.empty()) {
+    if (c.sph.probeInterval > 0)
+      std::printf("  probes      every %.4g s, %s\n", c.sph.probeInterval,
+                  c.sph.probeMean ? "each the mean since the one before (output.probe_sampling: mean)" : "each an instant's reading");
+    else
+      std::printf("  probes      at the snapshots, %s\n", c.sph.probeMean ? "each the mean since the one before" : "each an instant's reading");
+  }
   for (const auto& p : c.sph.probes)
     std::printf("  %-6s %-10s at (%.4g, %.4g, %.4g) m\n", p.gauge ? "gauge" : "probe", p.name.c_str(), p.point.x, p.point.y, p.point.z);
   return kExitOk;

@@ -31,34 +31,63 @@ struct ProbeSeries {
 // An SPH run's probes as they are sampled (`pflow run` and the worker): the series' names, units and points from
 // the scene's probes (SphSimulation::probes(): name, point, gauge), a sample at the start, then every `interval`
 // seconds of simulated time at the first step at or past each multiple, or, with interval 0, at every snapshot
-// (the simulation's outputDue()). `Sim` is compute::sph::SphSimulation (a template: no link dependency); sampling is
+// (the simulation's outputDue()). A sample is the reading at that step (`mean` false: output.probe_sampling:
+// instant) or the time average of the readings since the previous sample (`mean`: output.probe_sampling: mean; the
+// readings of every step, joined by straight lines, integrated and divided by the time between the two samples: a
+// sensor that integrates over the record's interval, so that a spike shorter than the interval counts by its
+// impulse, not by its height). `Sim` is compute::sph::SphSimulation (a template: no link dependency); sampling is
 // collective in a distributed run, so every rank calls sample() after every step.
 class ProbeRecorder {
  public:
   template <class Sim>
-  ProbeRecorder(const Sim& sim, double interval) : m_interval(interval), m_next(interval) {
+  ProbeRecorder(const Sim& sim, double interval, bool mean = false) : m_interval(interval), m_next(interval), m_mean(mean) {
     for (const auto& p : sim.probes()) {
       m_series.names.push_back(p.name);
       m_series.units.push_back(p.gauge ? "m" : "Pa");
       m_series.points.push_back(p.point);
     }
-    if (!empty()) m_series.add(sim.time(), sim.probeValues());
+    if (empty()) return;
+    m_last = sim.probeValues();
+    m_lastTime = m_windowStart = sim.time();
+    m_series.add(sim.time(), m_last);
+    m_integral.assign(m_last.size(), 0.0);
     // A resumed run: the next samples where its run's fell (the interval's multiples, summed as sample() does).
     while (m_interval > 0 && m_next <= sim.time() * (1 + 1e-12)) m_next += m_interval;
   }
   template <class Sim>
   void sample(const Sim& s) {
     if (empty()) return;
-    if (m_interval > 0 ? s.time() < m_next * (1 - 1e-12) : !s.outputDue()) return;
-    m_series.add(s.time(), s.probeValues());
+    const bool due = m_interval > 0 ? s.time() >= m_next * (1 - 1e-12) : s.outputDue();
+    if (!due && !m_mean) return;
+    const std::vector<double> now = s.probeValues();
+    if (m_mean) {
+      const double dt = s.time() - m_lastTime;
+      for (std::size_t k = 0; k < now.size(); ++k) m_integral[k] += 0.5 * (m_last[k] + now[k]) * dt;
+      m_last = now;
+      m_lastTime = s.time();
+    }
+    if (!due) return;
+    if (m_mean && s.time() > m_windowStart) {
+      std::vector<double> mean(now.size());
+      for (std::size_t k = 0; k < now.size(); ++k) mean[k] = m_integral[k] / (s.time() - m_windowStart);
+      m_series.add(s.time(), mean);
+      m_integral.assign(now.size(), 0.0);
+      m_windowStart = s.time();
+    } else {
+      m_series.add(s.time(), now);
+    }
     while (m_interval > 0 && m_next <= s.time() * (1 + 1e-12)) m_next += m_interval;
   }
   bool empty() const { return m_series.names.empty(); }
+  bool mean() const { return m_mean; }
   const ProbeSeries& series() const { return m_series; }
 
  private:
   ProbeSeries m_series;
   double m_interval, m_next;
+  bool m_mean;
+  std::vector<double> m_last, m_integral;  // the last step's readings; their integral over the window so far
+  double m_lastTime = 0, m_windowStart = 0;
 };
 
 // Adds /probes to an existing, closed HDF5 file (SnapshotWriter's); replaces a /probes already there.

@@ -84,6 +84,10 @@ struct SphConfig {
   std::vector<SphRegion> obstacles;
   std::vector<SphProbe> probes;
   double probeInterval = 0;  // [s]; 0: at the snapshots only
+  // output.probe_sampling: false ("instant"): a sample is the reading at the step that reaches it; true ("mean"): the
+  // time average of the readings of every step since the previous sample (a sensor that integrates over the
+  // record's interval), at the cost of a reading every step.
+  bool probeMean = false;
 
   std::size_t size() const { return position.size(); }
   std::size_t fluidCount() const;

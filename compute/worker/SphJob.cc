@@ -74,7 +74,7 @@ int runSphRank(const WorkerOptions& o, int rank, int ranks, const frontend::Load
   const auto& fields = scene.outputFields;
 
   // Probes: sampled on every rank (a collective), kept and sent by rank 0.
-  backend::ProbeRecorder probes(sim, cfg.sph.probeInterval);
+  backend::ProbeRecorder probes(sim, cfg.sph.probeInterval, cfg.sph.probeMean);
   std::size_t sent = 0;  // samples already with the sink
   auto sendProbes = [&]() -> Status {  // rank 0's samples since the last send
     const backend::ProbeSeries& series = probes.series();

@@ -373,6 +373,13 @@ void Loader::parseOutput(const Fields& top) {
       badValue("output.checkpoint_interval", format::num(m_checkpointInterval) + " must be > 0 (simulated seconds between checkpoints)", c->loc);
   }
   if (m_sph) get(*f, "probe_interval", m_config.sph.probeInterval);
+  if (const Entry* k = m_sph ? f->find("probe_sampling") : nullptr) {
+    std::string name;
+    if (read(k->value, "output.probe_sampling", k->loc, name)) {
+      if (name == "instant" || name == "mean") m_config.sph.probeMean = name == "mean";
+      else badValue("output.probe_sampling", unknownName("probe sampling", name, kProbeSamplings, "Choices"), k->loc);
+    }
+  }
   if (!m_sph) parseSeries(*f);
   const Entry* fields = f->find("fields");
   if (!fields || !isList(fields->value, "output.fields", fields->loc, "field names")) return;

@@ -207,6 +207,21 @@ TEST(SphScene, IntegratorAndItsErrors) {
       << stray.status().message();
 }
 
+// output.probe_sampling: instant (the default) or mean; anything else is named with the choices.
+TEST(SphScene, ProbeSamplingAndItsError) {
+  auto plain = load(damBreak());
+  ASSERT_TRUE(plain.isOk()) << plain.status().message();
+  EXPECT_FALSE(plain.value().config.sph.probeMean);
+  auto mean = load(damBreak() + "output: {probe_interval: 0.001, probe_sampling: mean}\n");
+  ASSERT_TRUE(mean.isOk()) << mean.status().message();
+  EXPECT_TRUE(mean.value().config.sph.probeMean);
+  EXPECT_EQ(mean.value().config.sph.probeInterval, 0.001);
+  auto bad = load(damBreak() + "output: {probe_sampling: average}\n");
+  ASSERT_FALSE(bad.isOk());
+  EXPECT_NE(bad.status().message().find("output.probe_sampling"), std::string::npos) << bad.status().message();
+  EXPECT_NE(bad.status().message().find("instant, mean"), std::string::npos) << bad.status().message();
+}
+
 TEST(SphScene, UnknownSolverIsNamed) {
   auto r = load("solver: fem\nsimulation: {duration: 1}\n");
   ASSERT_FALSE(r.isOk());
