@@ -108,7 +108,7 @@ class SphEngine : public DistributedRows {
   // The furthest a fluid particle reaches along the unit vector `direction`: max of x.direction [m] (one
   // device reduction; the surge front of a dam break is this along +x).
   virtual double fluidReach(Vec3d direction) const = 0;
-  // The owned fluid's kernel sums at `points` (SampleAt in SphKernels.h): its share of the kernel there and the
+  // The owned fluid's kernel sums at `points` (SampleRows and SampleSum in SphKernels.h): its share of the kernel there and the
   // share-weighted pressure sum [Pa] (the Shepard pressure is their ratio once summed over ranks). Points in a 2D
   // run lie in its plane.
   virtual void sample(const std::vector<Vec3d>& points, std::vector<double>& fraction, std::vector<double>& pressure) const = 0;

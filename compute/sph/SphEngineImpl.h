@@ -249,16 +249,29 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     fraction.assign(n, 0.0);
     pressure.assign(n, 0.0);
     if (!n) return;
-    if (m_samples.bytes() < n * (sizeof(Vec3d) + 2 * sizeof(double))) m_samples.resize(n * (sizeof(Vec3d) + 2 * sizeof(double)));
+    const int side = 2 * m_setup.grid.reach + 1, rows = side * side;
+    const std::size_t items = n * std::size_t(rows);
+    // The points (uploaded again only when they change: a run samples the same ones every time), the sums, the rows'.
+    const std::size_t bytes = n * sizeof(Vec3d) + 2 * n * sizeof(double) + 2 * items * sizeof(double);
+    if (m_samples.bytes() < bytes) {
+      m_samples.resize(bytes);
+      m_samplePoints.clear();
+    }
     auto* pts = m_samples.as<Vec3d>();
-    auto* frac = reinterpret_cast<double*>(pts + n);
-    double* pres = frac + n;
-    m_mem.copyFromHost(pts, points.data(), n * sizeof(Vec3d));
-    m_exec.forEach(Index(n), kernels::SampleAt<R>{m_setup.grid, m_cellStart.as<Index>(), cptr<SphField::Position>(),
-                                                  cptr<SphField::Density>(), cptr<SphField::Pressure>(), cptr<SphField::Mass>(),
-                                                  cptr<SphField::Kind>(), m_kernel, pts, frac, pres});
-    m_mem.copyToHost(fraction.data(), frac, n * sizeof(double));
-    m_mem.copyToHost(pressure.data(), pres, n * sizeof(double));
+    auto* sums = reinterpret_cast<double*>(pts + n);  // n fractions, then n pressures
+    double* partial = sums + 2 * n;
+    if (m_samplePoints.size() != n || std::memcmp(m_samplePoints.data(), points.data(), n * sizeof(Vec3d)) != 0) {
+      m_mem.copyFromHost(pts, points.data(), n * sizeof(Vec3d));
+      m_samplePoints = points;
+    }
+    m_exec.forEach(Index(items), kernels::SampleRows<R>{m_setup.grid, m_cellStart.as<Index>(), cptr<SphField::Position>(),
+                                                        cptr<SphField::Density>(), cptr<SphField::Pressure>(), cptr<SphField::Mass>(),
+                                                        cptr<SphField::Kind>(), m_kernel, pts, rows, partial});
+    m_exec.forEach(Index(n), kernels::SampleSum{partial, rows, sums, sums + n});
+    std::vector<double> both(2 * n);
+    m_mem.copyToHost(both.data(), sums, 2 * n * sizeof(double));
+    std::copy(both.begin(), both.begin() + std::ptrdiff_t(n), fraction.begin());
+    std::copy(both.begin() + std::ptrdiff_t(n), both.end(), pressure.begin());
   }
 
   ParticleSnapshot stateArrays(std::int64_t step, double time) const override {
@@ -465,7 +478,8 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
   PairParams<R> m_pair;
   Buffer m_cellKey{m_mem, 0}, m_perm{m_mem, 0}, m_cellStart{m_mem, 0}, m_ref{m_mem, 0};
   Buffer m_cond{m_mem, sizeof(Conditions)};
-  mutable Buffer m_samples{m_mem, 0};  // sample(): points, then fractions and pressures
+  mutable Buffer m_samples{m_mem, 0};  // sample(): points, then fractions and pressures, then the rows' sums
+  mutable std::vector<Vec3d> m_samplePoints;  // the points m_samples holds
   Buffer m_split{m_mem, 0}, m_splitFlag{m_mem, 0};  // boundary rows, then interior ones (splitBoundary)
   Buffer m_wet{m_mem, 0};  // MarkWet, per owned particle
   Buffer m_packRow{m_mem, 0}, m_packState{m_mem, 0}, m_packPm{m_mem, 0};  // PackRates, per local row

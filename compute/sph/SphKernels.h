@@ -630,9 +630,12 @@ struct EquationOfState {
 // Kernel sums of the fluid at arbitrary points (probes and gauges): fraction[k] = sum_b V_b W(x_k - x_b) (the
 // fluid's share of the kernel there: 1 inside the fluid, about 1/2 on a wall or the free surface, 0 in air) and
 // pressure[k] = sum_b V_b p_b W, over this engine's owned fluid particles b (V_b = m_b/rho_b): sums, so that
-// ranks add theirs; the Shepard pressure is pressure / fraction.
+// ranks add theirs; the Shepard pressure is pressure / fraction. In two passes, so that a few points still make
+// many items: SampleRows takes one row of a point's neighbouring cells (the cells along x at one y and z, whose
+// particles are contiguous in the cell order), item = point * rows + row, rows = (2 reach + 1)^2; SampleSum adds a
+// point's rows in their order (the same bits on both executors).
 template <class R>
-struct SampleAt {
+struct SampleRows {
   CellGrid grid;
   const Index* cellStart;
   const Vec3d* pos;
@@ -642,14 +645,20 @@ struct SampleAt {
   const std::int32_t* kind;
   Kernel<R> kernel;
   const Vec3d* points;
-  double* fraction;
-  double* pressure;
-  PFLOW_HOSTDEVICE void operator()(Index k) const {
+  int rows;
+  double* partial;  // 2 a row: the fraction's and the pressure's sums
+  PFLOW_HOSTDEVICE void operator()(Index item) const {
+    const Index k = item / Index(rows);
+    const int r = int(item - k * Index(rows)), side = 2 * grid.reach + 1;
     const Vec3d x = points[k];
-    const double cut2 = double(kernel.support()) * double(kernel.support());
+    int cx, cy, cz;
+    grid.coords(x, cx, cy, cz);
+    const int y = cy + r % side - grid.reach, z = cz + r / side - grid.reach;
     double sw = 0, swp = 0;
-    grid.forNeighbourCells(x, [&](std::uint32_t c) {
-      for (Index b = cellStart[c]; b < cellStart[c + 1]; ++b) {
+    if (y >= 0 && y < grid.ny && z >= 0 && z < grid.nz) {
+      const int x0 = cx > grid.reach ? cx - grid.reach : 0, x1 = cx + grid.reach < grid.nx ? cx + grid.reach : grid.nx - 1;
+      const double cut2 = double(kernel.support()) * double(kernel.support());
+      for (Index b = cellStart[grid.index(x0, y, z)]; b < cellStart[grid.index(x1, y, z) + 1]; ++b) {
         if (kind[b] != kFluid) continue;
         const double r2 = norm2(x - pos[b]);
         if (r2 >= cut2) continue;
@@ -657,7 +666,23 @@ struct SampleAt {
         sw += w;
         swp += w * double(p[b]);
       }
-    });
+    }
+    partial[2 * item] = sw;
+    partial[2 * item + 1] = swp;
+  }
+};
+
+struct SampleSum {
+  const double* partial;
+  int rows;
+  double* fraction;
+  double* pressure;
+  PFLOW_HOSTDEVICE void operator()(Index k) const {
+    double sw = 0, swp = 0;
+    for (int r = 0; r < rows; ++r) {
+      sw += partial[2 * (k * Index(rows) + r)];
+      swp += partial[2 * (k * Index(rows) + r) + 1];
+    }
     fraction[k] = sw;
     pressure[k] = swp;
   }
