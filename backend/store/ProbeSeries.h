@@ -79,7 +79,6 @@ class ProbeRecorder {
     while (m_interval > 0 && m_next <= s.time() * (1 + 1e-12)) m_next += m_interval;
   }
   bool empty() const { return m_series.names.empty(); }
-  bool mean() const { return m_mean; }
   const ProbeSeries& series() const { return m_series; }
 
  private:
