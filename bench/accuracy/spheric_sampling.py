@@ -2,10 +2,11 @@
 """SPHERIC test 2: P1 (and the probes beside it) read at every step, sampled as the run's recorder would
 (output.probe_sampling: instant and mean over 1 ms, backend/store/ProbeSeries.h's rule: every step's reading joined
 by straight lines, integrated over the window, divided by it) and box-filtered 1-5 ms wide, against the experiment.
-Prints the table of docs/sph.md ("Not the sampling") and the ringing's strongest frequencies.
+Prints the table of docs/sph.md ("Not the sampling") and the ringing's strongest frequencies; with a third
+argument, charts P1 read every step, as 1 ms means and box-filtered 5 ms wide against the experiment into that PNG.
 
     python3 bench/accuracy/spheric_sampling.py docs/sph/spheric2_dp0.0064_steps.probes.csv \
-        bench/accuracy/data/kleefsman_2005_spheric_test2_0-1s.csv
+        bench/accuracy/data/kleefsman_2005_spheric_test2_0-1s.csv [docs/sph/spheric2_p1_sampling.png]
 """
 import sys
 
@@ -73,5 +74,34 @@ def main():
         print('%s ringing above 100 Hz, strongest: %s Hz' % (probe, ', '.join('%.0f' % q for q in f[band][top])))
 
 
+def chart(run_path, exp_path, png):
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    names, run = read(run_path)
+    enames, exp = read(exp_path)
+    t, v = run[:, 0], run[:, names.index('P1')]
+    tm, vm = samples(t, v, 1e-3, True)
+    tu = np.arange(t[0], t[-1], 2e-5)
+    vu = np.interp(tu, t, v)
+    n = int(round(5e-3 / 2e-5))
+    box = np.convolve(vu, np.ones(n) / n, 'same')
+    fig, ax = plt.subplots(figsize=(8, 4.2))
+    ax.plot(t, v / 1e3, color='0.75', lw=0.8, label='run, every step (55 µs)')
+    ax.plot(tm, vm / 1e3, color='tab:blue', lw=1.2, drawstyle='steps-pre', label='run, mean over each 1 ms (probe_sampling: mean)')
+    ax.plot(tu, box / 1e3, color='tab:green', lw=1.2, label='run, box filter 5 ms')
+    ax.plot(exp[:, 0], exp[:, enames.index('P1')] / 1e3, color='k', lw=1.5, label='experiment (Kleefsman et al. 2005), ≈1 kHz')
+    ax.set_xlim(0.385, 0.47)
+    ax.set_xlabel('t [s]')
+    ax.set_ylabel('P1 [kPa]')
+    ax.set_title('SPHERIC test 2, P1: dp 6.4 mm, float, velocity Verlet (H200)')
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc='upper right')
+    fig.tight_layout()
+    fig.savefig(png, dpi=110)
+
+
 if __name__ == '__main__':
     main()
+    if len(sys.argv) > 3:
+        chart(sys.argv[1], sys.argv[2], sys.argv[3])
