@@ -41,6 +41,13 @@ std::size_t addFluidBlock(SphConfig& c, const std::string& name, Vec3d lo, Vec3d
   return c.size() - before;
 }
 
+LatticeFill latticeFill(const SphConfig& c, Vec3d lo, Vec3d hi) {
+  LatticeFill f{{cellsAlong(lo.x, hi.x, c.spacing), cellsAlong(lo.y, hi.y, c.spacing), cellsAlong(lo.z, hi.z, c.spacing)}, {}};
+  if (c.dimension == 2) f.count[1] = 1;
+  f.filled = {f.count[0] * c.spacing, c.dimension == 2 ? hi.y - lo.y : f.count[1] * c.spacing, f.count[2] * c.spacing};
+  return f;
+}
+
 std::size_t addTank(SphConfig& c, const std::string& name, Vec3d lo, Vec3d hi, bool openTop, int layers) {
   const std::size_t before = c.size();
   if (layers <= 0) layers = std::max(1, int(std::ceil(2.0 * c.smoothingRatio - 1e-9)));

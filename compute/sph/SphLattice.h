@@ -12,6 +12,15 @@ namespace pflow::compute::sph {
 // is recorded in config.fluidBlocks under `name`. Returns the particles added.
 std::size_t addFluidBlock(SphConfig& config, const std::string& name, Vec3d lo, Vec3d hi, Vec3d velocity = {0, 0, 0});
 
+// What a block [lo, hi] is filled as: whole spacings from its low corner along each axis, so a side that is not a
+// multiple of dp comes out short by up to one spacing. `count`: the particles along x, y, z (y: 1 in 2D);
+// `filled`: count x dp [m] (y: the block's own width in 2D).
+struct LatticeFill {
+  int count[3];
+  Vec3d filled;
+};
+LatticeFill latticeFill(const SphConfig& config, Vec3d lo, Vec3d hi);
+
 // The walls of a box tank whose inside is [lo, hi]: `layers` layers of boundary particles (0: derived,
 // ceil(2h/dp)) outside the floor and the side walls (2D: left and right), up to hi.z, and over the top
 // unless `openTop`. Recorded as config.tank.
