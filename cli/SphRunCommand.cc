@@ -10,6 +10,7 @@
 #include "cli/RunCheckpoints.h"
 #include "cli/SphRunCommand.h"
 #include "common/Log.h"
+#include "compute/core/Format.h"
 #include "compute/sph/SphLattice.h"
 #include "compute/sph/SphSimulation.h"
 
@@ -127,28 +128,13 @@ int validateSphScene(const std::string& scenePath, const frontend::LoadedScene& 
   const compute::CellGrid& g = setup.value().grid;
   // The first step: the acoustic limit (the fluid starts at rest or at its block velocities).
   const double dt0 = compute::sph::stableDt(c.sph.cfl, d.h, c.sph.kinematicViscosity, compute::sph::inverseStep(d.h, d.c0, 0, 0, false));
-  // Each fluid block as the lattice fills it: whole spacings from its low corner (docs/sph.md, "Initial particles").
-  struct Block {
-    std::string name;
-    Vec3d asked, filled;
-    std::size_t particles;
-    double volumeShare;  // filled volume / asked volume
-  };
-  std::vector<Block> blocks;
-  for (const auto& b : c.sph.fluidBlocks) {
-    const compute::sph::LatticeFill f = compute::sph::latticeFill(c.sph, b.lo, b.hi);
-    const Vec3d asked = b.hi - b.lo;
-    const bool planar = c.sph.dimension == 2;
-    const double askedVolume = asked.x * asked.z * (planar ? 1.0 : asked.y);
-    const double filledVolume = f.filled.x * f.filled.z * (planar ? 1.0 : f.filled.y);
-    blocks.push_back({b.name, asked, f.filled, std::size_t(f.count[0]) * std::size_t(f.count[1]) * std::size_t(f.count[2]),
-                      askedVolume > 0 ? filledVolume / askedVolume : 0.0});
-  }
   if (json) {
     nlohmann::json fills = nlohmann::json::array();
-    for (const Block& b : blocks)
-      fills.push_back({{"name", b.name}, {"size", {b.asked.x, b.asked.y, b.asked.z}}, {"filled", {b.filled.x, b.filled.y, b.filled.z}},
-                       {"particles", b.particles}, {"volume_fraction", b.volumeShare}});
+    for (const auto& b : c.sph.fluidBlocks) {
+      const compute::sph::LatticeFill f = compute::sph::latticeFill(c.sph, b.lo, b.hi);
+      fills.push_back({{"name", b.name}, {"size", {b.hi.x - b.lo.x, b.hi.y - b.lo.y, b.hi.z - b.lo.z}},
+                       {"filled", {f.filled.x, f.filled.y, f.filled.z}}, {"particles", f.particles()}, {"volume_fraction", f.volumeFraction}});
+    }
     nlohmann::json j{{"valid", true},         {"solver", "sph"},    {"particles", n},         {"fluid_particles", fluid},
                      {"boundary_particles", n - fluid}, {"dimension", c.sph.dimension}, {"spacing", c.sph.spacing},
                      {"smoothing_length", d.h}, {"sound_speed", d.c0}, {"sound_speed_reason", d.soundSpeedReason},
@@ -160,13 +146,15 @@ int validateSphScene(const std::string& scenePath, const frontend::LoadedScene& 
   std::printf("%s: valid (solver: sph)\n", scenePath.c_str());
   std::printf("  particles   %zu: %zu fluid, %zu boundary (%d layers), %dD, spacing %.4g m\n", n, fluid, n - fluid,
               d.boundaryLayers, c.sph.dimension, c.sph.spacing);
-  for (const Block& b : blocks) {
+  for (const auto& b : c.sph.fluidBlocks) {  // each block as the lattice fills it (whole spacings from its low corner)
+    const compute::sph::LatticeFill f = compute::sph::latticeFill(c.sph, b.lo, b.hi);
+    const Vec3d asked = b.hi - b.lo;
     if (c.sph.dimension == 2)
       std::printf("  fluid       %s: %zu particles, %.4g x %.4g m (x, z) of the %.4g x %.4g m asked (%.1f %% of its area)\n",
-                  b.name.c_str(), b.particles, b.filled.x, b.filled.z, b.asked.x, b.asked.z, 100.0 * b.volumeShare);
+                  b.name.c_str(), f.particles(), f.filled.x, f.filled.z, asked.x, asked.z, 100.0 * f.volumeFraction);
     else
       std::printf("  fluid       %s: %zu particles, %.4g x %.4g x %.4g m of the %.4g x %.4g x %.4g m asked (%.1f %% of its volume)\n",
-                  b.name.c_str(), b.particles, b.filled.x, b.filled.y, b.filled.z, b.asked.x, b.asked.y, b.asked.z, 100.0 * b.volumeShare);
+                  b.name.c_str(), f.particles(), f.filled.x, f.filled.y, f.filled.z, asked.x, asked.y, asked.z, 100.0 * f.volumeFraction);
   }
   std::printf("  method      %s kernel, h = %.4g m (h/dp %.3g), Tait gamma %.3g, alpha %.3g, delta %.3g%s, nu %.3g m^2/s\n",
               compute::sph::kernelName(c.sph.kernel), d.h, c.sph.smoothingRatio, c.sph.gamma, c.sph.artificialViscosity,
@@ -174,13 +162,9 @@ int validateSphScene(const std::string& scenePath, const frontend::LoadedScene& 
   std::printf("  sound speed %.4g m/s: %s\n", d.c0, d.soundSpeedReason.c_str());
   std::printf("  time step   %.4g s at the start (CFL %.3g; adapted every step), %.4g s simulated\n", dt0, c.sph.cfl, c.sim.duration);
   std::printf("  cells       %d x %d x %d of %.4g m\n", g.nx, g.ny, g.nz, g.cellSize);
-  if (!c.sph.probes.empty()) {
-    if (c.sph.probeInterval > 0)
-      std::printf("  probes      every %.4g s, %s\n", c.sph.probeInterval,
-                  c.sph.probeMean ? "each the mean since the one before (output.probe_sampling: mean)" : "each an instant's reading");
-    else
-      std::printf("  probes      at the snapshots, %s\n", c.sph.probeMean ? "each the mean since the one before" : "each an instant's reading");
-  }
+  if (!c.sph.probes.empty())
+    std::printf("  probes      %s, %s\n", c.sph.probeInterval > 0 ? ("every " + format::num(c.sph.probeInterval) + " s").c_str() : "at the snapshots",
+                c.sph.probeMean ? "each the mean since the one before (output.probe_sampling: mean)" : "each an instant's reading");
   for (const auto& p : c.sph.probes)
     std::printf("  %-6s %-10s at (%.4g, %.4g, %.4g) m\n", p.gauge ? "gauge" : "probe", p.name.c_str(), p.point.x, p.point.y, p.point.z);
   return kExitOk;

@@ -12,12 +12,14 @@ import sys
 
 import numpy as np
 
+from plot_spheric import table  # the probes' and the record's CSV, columns by name
+
 
 def read(path):
-    lines = [l for l in open(path) if not l.startswith('#')]
-    names = [h.split(' ')[0] for h in lines[0].strip().split(',')]
-    data = np.array([[float(x) for x in l.split(',')] for l in lines[1:]])
-    return names, data
+    """A CSV as plot_spheric.table reads it: its columns' names and the rows as an array."""
+    columns = table(path)
+    names = list(columns)
+    return names, np.array([columns[n] for n in names]).T
 
 
 def samples(t, v, interval, mean):

@@ -268,10 +268,10 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
                                                         cptr<SphField::Density>(), cptr<SphField::Pressure>(), cptr<SphField::Mass>(),
                                                         cptr<SphField::Kind>(), m_kernel, pts, rows, partial});
     m_exec.forEach(Index(n), kernels::SampleSum{partial, rows, sums, sums + n});
-    std::vector<double> both(2 * n);
-    m_mem.copyToHost(both.data(), sums, 2 * n * sizeof(double));
-    std::copy(both.begin(), both.begin() + std::ptrdiff_t(n), fraction.begin());
-    std::copy(both.begin() + std::ptrdiff_t(n), both.end(), pressure.begin());
+    m_sampleHost.resize(2 * n);  // one copy back for both sums
+    m_mem.copyToHost(m_sampleHost.data(), sums, 2 * n * sizeof(double));
+    std::copy(m_sampleHost.begin(), m_sampleHost.begin() + std::ptrdiff_t(n), fraction.begin());
+    std::copy(m_sampleHost.begin() + std::ptrdiff_t(n), m_sampleHost.end(), pressure.begin());
   }
 
   ParticleSnapshot stateArrays(std::int64_t step, double time) const override {
@@ -480,6 +480,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
   Buffer m_cond{m_mem, sizeof(Conditions)};
   mutable Buffer m_samples{m_mem, 0};  // sample(): points, then fractions and pressures, then the rows' sums
   mutable std::vector<Vec3d> m_samplePoints;  // the points m_samples holds
+  mutable std::vector<double> m_sampleHost;    // the sums as copied back
   Buffer m_split{m_mem, 0}, m_splitFlag{m_mem, 0};  // boundary rows, then interior ones (splitBoundary)
   Buffer m_wet{m_mem, 0};  // MarkWet, per owned particle
   Buffer m_packRow{m_mem, 0}, m_packState{m_mem, 0}, m_packPm{m_mem, 0};  // PackRates, per local row

@@ -31,21 +31,23 @@ void lattice(const SphConfig& c, Vec3d lo, const int from[3], const int to[3], c
 
 }  // namespace
 
+LatticeFill latticeFill(const SphConfig& c, Vec3d lo, Vec3d hi) {
+  const bool planar = c.dimension == 2;
+  LatticeFill f{{cellsAlong(lo.x, hi.x, c.spacing), planar ? 1 : cellsAlong(lo.y, hi.y, c.spacing), cellsAlong(lo.z, hi.z, c.spacing)}, {}, 0};
+  f.filled = {f.count[0] * c.spacing, planar ? hi.y - lo.y : f.count[1] * c.spacing, f.count[2] * c.spacing};
+  const double asked = (hi.x - lo.x) * (hi.z - lo.z) * (planar ? 1.0 : hi.y - lo.y);
+  f.volumeFraction = asked > 0 ? f.filled.x * f.filled.z * (planar ? 1.0 : f.filled.y) / asked : 0.0;
+  return f;
+}
+
 std::size_t addFluidBlock(SphConfig& c, const std::string& name, Vec3d lo, Vec3d hi, Vec3d velocity) {
   const std::size_t before = c.size();
   const int from[3] = {0, 0, 0};
-  const int to[3] = {cellsAlong(lo.x, hi.x, c.spacing), cellsAlong(lo.y, hi.y, c.spacing), cellsAlong(lo.z, hi.z, c.spacing)};
-  lattice(c, lo, from, to, [&](Vec3d x, int, int, int) { add(c, x, ParticleKind::kFluid, velocity); });
+  const LatticeFill fill = latticeFill(c, lo, hi);
+  lattice(c, lo, from, fill.count, [&](Vec3d x, int, int, int) { add(c, x, ParticleKind::kFluid, velocity); });
   c.fluidBlocks.push_back({name, lo, hi});
   if (!c.velocity.empty()) c.velocity.resize(c.size(), Vec3d{0, 0, 0});
   return c.size() - before;
-}
-
-LatticeFill latticeFill(const SphConfig& c, Vec3d lo, Vec3d hi) {
-  LatticeFill f{{cellsAlong(lo.x, hi.x, c.spacing), cellsAlong(lo.y, hi.y, c.spacing), cellsAlong(lo.z, hi.z, c.spacing)}, {}};
-  if (c.dimension == 2) f.count[1] = 1;
-  f.filled = {f.count[0] * c.spacing, c.dimension == 2 ? hi.y - lo.y : f.count[1] * c.spacing, f.count[2] * c.spacing};
-  return f;
 }
 
 std::size_t addTank(SphConfig& c, const std::string& name, Vec3d lo, Vec3d hi, bool openTop, int layers) {

@@ -12,12 +12,15 @@ namespace pflow::compute::sph {
 // is recorded in config.fluidBlocks under `name`. Returns the particles added.
 std::size_t addFluidBlock(SphConfig& config, const std::string& name, Vec3d lo, Vec3d hi, Vec3d velocity = {0, 0, 0});
 
-// What a block [lo, hi] is filled as: whole spacings from its low corner along each axis, so a side that is not a
-// multiple of dp comes out short by up to one spacing. `count`: the particles along x, y, z (y: 1 in 2D);
-// `filled`: count x dp [m] (y: the block's own width in 2D).
+// What a block [lo, hi] is filled as (addFluidBlock's rule): whole spacings from its low corner along each axis, so
+// a side that is not a multiple of dp comes out short by up to one spacing. `count`: the particles along x, y, z
+// (y: 1 in 2D); `filled`: count x dp [m] (y: the block's own width in 2D); `volumeFraction`: the filled volume (2D:
+// area) over the block's.
 struct LatticeFill {
   int count[3];
   Vec3d filled;
+  double volumeFraction;
+  std::size_t particles() const { return std::size_t(count[0]) * std::size_t(count[1]) * std::size_t(count[2]); }
 };
 LatticeFill latticeFill(const SphConfig& config, Vec3d lo, Vec3d hi);
 

@@ -211,26 +211,40 @@ Status SphSimulation::runUntil(double time, const std::function<Status(const Sph
   return Status::ok();
 }
 
-std::vector<double> SphSimulation::probeValues() const {
+void SphSimulation::placeProbes() {
   const auto& probes = m_method.probes;
-  std::vector<Vec3d> points;
-  std::vector<std::size_t> first(probes.size() + 1, 0);
+  m_probePoints.clear();
+  m_probeFirst.assign(probes.size() + 1, 0);
   const double floor = m_method.tank ? m_method.tank->lo.z : m_grid.lo.z;
   const double top = m_grid.lo.z + m_grid.cellSize * m_grid.nz, dz = 0.5 * m_method.spacing;
   const double plane = m_grid.lo.y + 0.5 * m_grid.cellSize;  // 2D: the particles' plane
   for (std::size_t k = 0; k < probes.size(); ++k) {
-    first[k] = points.size();
+    m_probeFirst[k] = m_probePoints.size();
     Vec3d x = probes[k].point;
     if (m_method.dimension == 2) x.y = plane;
-    if (!probes[k].gauge) points.push_back(x);
+    if (!probes[k].gauge) m_probePoints.push_back(x);
     else
-      for (double z = floor; z <= top; z += dz) points.push_back({x.x, x.y, z});
+      for (double z = floor; z <= top; z += dz) m_probePoints.push_back({x.x, x.y, z});
   }
-  first[probes.size()] = points.size();
-  std::vector<double> fraction, pressure, values(probes.size(), 0.0);
+  m_probeFirst[probes.size()] = m_probePoints.size();
+}
+
+std::vector<double> SphSimulation::probeValues() const {
+  const auto& probes = m_method.probes;
+  const std::vector<Vec3d>& points = m_probePoints;
+  const std::vector<std::size_t>& first = m_probeFirst;
+  const double floor = m_method.tank ? m_method.tank->lo.z : m_grid.lo.z, dz = 0.5 * m_method.spacing;
+  std::vector<double>& fraction = m_probeFraction;
+  std::vector<double>& pressure = m_probePressure;
+  std::vector<double> values(probes.size(), 0.0);
   m_engine->sample(points, fraction, pressure);
-  m_domain->sum(fraction);  // every rank's fluid near the points
-  m_domain->sum(pressure);
+  if (m_domain->ranks() > 1) {  // every rank's fluid near the points, in one sum
+    const std::size_t n = points.size();
+    fraction.insert(fraction.end(), pressure.begin(), pressure.end());
+    m_domain->sum(fraction);
+    pressure.assign(fraction.begin() + std::ptrdiff_t(n), fraction.end());
+    fraction.resize(n);
+  }
   for (std::size_t k = 0; k < probes.size(); ++k) {
     if (!probes[k].gauge) {
       values[k] = fraction[first[k]] > 0.05 ? pressure[first[k]] / fraction[first[k]] : 0.0;
@@ -293,6 +307,7 @@ Result<std::unique_ptr<SphSimulation>> SphSimulation::create(const RunConfig& co
   std::vector<ParticleKind>().swap(sim->m_method.kind);
   sim->m_grid = setup.value().grid;
   sim->m_skin = setup.value().skin;
+  sim->placeProbes();
   sim->m_fluid = config.sph.fluidCount();
   const bool single = config.sim.precision == Precision::kFloat;
   ExecutorKind kind = options.executor;

@@ -102,6 +102,12 @@ class SphSimulation {
   double m_dtBefore = 0;  // Verlet: the last step taken
   CellGrid m_grid;
   double m_skin = 0;
+  // Where probeValues() reads: each probe's point, each gauge's column (floor to top in steps of dp/2), placed once;
+  // probe k's points are [m_probeFirst[k], m_probeFirst[k + 1]).
+  std::vector<Vec3d> m_probePoints;
+  std::vector<std::size_t> m_probeFirst;
+  mutable std::vector<double> m_probeFraction, m_probePressure;  // probeValues()'s kernel sums, kept between calls
+  void placeProbes();
   PhaseTimers m_timers;
   std::int64_t m_step = 0, m_rebuilds = 0;
   std::int64_t m_rebuiltAt = 0;  // the step whose end had the last cell sort (0: the start's)
