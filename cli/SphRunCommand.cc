@@ -138,7 +138,8 @@ int validateSphScene(const std::string& scenePath, const frontend::LoadedScene& 
     nlohmann::json j{{"valid", true},         {"solver", "sph"},    {"particles", n},         {"fluid_particles", fluid},
                      {"boundary_particles", n - fluid}, {"dimension", c.sph.dimension}, {"spacing", c.sph.spacing},
                      {"smoothing_length", d.h}, {"sound_speed", d.c0}, {"sound_speed_reason", d.soundSpeedReason},
-                     {"boundary_layers", d.boundaryLayers}, {"dt", dt0},  {"duration", c.sim.duration},
+                     {"boundary_layers", d.boundaryLayers}, {"boundary_density", c.sph.mdbc ? "mdbc" : "continuity"},
+                     {"dt", dt0},  {"duration", c.sim.duration},
                      {"kernel", compute::sph::kernelName(c.sph.kernel)}, {"fluid_blocks", fills}};
     std::printf("%s\n", j.dump().c_str());
     return kExitOk;
@@ -146,6 +147,9 @@ int validateSphScene(const std::string& scenePath, const frontend::LoadedScene& 
   std::printf("%s: valid (solver: sph)\n", scenePath.c_str());
   std::printf("  particles   %zu: %zu fluid, %zu boundary (%d layers), %dD, spacing %.4g m\n", n, fluid, n - fluid,
               d.boundaryLayers, c.sph.dimension, c.sph.spacing);
+  if (n > fluid)
+    std::printf("  boundary    %s\n", c.sph.mdbc ? "density extrapolated from the fluid at ghost nodes (sph.boundary_density: mdbc)"
+                                                   : "density by continuity (dynamic boundary particles)");
   for (const auto& b : c.sph.fluidBlocks) {  // each block as the lattice fills it (whole spacings from its low corner)
     const compute::sph::LatticeFill f = compute::sph::latticeFill(c.sph, b.lo, b.hi);
     const Vec3d asked = b.hi - b.lo;

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "compute/core/Format.h"
+#include "compute/sph/SphMdbc.h"
 #include "compute/sim/RunConfig.h"
 
 namespace pflow::compute::sph {
@@ -100,6 +101,11 @@ ErrorList SphConfig::validate(const SimulationSettings& sim) const {
   if (boundary == BoundaryKind::kMirror && boundaryLayers > 0)
     e.add("sph.boundary_layers", "applies to dynamic walls; mirror walls have no particles");
   if (boundary != BoundaryKind::kMirror && freeSlip) e.add("sph.wall_slip", "applies to mirror walls (sph.boundary: mirror)");
+  if (mdbc && kind.size() == fluidCount())
+    e.add("sph.boundary_density", "mdbc applies to boundary particles, and the scene has none (mirror walls and no obstacle)");
+  if (mdbc && obstacles.size() > std::size_t(MdbcGeometry::kMaxObstacles))
+    e.add("sph.boundary_density", "mdbc takes at most " + std::to_string(MdbcGeometry::kMaxObstacles) + " obstacles; the scene has " +
+                                      std::to_string(obstacles.size()));
   if (!(minDensityRatio > 0 && minDensityRatio < 1)) e.add("sph.density_bounds", "the lower bound " + num(minDensityRatio) + " must be in (0, 1)");
   if (!(maxDensityRatio > 1)) e.add("sph.density_bounds", "the upper bound " + num(maxDensityRatio) + " must be > 1");
   positive(e, "simulation.duration", sim.duration);

@@ -66,6 +66,9 @@ struct SphConfig {
   BoundaryKind boundary = BoundaryKind::kDynamic;  // the tank's walls
   bool freeSlip = false;       // mirror walls: the image keeps the tangential velocity (sph.wall_slip: free_slip)
   int boundaryLayers = 0;      // dynamic walls: 0 = enough to cover the kernel support, ceil(2h/dp)
+  // sph.boundary_density: mdbc: every boundary particle's density extrapolated from the fluid at its ghost node
+  // (English et al. 2022, SphMdbc.h) instead of the dynamic boundary's continuity equation.
+  bool mdbc = false;
   double skin = 0.25;          // neighbour skin as a fraction of h: cells are 2h + skin wide
   // The rates pass reads hit masks, marked by the first pass after each sort (SphKernels.h, RatePass), instead of
   // testing every candidate of the walk: the same pairs in the same order, so the same sums; faster from rest, level

@@ -11,6 +11,7 @@
 #include "compute/neighbor/CellGrid.h"
 #include "compute/particles/DistributedRows.h"
 #include "compute/particles/ParticleSnapshot.h"
+#include "compute/sph/SphMdbc.h"
 #include "compute/sph/SphPhysics.h"
 
 namespace pflow::compute::sph {
@@ -32,6 +33,7 @@ struct SphSetup {
   bool checkBox = false;  // leak check (the tank's outer walls; open top)
   Vec3d boxLo{0, 0, 0}, boxHi{0, 0, 0};
   MirrorWalls mirror;     // sph.boundary: mirror (mirror.any false: none)
+  MdbcGeometry mdbc;      // sph.boundary_density: mdbc (mdbc.on false: the dynamic boundary's continuity)
   CellGrid grid;
   double skin = 0;  // [m]
   bool hitMasks = false;  // SphConfig::hitMasks

@@ -107,6 +107,14 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     if (m_wetStale) markWet();
     // The packed rows the pass reads: the owned ones before the interior pass (the ghosts are still travelling),
     // the ghosts before the boundary one.
+    // mDBC: the boundary particles' density from the fluid at their ghost nodes, before the pass reads it (one process
+    // only: SphSimulation::create), over the wet boundary particles listed by markWet.
+    if (m_setup.mdbc.on && set != RateSet::kBoundary && m_mdbcCount > 0)
+      m_exec.forEach(m_mdbcCount, kernels::MdbcDensity<R>{m_setup.grid, m_cellStart.as<Index>(), cptr<SphField::Position>(),
+                                                          cptr<SphField::Kind>(), cptr<SphField::Mass>(), m_mdbcList.as<Index>(),
+                                                          m_kernel, m_eos, m_setup.mdbc, m_setup.rho0,
+                                                          0.5 * m_setup.skin * 1.001 + 1e-5 * m_setup.grid.cellSize,
+                                                          ptr<SphField::Density>(), ptr<SphField::Pressure>()});
     const Index packFrom = set == RateSet::kBoundary ? m_owned : 0;
     const Index packTo = set == RateSet::kInterior && ghosts ? m_owned : m_n;
     packRates(packFrom, packTo);
@@ -366,6 +374,16 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     w.wet = m_wet.as<std::uint8_t>();
     m_exec.forEach(m_owned, w);
     m_wetStale = false;
+    if (m_setup.mdbc.on) {  // the mDBC pass's list: the wet boundary particles, in row order
+      const std::size_t n = std::max<std::size_t>(1, m_owned);
+      if (m_mdbcList.bytes() < n * sizeof(Index)) m_mdbcList.resize(n * sizeof(Index) * 5 / 4);
+      if (m_splitFlag.bytes() < 2 * n * sizeof(std::uint32_t)) m_splitFlag.resize(2 * n * sizeof(std::uint32_t) * 5 / 4);
+      std::uint32_t* flag = m_splitFlag.as<std::uint32_t>();
+      std::uint32_t* scan = flag + n;
+      m_exec.forEach(m_owned, kernels::MdbcFlag{cptr<SphField::Kind>(), m_wet.as<std::uint8_t>(), flag});
+      m_mdbcCount = Index(m_exec.exclusiveScan(flag, scan, m_owned));
+      m_exec.forEach(m_owned, compute::kernels::SplitByFlag{flag, scan, m_mdbcCount, m_mdbcList.as<Index>()});
+    }
   }
 
   // Per-particle work buffers sized for the local rows (kept when big enough).
@@ -435,6 +453,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     a.boxLo = m_setup.boxLo;
     a.boxHi = m_setup.boxHi;
     a.mirror = m_setup.mirror;
+    a.extrapolatedBoundary = m_setup.mdbc.on;
     a.cond = m_cond.as<Conditions>();
     return a;
   }
@@ -483,6 +502,8 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
   mutable std::vector<double> m_sampleHost;    // the sums as copied back
   Buffer m_split{m_mem, 0}, m_splitFlag{m_mem, 0};  // boundary rows, then interior ones (splitBoundary)
   Buffer m_wet{m_mem, 0};  // MarkWet, per owned particle
+  Buffer m_mdbcList{m_mem, 0};  // mDBC: the wet boundary rows first (m_mdbcCount of them), then the rest (markWet)
+  Index m_mdbcCount = 0;
   Buffer m_packRow{m_mem, 0}, m_packState{m_mem, 0}, m_packPm{m_mem, 0};  // PackRates, per local row
   Buffer m_sums{m_mem, 0};  // the pairs once's sums (RateSum), per owned row, zero between passes
   bool m_pairsOnce = false;  // the last rates pass evaluated each pair once

@@ -5,6 +5,7 @@
 
 #include "common/Log.h"
 #include "compute/core/Memory.h"
+#include "compute/sph/SphLattice.h"
 
 namespace pflow::compute::sph {
 
@@ -282,6 +283,9 @@ Result<std::unique_ptr<SphSimulation>> SphSimulation::create(const RunConfig& co
   if (!setup) return setup.status();
   std::unique_ptr<SphSimulation> sim(new SphSimulation());
   sim->m_domain = options.domain ? options.domain : std::make_shared<Domain>();
+  if (config.sph.mdbc && sim->m_domain->ranks() > 1)
+    return invalidArgument("sph.boundary_density: mdbc runs in one process only: a ghost node's fluid on another rank is "
+                           "not exchanged yet (use continuity, or one rank)");
   sim->m_overlapHalo = options.overlapHalo;
   {
     // This rank's share of the scene's particles, their scene index as global id.
@@ -435,6 +439,30 @@ Result<SphSetup> prepareSphSetup(const RunConfig& config) {
       m.hi[a] = !across && !(a == 2 && c.tankOpenTop);
       m.loAt[a] = (&c.tank->lo.x)[a];
       m.hiAt[a] = (&c.tank->hi.x)[a];
+    }
+  }
+  if (c.mdbc) {  // the interfaces as the lattice filled the boxes: whole spacings from each low corner (SphLattice.cc)
+    MdbcGeometry& m = s.mdbc;
+    m.on = true;
+    m.planar = c.dimension == 2;
+    m.tie = 1e-6 * c.spacing;
+    Vec3d tankLo{-1e300, -1e300, -1e300}, tankHi{1e300, 1e300, 1e300};
+    if (c.tank) {
+      tankLo = c.tank->lo;
+      tankHi = c.tank->lo + latticeFill(c, c.tank->lo, c.tank->hi).filled;
+      m.tank = c.boundary != BoundaryKind::kMirror;  // mirror walls have no particles
+      m.tankLo = tankLo;
+      m.tankHi = tankHi;
+    }
+    m.obstacles = int(c.obstacles.size());
+    for (int k = 0; k < m.obstacles; ++k) {
+      const SphRegion& o = c.obstacles[std::size_t(k)];
+      m.obLo[k] = o.lo;
+      m.obHi[k] = o.lo + latticeFill(c, o.lo, o.hi).filled;
+      for (int a = 0; a < 3; ++a) {  // a face on the tank's wall has wall behind it, not fluid
+        if ((&m.obLo[k].x)[a] > (&tankLo.x)[a] + 0.5 * c.spacing) m.wetLo[k] |= std::uint8_t(1 << a);
+        if ((&m.obHi[k].x)[a] < (&tankHi.x)[a] - 0.5 * c.spacing) m.wetHi[k] |= std::uint8_t(1 << a);
+      }
     }
   }
   if (c.tank) {

@@ -34,6 +34,9 @@ struct StepArgs {
   bool checkBox = false;
   Vec3d boxLo{0, 0, 0}, boxHi{0, 0, 0};
   MirrorWalls mirror;  // a fluid particle past a mirror wall is put back (MirrorWalls::keepInside)
+  // sph.boundary_density: mdbc: the boundary particles' density and pressure are the extrapolation's
+  // (kernels::MdbcDensity, before each evaluation of the rates), not integrated: these kernels leave them.
+  bool extrapolatedBoundary = false;
   Conditions* cond = nullptr;
 };
 
@@ -58,6 +61,8 @@ struct Predictor {
       if (a.mirror.any) a.mirror.keepInside(x, v);
       a.vel[i] = v;
       a.pos[i] = x;
+    } else if (a.extrapolatedBoundary) {
+      return norm2(a.pos[i] - a.ref[i]);
     } else if (r < a.boundaryFloor) {
       r = a.boundaryFloor;
     }
@@ -99,6 +104,8 @@ PFLOW_HOSTDEVICE PFLOW_FORCEINLINE double finishStep(const StepArgs<R>& a, Index
     if (a.mirror.any) a.mirror.keepInside(x, v);
     a.vel[i] = v;
     a.pos[i] = x;
+  } else if (a.extrapolatedBoundary) {
+    return norm2(x - a.ref[i]);
   } else if (r < a.boundaryFloor) {
     r = a.boundaryFloor;
   }
@@ -177,6 +184,8 @@ struct KickDrift {
       a.vel0[i] = vHalf;
       a.vel[i] = vHalf + half * acc;
       a.pos[i] = x;
+    } else if (a.extrapolatedBoundary) {
+      return norm2(a.pos[i] - a.ref[i]);
     } else {
       rHalf = rHalf < a.boundaryFloor ? a.boundaryFloor : rHalf;
       r = r < a.boundaryFloor ? a.boundaryFloor : r;

@@ -89,6 +89,13 @@ void Loader::parseSphScene(const Fields& top) {
           else badValue(f->child("wall_slip"), unknownName("wall slip", name, kWallSlips, "Choices"), k->loc);
         }
       }
+      if (const Entry* k = f->find("boundary_density")) {
+        std::string name;
+        if (read(k->value, f->child("boundary_density"), k->loc, name)) {
+          if (name == "continuity" || name == "mdbc") c.mdbc = name == "mdbc";
+          else badValue(f->child("boundary_density"), unknownName("boundary density", name, kBoundaryDensities, "Choices"), k->loc);
+        }
+      }
       if (const Entry* b = f->find("boundary_layers")) {
         const auto v = autoOrNumber(*b, "sph.boundary_layers", "");
         if (v) {

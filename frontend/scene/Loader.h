@@ -47,11 +47,12 @@ constexpr std::string_view kTankKeys[] = {"name", "min", "max", "open_top"};
 constexpr std::string_view kObstacleKeys[] = {"name", "min", "max"};
 constexpr std::string_view kSphKeys[] = {"dimension", "spacing", "smoothing_ratio", "kernel", "artificial_viscosity",
                                          "density_diffusion", "diffusion_correction", "cfl", "dt", "boundary",
-                                         "boundary_layers", "wall_slip", "skin", "density_bounds", "integrator",
-                                         "verlet_steps"};
+                                         "boundary_layers", "wall_slip", "boundary_density", "skin", "density_bounds",
+                                         "integrator", "verlet_steps"};
 constexpr std::string_view kSphKernels[] = {"wendland", "cubic_spline"};
 constexpr std::string_view kSphBoundaries[] = {"dynamic", "mirror"};
 constexpr std::string_view kWallSlips[] = {"no_slip", "free_slip"};
+constexpr std::string_view kBoundaryDensities[] = {"continuity", "mdbc"};
 constexpr std::string_view kSphIntegrators[] = {"symplectic", "verlet", "velocity_verlet"};
 constexpr std::string_view kDiffusionCorrections[] = {"hydrostatic", "none"};
 constexpr std::string_view kProbeKeys[] = {"name", "point", "gauge"};

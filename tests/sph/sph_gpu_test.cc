@@ -203,6 +203,19 @@ TEST(SphCudaVsCpu, MirrorWallsDamBreakAgrees) {
       << "largest position difference [m]";
 }
 
+// The modified dynamic boundary (sph.boundary_density: mdbc) on both executors (double, velocity Verlet): the 2D dam
+// break and a 3D one with a box in its path to 0.1 s, every particle within 1e-6 m of its CPU position.
+TEST(SphCudaVsCpu, ModifiedBoundaryDamBreakAgrees) {
+  SKIP_WITHOUT_GPU();
+  RunConfig flat = test::damBreak2D(0.01, 0.1), box = test::damBreak3D(0.02, 0.1);
+  compute::sph::addObstacle(box.sph, "box", {0.3, 0.04, 0}, {0.36, 0.08, 0.06});
+  for (RunConfig* c : {&flat, &box}) {
+    c->sph.mdbc = true;
+    c->sph.integrator = Integrator::kVelocityVerlet;
+    EXPECT_LT(largestCpuGpuDifference(*c, c == &flat ? "mdbc 2D: " : "mdbc 3D, box: "), 1e-6) << "largest position difference [m]";
+  }
+}
+
 // Hit masks (SphConfig::hitMasks, column-major on the GPU), double, the 2D dam break and a 3D one to 0.1 s: against
 // the GPU's own walk bit for bit (the same pairs in the same order), and within 1e-6 m of the CPU's walk as the walk is.
 TEST(SphCudaVsCpu, HitMasksAgreeWithTheWalk) {

@@ -187,6 +187,25 @@ TEST(SphScene, MirrorWallsAndTheirErrors) {
   EXPECT_NE(unknown.status().message().find("dynamic, mirror"), std::string::npos) << unknown.status().message();
 }
 
+// sph.boundary_density: continuity (the default) or mdbc; a bad name, and mdbc where there are no boundary particles
+// (mirror walls, no obstacle), are named.
+TEST(SphScene, BoundaryDensityAndItsErrors) {
+  auto plain = load(damBreak());
+  ASSERT_TRUE(plain.isOk()) << plain.status().message();
+  EXPECT_FALSE(plain.value().config.sph.mdbc);
+  auto mdbc = load(damBreak("{dimension: 2, spacing: 0.01, boundary_density: mdbc}"));
+  ASSERT_TRUE(mdbc.isOk()) << mdbc.status().message();
+  EXPECT_TRUE(mdbc.value().config.sph.mdbc);
+  auto unknown = load(damBreak("{dimension: 2, spacing: 0.01, boundary_density: ghost}"));
+  ASSERT_FALSE(unknown.isOk());
+  EXPECT_NE(unknown.status().message().find("sph.boundary_density"), std::string::npos) << unknown.status().message();
+  EXPECT_NE(unknown.status().message().find("continuity, mdbc"), std::string::npos) << unknown.status().message();
+  auto none = load(damBreak("{dimension: 2, spacing: 0.01, boundary: mirror, boundary_density: mdbc}"));
+  ASSERT_FALSE(none.isOk());
+  EXPECT_NE(none.status().message().find("sph.boundary_density: mdbc applies to boundary particles"), std::string::npos)
+      << none.status().message();
+}
+
 // sph.integrator picks the time integration; a bad name and sph.verlet_steps without Verlet are named.
 TEST(SphScene, IntegratorAndItsErrors) {
   auto r = load(damBreak("{dimension: 2, spacing: 0.01, integrator: verlet, verlet_steps: 50}"));

@@ -1,0 +1,225 @@
+// Modified dynamic boundary conditions (mDBC; English, Domínguez, Vacondio, Crespo, Stansby, Lind, Chiapponi &
+// Gómez-Gesteira 2022, Comp. Part. Mech. 9, 1-15; sph.boundary_density: mdbc, docs/sph.md section 6): each boundary
+// particle's density is not integrated from the continuity equation (the dynamic boundary, which keeps the fluid
+// about an h off the wall and answers an impact with its own compression) but extrapolated from the fluid at its
+// ghost node, its mirror image across the boundary's interface: at the ghost node g a first-order consistent
+// interpolation gives the density and its gradient, and rho_b = rho_g + (x_b - x_g).grad rho_g. Stateless
+// PFLOW_HOSTDEVICE functions and one kernel, run by either executor.
+#pragma once
+#include <cmath>
+#include <cstdint>
+
+#include "compute/neighbor/CellGrid.h"
+#include "compute/sph/SphKernels.h"
+#include "compute/sph/SphPhysics.h"
+
+namespace pflow::compute::sph {
+
+// Where the boundary's interface lies, for the ghost nodes: the tank's inside (its walls' particles lie outside it)
+// and the obstacles (boxes filled with boundary particles), as the lattice placed them (SphLattice.cc: whole
+// spacings from each box's low corner, so an interface is at lo + n dp).
+struct MdbcGeometry {
+  static constexpr int kMaxObstacles = 8;
+  bool on = false;
+  bool planar = false;  // a 2D run: y is not an axis of the flow
+  bool tank = false;
+  Vec3d tankLo{0, 0, 0}, tankHi{0, 0, 0};
+  int obstacles = 0;
+  Vec3d obLo[kMaxObstacles] = {}, obHi[kMaxObstacles] = {};
+  // Which faces of each obstacle face the fluid: a face lying on the tank's wall (the box stands on the floor) has
+  // only wall behind it, and a ghost node across it would find none.
+  std::uint8_t wetLo[kMaxObstacles] = {}, wetHi[kMaxObstacles] = {};  // bit a: the face normal to axis a
+  double tie = 0;  // depths within this of each other are one (a particle on a box's diagonal) [m]
+
+  // The ghost node of a boundary particle at x: false where x is neither in a tank's wall nor in an obstacle.
+  // In a wall: reflected across every face of the tank's inside it lies beyond (a corner particle through the corner).
+  // In an obstacle: across the nearest face that faces the fluid, or across each of the nearest ones where they tie.
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE bool ghost(const Vec3d& x, Vec3d& g) const {
+    g = x;
+    if (tank) {
+      bool outside = false;
+      for (int a = 0; a < 3; ++a) {
+        if (planar && a == 1) continue;
+        const double c = (&x.x)[a], lo = (&tankLo.x)[a], hi = (&tankHi.x)[a];
+        if (c < lo) (&g.x)[a] = 2 * lo - c, outside = true;
+        else if (c > hi) (&g.x)[a] = 2 * hi - c, outside = true;
+      }
+      if (outside) return true;
+    }
+    for (int k = 0; k < obstacles; ++k) {
+      bool inside = true;
+      for (int a = 0; a < 3 && inside; ++a)
+        if (!(planar && a == 1)) inside = (&x.x)[a] >= (&obLo[k].x)[a] && (&x.x)[a] <= (&obHi[k].x)[a];
+      if (!inside) continue;
+      double dLo[3], dHi[3], nearest = 1e300;
+      for (int a = 0; a < 3; ++a) {
+        const bool axis = !(planar && a == 1);
+        dLo[a] = axis && (wetLo[k] >> a & 1) ? (&x.x)[a] - (&obLo[k].x)[a] : 1e300;
+        dHi[a] = axis && (wetHi[k] >> a & 1) ? (&obHi[k].x)[a] - (&x.x)[a] : 1e300;
+        nearest = fmin(nearest, fmin(dLo[a], dHi[a]));
+      }
+      if (nearest >= 1e299) return false;  // no face meets the fluid
+      for (int a = 0; a < 3; ++a) {
+        if (dLo[a] <= nearest + tie) (&g.x)[a] = 2 * (&obLo[k].x)[a] - (&x.x)[a];
+        else if (dHi[a] <= nearest + tie) (&g.x)[a] = 2 * (&obHi[k].x)[a] - (&x.x)[a];
+      }
+      return true;
+    }
+    return false;
+  }
+};
+
+// The moments of the fluid around a ghost node g, in units of h (rt = (x_f - g)/h, Gt = h grad W): the corrected
+// interpolation's matrix A and right-hand side b, with rho_f ~ rho_g + rt.(h grad rho)
+//   A = sum_f V_f [W, W rt^T; Gt, Gt rt^T],  b = sum_f V_f rho_f [W; Gt]   (Liu & Liu 2006's first-order correction),
+// summed in T (the run's precision: of order one in these units, so float keeps 1e-7 of them).
+template <class T>
+struct MdbcMoments {
+  T a[4][4] = {};
+  T b[4] = {};
+  PFLOW_HOSTDEVICE PFLOW_FORCEINLINE void add(const Vec3<T>& rt, T w, const Vec3<T>& gt, T volume, T rho) {
+    const T u[4] = {w, gt.x, gt.y, gt.z};
+    const T c[4] = {T(1), rt.x, rt.y, rt.z};
+    for (int i = 0; i < 4; ++i) {
+      const T vu = volume * u[i];
+      for (int j = 0; j < 4; ++j) a[i][j] += vu * c[j];
+      b[i] += vu * rho;
+    }
+  }
+};
+
+// Solves the moments' system over the axes in use (2D: 1, x and z) by Gaussian elimination with partial pivoting:
+// rho_g and h grad rho_g in `u`. False when the fluid around g does not determine a gradient (|det A| < minDet: too
+// little fluid, or all on one side of a plane).
+template <class T>
+PFLOW_HOSTDEVICE inline bool mdbcSolve(const MdbcMoments<T>& m, bool planar, double minDet, double u[4]) {
+  const int idx[4] = {0, 1, 2, 3}, idx2[3] = {0, 1, 3};
+  const int* use = planar ? idx2 : idx;
+  const int n = planar ? 3 : 4;
+  double a[4][5];
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) a[i][j] = double(m.a[use[i]][use[j]]);
+    a[i][n] = double(m.b[use[i]]);
+  }
+  double det = 1;
+  for (int col = 0; col < n; ++col) {
+    int piv = col;
+    for (int r = col + 1; r < n; ++r)
+      if (fabs(a[r][col]) > fabs(a[piv][col])) piv = r;
+    if (piv != col) {
+      for (int j = 0; j <= n; ++j) {
+        const double t = a[col][j];
+        a[col][j] = a[piv][j];
+        a[piv][j] = t;
+      }
+      det = -det;
+    }
+    det *= a[col][col];
+    if (!(fabs(a[col][col]) > 1e-300)) return false;
+    for (int r = col + 1; r < n; ++r) {
+      const double f = a[r][col] / a[col][col];
+      for (int j = col; j <= n; ++j) a[r][j] -= f * a[col][j];
+    }
+  }
+  if (!(fabs(det) >= minDet)) return false;
+  double x[4] = {0, 0, 0, 0};
+  for (int i = n - 1; i >= 0; --i) {
+    double s = a[i][n];
+    for (int j = i + 1; j < n; ++j) s -= a[i][j] * x[j];
+    x[i] = s / a[i][i];
+  }
+  for (int k = 0; k < 4; ++k) u[k] = 0;
+  for (int i = 0; i < n; ++i) u[use[i]] = x[i];
+  return true;
+}
+
+namespace kernels {
+
+// The boundary particles' density (and pressure) from the fluid at their ghost nodes, before each evaluation of the
+// rates: one call per item of `list`, the boundary particles with fluid listed within reach at the last sort (MarkWet;
+// the others cannot be seen by any fluid particle and keep their density), over the fluid in the rows of cells around
+// the ghost node (the probes' rows along x), less the rows and end cells that lie beyond the support even with their
+// particles moved `margin` out of them (walkGap, as the rates pass prunes). A particle without a ghost node keeps its
+// density. Where the fluid around the ghost node does not determine a gradient (|det A| < 1e-3), the Shepard density
+// there; where the fluid's kernel share there is under 0.05, rho0. Never below rho0 (a wall must not pull fluid, as
+// for the dynamic boundary). The moments in R (float runs: float), the solve in double.
+template <class R>
+struct MdbcDensity {
+  static constexpr bool kVariableCost = true;
+  static constexpr double kMinDet = 1e-3, kMinShare = 0.05;
+  CellGrid grid;
+  const Index* cellStart;
+  const Vec3d* pos;
+  const std::int32_t* kind;
+  const R* mass;
+  const Index* list;
+  Kernel<R> kernel;
+  Tait<R> eos;
+  MdbcGeometry geometry;
+  double rho0;
+  double margin;  // [m]: how far a particle may be from the cell it is listed in (half the skin, widened)
+  R* rho;
+  R* p;
+
+  PFLOW_HOSTDEVICE void operator()(Index item) const {
+    const Index i = list[item];
+    const Vec3d x = pos[i];
+    Vec3d g;
+    if (!geometry.ghost(x, g)) return;
+    const R h = kernel.h, invH = kernel.invH;
+    const double support = double(kernel.support()), reach2 = support * support;
+    const R cut2 = kernel.support() * kernel.support();
+    MdbcMoments<R> m;
+    int cx, cy, cz;
+    grid.coords(g, cx, cy, cz);
+    const int r = grid.reach;
+    const double cs = grid.cellSize;
+    // g's offset from the low corner of its cell, per axis (walkGap's o).
+    const Vec3d o = g - (grid.lo + cs * Vec3d{double(cx), double(cy), double(cz)});
+    for (int z = cz > r ? cz - r : 0; z <= (cz + r < grid.nz ? cz + r : grid.nz - 1); ++z) {
+      const double gz = walkGap(o.z, z - cz, cs, margin, z == 0, z == grid.nz - 1);
+      if (gz * gz >= reach2) continue;
+      for (int y = cy > r ? cy - r : 0; y <= (cy + r < grid.ny ? cy + r : grid.ny - 1); ++y) {
+        const double gy = walkGap(o.y, y - cy, cs, margin, y == 0, y == grid.ny - 1), g2 = gz * gz + gy * gy;
+        if (g2 >= reach2) continue;
+        int x0 = cx > r ? cx - r : 0, x1 = cx + r < grid.nx ? cx + r : grid.nx - 1;
+        while (x0 < cx && [&] { const double e = walkGap(o.x, x0 - cx, cs, margin, x0 == 0, false); return g2 + e * e >= reach2; }()) ++x0;
+        while (x1 > cx && [&] { const double e = walkGap(o.x, x1 - cx, cs, margin, false, x1 == grid.nx - 1); return g2 + e * e >= reach2; }()) --x1;
+        for (Index b = cellStart[grid.index(x0, y, z)]; b < cellStart[grid.index(x1, y, z) + 1]; ++b) {
+          if (kind[b] != 0) continue;
+          const Vec3<R> d = vcast<R>(pos[b] - g);
+          const R r2 = norm2(d);
+          if (r2 >= cut2) continue;
+          const R dist = std::sqrt(r2);
+          const R rhoB = rho[b];
+          // grad_g W(g - x_b) = f (g - x_b): in units of h, -h f d.
+          m.add(invH * d, kernel.w(dist), (-h * kernel.f(dist)) * d, mass[b] / rhoB, rhoB);
+        }
+      }
+    }
+    double u[4];
+    double out;
+    if (mdbcSolve(m, geometry.planar, kMinDet, u)) {
+      const Vec3d s = (1.0 / double(h)) * (x - g);
+      out = u[0] + u[1] * s.x + u[2] * s.y + u[3] * s.z;
+    } else if (double(m.a[0][0]) >= kMinShare) {
+      out = double(m.b[0]) / double(m.a[0][0]);
+    } else {
+      out = rho0;
+    }
+    if (!(out >= rho0)) out = rho0;  // also a NaN
+    rho[i] = R(out);
+    p[i] = eos.pressure(R(out));
+  }
+};
+
+// The boundary particles the mDBC pass updates (flag 1): those with fluid listed within reach at the last sort.
+struct MdbcFlag {
+  const std::int32_t* kind;
+  const std::uint8_t* wet;
+  std::uint32_t* flag;
+  PFLOW_HOSTDEVICE void operator()(Index i) const { flag[i] = kind[i] != 0 && wet[i] ? 1u : 0u; }
+};
+
+}  // namespace kernels
+}  // namespace pflow::compute::sph
