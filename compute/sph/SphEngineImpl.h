@@ -14,6 +14,7 @@
 #include "compute/sph/SphEngine.h"
 #include "compute/sph/SphFields.h"
 #include "compute/sph/SphKernels.h"
+#include "compute/sph/SphMdbcKernels.h"
 #include "compute/sph/SphStepKernels.h"
 
 namespace pflow::compute::sph {
