@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "compute/core/Format.h"
-#include "compute/sph/SphMdbc.h"
+#include "compute/sph/SphLattice.h"
 #include "compute/sim/RunConfig.h"
 
 namespace pflow::compute::sph {
@@ -102,10 +102,31 @@ ErrorList SphConfig::validate(const SimulationSettings& sim) const {
     e.add("sph.boundary_layers", "applies to dynamic walls; mirror walls have no particles");
   if (boundary != BoundaryKind::kMirror && freeSlip) e.add("sph.wall_slip", "applies to mirror walls (sph.boundary: mirror)");
   if (mdbc && kind.size() == fluidCount())
-    e.add("sph.boundary_density", "mdbc applies to boundary particles, and the scene has none (mirror walls and no obstacle)");
+    e.add("sph.boundary_density", "mdbc applies to boundary particles, and the scene has none");
   if (mdbc && obstacles.size() > std::size_t(MdbcGeometry::kMaxObstacles))
     e.add("sph.boundary_density", "mdbc takes at most " + std::to_string(MdbcGeometry::kMaxObstacles) + " obstacles; the scene has " +
                                       std::to_string(obstacles.size()));
+  if (mdbc && spacing > 0 && obstacles.size() <= std::size_t(MdbcGeometry::kMaxObstacles)) {
+    const MdbcGeometry m = mdbcGeometry(*this);
+    const double support = 2 * smoothingRatio * spacing;  // 2h
+    const char* axis = "xyz";
+    for (int k = 0; k < m.obstacles; ++k) {
+      const std::string name = obstacles[std::size_t(k)].name;
+      for (int j = 0; j < k; ++j) {  // a particle in both would get one box's ghost
+        bool overlap = true;
+        for (int a = 0; a < 3; ++a)
+          if (!(dimension == 2 && a == 1))
+            overlap &= std::min((&m.obHi[k].x)[a], (&m.obHi[j].x)[a]) - std::max((&m.obLo[k].x)[a], (&m.obLo[j].x)[a]) > 0.5 * spacing;
+        if (overlap) e.add("obstacles", name + " overlaps " + obstacles[std::size_t(j)].name + ": with sph.boundary_density: mdbc obstacles may touch but not overlap");
+      }
+      for (int a = 0; a < 3; ++a) {  // fluid on both faces, within reach of both
+        const double thick = (&m.obHi[k].x)[a] - (&m.obLo[k].x)[a];
+        if ((m.wetLo[k] >> a & 1) && (m.wetHi[k] >> a & 1) && thick < 2 * support)
+          e.add("obstacles", name + " is " + num(thick) + " m thick along " + axis[a] + ", under twice the kernel's support (" + num(2 * support) +
+                                 " m) with fluid on both sides: sph.boundary_density: mdbc would extrapolate its particles from one side only (use continuity, or a thicker box)");
+      }
+    }
+  }
   if (!(minDensityRatio > 0 && minDensityRatio < 1)) e.add("sph.density_bounds", "the lower bound " + num(minDensityRatio) + " must be in (0, 1)");
   if (!(maxDensityRatio > 1)) e.add("sph.density_bounds", "the upper bound " + num(maxDensityRatio) + " must be > 1");
   positive(e, "simulation.duration", sim.duration);
@@ -157,6 +178,50 @@ ErrorList SphConfig::validate(const SimulationSettings& sim) const {
   }
   if (size() >= std::size_t(1) << 32) e.add("sph.spacing", std::to_string(size()) + " particles: more than a run can index");
   return e;
+}
+
+MdbcGeometry mdbcGeometry(const SphConfig& c) {
+  MdbcGeometry m;
+  m.on = c.mdbc;
+  m.planar = c.dimension == 2;
+  m.tie = 1e-6 * c.spacing;
+  const double half = 0.5 * c.spacing;
+  Vec3d tankLo{-1e300, -1e300, -1e300}, tankHi{1e300, 1e300, 1e300};
+  if (c.tank) {
+    tankLo = c.tank->lo;
+    tankHi = c.tank->lo + latticeFill(c, c.tank->lo, c.tank->hi).filled;
+    m.tank = c.boundary != BoundaryKind::kMirror;  // mirror walls have no particles
+    m.openTop = c.tankOpenTop;
+    m.tankLo = tankLo;
+    m.tankHi = tankHi;
+  }
+  m.obstacles = int(std::min<std::size_t>(c.obstacles.size(), MdbcGeometry::kMaxObstacles));
+  for (int k = 0; k < m.obstacles; ++k) {
+    const SphRegion& o = c.obstacles[std::size_t(k)];
+    m.obLo[k] = o.lo;
+    m.obHi[k] = o.lo + latticeFill(c, o.lo, o.hi).filled;
+  }
+  // A face meets the fluid unless it stands on the tank's wall, or against a face of another obstacle that it overlaps
+  // across.
+  auto against = [&](int k, int a, bool hiFace) {
+    const double at = hiFace ? (&m.obHi[k].x)[a] : (&m.obLo[k].x)[a];
+    if (hiFace ? at >= (&tankHi.x)[a] - half : at <= (&tankLo.x)[a] + half) return true;
+    for (int j = 0; j < m.obstacles; ++j) {
+      if (j == k || std::fabs((hiFace ? (&m.obLo[j].x)[a] : (&m.obHi[j].x)[a]) - at) > half) continue;
+      bool across = true;
+      for (int b = 0; b < 3; ++b)
+        if (b != a && !(m.planar && b == 1))
+          across &= std::min((&m.obHi[k].x)[b], (&m.obHi[j].x)[b]) - std::max((&m.obLo[k].x)[b], (&m.obLo[j].x)[b]) > half;
+      if (across) return true;
+    }
+    return false;
+  };
+  for (int k = 0; k < m.obstacles; ++k)
+    for (int a = 0; a < 3; ++a) {
+      if (!against(k, a, false)) m.wetLo[k] |= std::uint8_t(1 << a);
+      if (!against(k, a, true)) m.wetHi[k] |= std::uint8_t(1 << a);
+    }
+  return m;
 }
 
 }  // namespace pflow::compute::sph

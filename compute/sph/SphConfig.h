@@ -9,6 +9,7 @@
 
 #include "common/Status.h"
 #include "compute/core/VectorMath.h"
+#include "compute/sph/SphMdbc.h"
 #include "compute/sph/SphPhysics.h"
 
 namespace pflow::compute {
@@ -98,6 +99,12 @@ struct SphConfig {
   // run's duration, gravity and snapshots.
   ErrorList validate(const SimulationSettings& sim) const;
 };
+
+// sph.boundary_density: mdbc: the interfaces of the tank's walls and the obstacles as the lattice fills them (whole
+// spacings from each box's low corner, SphLattice.cc), and which obstacle faces meet the fluid (not those standing on
+// the tank's wall or against another obstacle). Obstacles past MdbcGeometry::kMaxObstacles are left out (validate()
+// names them).
+MdbcGeometry mdbcGeometry(const SphConfig& c);
 
 // What follows from the configuration: the quantities the engine runs with and where each came from.
 struct SphDerived {

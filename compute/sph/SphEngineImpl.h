@@ -106,16 +106,16 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
   void computeRates(RateSet set) override {
     const bool ghosts = m_n > m_owned;
     if (m_wetStale) markWet();
-    // The packed rows the pass reads: the owned ones before the interior pass (the ghosts are still travelling),
-    // the ghosts before the boundary one.
     // mDBC: the boundary particles' density from the fluid at their ghost nodes, before the pass reads it (one process
     // only: SphSimulation::create), over the wet boundary particles listed by markWet.
     if (m_setup.mdbc.on && set != RateSet::kBoundary && m_mdbcCount > 0)
       m_exec.forEach(m_mdbcCount, kernels::MdbcDensity<R>{m_setup.grid, m_cellStart.as<Index>(), cptr<SphField::Position>(),
                                                           cptr<SphField::Kind>(), cptr<SphField::Mass>(), m_mdbcList.as<Index>(),
-                                                          m_kernel, m_eos, m_setup.mdbc, m_setup.rho0,
+                                                          m_kernel, m_eos, m_setup.mdbc, m_setup.rho0, m_setup.maxDensity,
                                                           0.5 * m_setup.skin * 1.001 + 1e-5 * m_setup.grid.cellSize,
                                                           ptr<SphField::Density>(), ptr<SphField::Pressure>()});
+    // The packed rows the pass reads: the owned ones before the interior pass (the ghosts are still travelling),
+    // the ghosts before the boundary one.
     const Index packFrom = set == RateSet::kBoundary ? m_owned : 0;
     const Index packTo = set == RateSet::kInterior && ghosts ? m_owned : m_n;
     packRates(packFrom, packTo);

@@ -21,7 +21,8 @@ struct MdbcGeometry {
   static constexpr int kMaxObstacles = 8;
   bool on = false;
   bool planar = false;  // a 2D run: y is not an axis of the flow
-  bool tank = false;
+  bool tank = false;     // the tank's walls are boundary particles (not mirrors)
+  bool openTop = false;  // no lid: nothing beyond the tank's top is a wall
   Vec3d tankLo{0, 0, 0}, tankHi{0, 0, 0};
   int obstacles = 0;
   Vec3d obLo[kMaxObstacles] = {}, obHi[kMaxObstacles] = {};
@@ -31,21 +32,11 @@ struct MdbcGeometry {
   double tie = 0;  // depths within this of each other are one (a particle on a box's diagonal) [m]
 
   // The ghost node of a boundary particle at x: false where x is neither in a tank's wall nor in an obstacle.
-  // In a wall: reflected across every face of the tank's inside it lies beyond (a corner particle through the corner).
-  // In an obstacle: across the nearest face that faces the fluid, or across each of the nearest ones where they tie.
+  // In an obstacle (looked at first): across the nearest face that meets the fluid, or across each of the nearest where
+  // they tie. In a wall: across every face of the tank's inside it lies beyond (a corner particle through the corner).
   PFLOW_HOSTDEVICE PFLOW_FORCEINLINE bool ghost(const Vec3d& x, Vec3d& g) const {
     g = x;
-    if (tank) {
-      bool outside = false;
-      for (int a = 0; a < 3; ++a) {
-        if (planar && a == 1) continue;
-        const double c = (&x.x)[a], lo = (&tankLo.x)[a], hi = (&tankHi.x)[a];
-        if (c < lo) (&g.x)[a] = 2 * lo - c, outside = true;
-        else if (c > hi) (&g.x)[a] = 2 * hi - c, outside = true;
-      }
-      if (outside) return true;
-    }
-    for (int k = 0; k < obstacles; ++k) {
+    for (int k = 0; k < obstacles; ++k) {  // first: an obstacle may reach into the walls or above an open top
       bool inside = true;
       for (int a = 0; a < 3 && inside; ++a)
         if (!(planar && a == 1)) inside = (&x.x)[a] >= (&obLo[k].x)[a] && (&x.x)[a] <= (&obHi[k].x)[a];
@@ -63,6 +54,16 @@ struct MdbcGeometry {
         else if (dHi[a] <= nearest + tie) (&g.x)[a] = 2 * (&obHi[k].x)[a] - (&x.x)[a];
       }
       return true;
+    }
+    if (tank) {
+      bool outside = false;
+      for (int a = 0; a < 3; ++a) {
+        if (planar && a == 1) continue;
+        const double c = (&x.x)[a], lo = (&tankLo.x)[a], hi = (&tankHi.x)[a];
+        if (c < lo) (&g.x)[a] = 2 * lo - c, outside = true;
+        else if (c > hi && !(a == 2 && openTop)) (&g.x)[a] = 2 * hi - c, outside = true;
+      }
+      if (outside) return true;
     }
     return false;
   }

@@ -20,7 +20,9 @@ namespace kernels {
 // particles moved `margin` out of them (walkGap, as the rates pass prunes). A particle without a ghost node keeps its
 // density. Where the fluid around the ghost node does not determine a gradient (|det A| < 1e-3), the Shepard density
 // there; where the fluid's kernel share there is under 0.05, rho0. Never below rho0 (a wall must not pull fluid, as
-// for the dynamic boundary). The moments in R (float runs: float), the solve in double.
+// for the dynamic boundary) nor above the fluid's upper density bound (sph.density_bounds). The moments in R (float
+// runs: float), the solve in double. Mirror walls' images are not among the fluid summed: a ghost node near a mirror
+// sees the fluid's side of it only.
 template <class R>
 struct MdbcDensity {
   static constexpr bool kVariableCost = true;
@@ -34,7 +36,7 @@ struct MdbcDensity {
   Kernel<R> kernel;
   Tait<R> eos;
   MdbcGeometry geometry;
-  double rho0;
+  double rho0, rhoMax;  // the bounds of a boundary particle's density: rho0 and the fluid's upper bound
   double margin;  // [m]: how far a particle may be from the cell it is listed in (half the skin, widened)
   R* rho;
   R* p;
@@ -86,6 +88,7 @@ struct MdbcDensity {
       out = rho0;
     }
     if (!(out >= rho0)) out = rho0;  // also a NaN
+    if (out > rhoMax) out = rhoMax;  // an extrapolation past what the fluid may reach
     rho[i] = R(out);
     p[i] = eos.pressure(R(out));
   }

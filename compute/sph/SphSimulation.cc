@@ -441,29 +441,10 @@ Result<SphSetup> prepareSphSetup(const RunConfig& config) {
       m.hiAt[a] = (&c.tank->hi.x)[a];
     }
   }
-  if (c.mdbc) {  // the interfaces as the lattice filled the boxes: whole spacings from each low corner (SphLattice.cc)
-    MdbcGeometry& m = s.mdbc;
-    m.on = true;
-    m.planar = c.dimension == 2;
-    m.tie = 1e-6 * c.spacing;
-    Vec3d tankLo{-1e300, -1e300, -1e300}, tankHi{1e300, 1e300, 1e300};
-    if (c.tank) {
-      tankLo = c.tank->lo;
-      tankHi = c.tank->lo + latticeFill(c, c.tank->lo, c.tank->hi).filled;
-      m.tank = c.boundary != BoundaryKind::kMirror;  // mirror walls have no particles
-      m.tankLo = tankLo;
-      m.tankHi = tankHi;
-    }
-    m.obstacles = int(c.obstacles.size());
-    for (int k = 0; k < m.obstacles; ++k) {
-      const SphRegion& o = c.obstacles[std::size_t(k)];
-      m.obLo[k] = o.lo;
-      m.obHi[k] = o.lo + latticeFill(c, o.lo, o.hi).filled;
-      for (int a = 0; a < 3; ++a) {  // a face on the tank's wall has wall behind it, not fluid
-        if ((&m.obLo[k].x)[a] > (&tankLo.x)[a] + 0.5 * c.spacing) m.wetLo[k] |= std::uint8_t(1 << a);
-        if ((&m.obHi[k].x)[a] < (&tankHi.x)[a] - 0.5 * c.spacing) m.wetHi[k] |= std::uint8_t(1 << a);
-      }
-    }
+  if (c.mdbc) {
+    if (c.obstacles.size() > std::size_t(MdbcGeometry::kMaxObstacles))
+      return invalidArgument("sph.boundary_density: mdbc takes at most " + std::to_string(MdbcGeometry::kMaxObstacles) + " obstacles");
+    s.mdbc = mdbcGeometry(c);
   }
   if (c.tank) {
     const double wall = (d.boundaryLayers + 1) * c.spacing;

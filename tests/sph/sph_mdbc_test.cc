@@ -39,6 +39,38 @@ void expectNear3(Vec3d a, Vec3d b) {
 
 }  // namespace
 
+// The geometry as built from a scene (mdbcGeometry): the interfaces at whole spacings from each box's low corner; a
+// face standing on the floor, or against another obstacle it overlaps across, does not meet the fluid.
+TEST(SphMdbc, GeometryFromTheScene) {
+  RunConfig c = test::damBreak3D(0.02, 0.1);
+  c.sph.mdbc = true;
+  compute::sph::addObstacle(c.sph, "low", {0.3, 0.02, 0}, {0.41, 0.1, 0.1});  // 0.11: filled 0.10 along x
+  compute::sph::addObstacle(c.sph, "high", {0.3, 0.02, 0.1}, {0.4, 0.1, 0.2});
+  const MdbcGeometry m = mdbcGeometry(c.sph);
+  ASSERT_EQ(m.obstacles, 2);
+  EXPECT_TRUE(m.tank);
+  EXPECT_TRUE(m.openTop);  // addTank's default
+  expectNear3(m.obHi[0], {0.4, 0.1, 0.1});
+  expectNear3(m.tankHi, {0.5, 0.12, 0.4});
+  EXPECT_EQ(m.wetLo[0], 0b011);  // the floor under it
+  EXPECT_EQ(m.wetHi[0], 0b011);  // the upper box on it
+  EXPECT_EQ(m.wetLo[1], 0b011);  // on the lower box
+  EXPECT_EQ(m.wetHi[1], 0b111);
+}
+
+// Scenes that mDBC cannot extrapolate are refused, each named: overlapping obstacles, an obstacle thinner than twice
+// the kernel's support with fluid on both sides.
+TEST(SphMdbc, ScenesItCannotServeAreNamed) {
+  RunConfig c = test::damBreak3D(0.02, 0.1);
+  c.sph.mdbc = true;
+  compute::sph::addObstacle(c.sph, "a", {0.3, 0.0, 0}, {0.4, 0.12, 0.2});
+  compute::sph::addObstacle(c.sph, "b", {0.34, 0.0, 0}, {0.44, 0.12, 0.2});
+  compute::sph::addObstacle(c.sph, "baffle", {0.46, 0.0, 0.1}, {0.48, 0.12, 0.3});
+  const std::string m = c.sph.validate(c.sim).toStatus("").message();
+  EXPECT_NE(m.find("b overlaps a"), std::string::npos) << m;
+  EXPECT_NE(m.find("baffle is 0.02 m thick along x"), std::string::npos) << m;
+}
+
 // A wall particle's ghost is its mirror image across the tank's inside (a corner particle's through the corner); an
 // obstacle particle's across the nearest face that meets the fluid (both where two tie: the box's diagonal), never
 // across the face it stands on; a particle in neither has none.
@@ -62,6 +94,16 @@ TEST(SphMdbc, GhostNodesMirrorAcrossTheInterface) {
   ASSERT_TRUE(m.ghost({0.595, 0.2, 0.195}, g));  // on the diagonal of the face x = 0.6 and the top
   expectNear3(g, {0.605, 0.2, 0.205});
   EXPECT_FALSE(m.ghost({0.2, 0.25, 0.5}, g));  // in the fluid
+  MdbcGeometry open = m;  // an open top, and a pillar standing above it: its particles there get its own ghosts
+  open.openTop = true;
+  open.obstacles = 2;
+  open.obLo[1] = {0.8, 0.1, 0};
+  open.obHi[1] = {0.9, 0.3, 1.5};
+  open.wetLo[1] = 0b011;
+  open.wetHi[1] = 0b011;
+  ASSERT_TRUE(open.ghost({0.805, 0.2, 1.2}, g));
+  expectNear3(g, {0.795, 0.2, 1.2});
+  EXPECT_FALSE(open.ghost({0.5, 0.25, 1.01}, g));  // above an open top: no wall
   MdbcGeometry planar = m;
   planar.planar = true;  // a 2D run: y is no axis
   ASSERT_TRUE(planar.ghost({1.01, 0.9, 0.5}, g));
@@ -119,10 +161,14 @@ RunConfig mdbcTank(double dp, double depth, double duration) {
 
 // After one evaluation of the rates, the floor's boundary particles under the fluid carry the pressure the fluid's
 // hydrostatic profile extrapolates to their depth (within 2 % of rho g H), where the dynamic boundary's start from
-// the hydrostatic density only by construction; the walls beside the air read rho0.
-TEST(SphMdbc, WallsCarryTheFluidsHydrostaticPressure) {
+// the hydrostatic density only by construction; the walls beside the air read rho0. In double and in float (the
+// moments in the run's precision).
+class SphMdbcWalls : public ::testing::TestWithParam<Precision> {};
+
+TEST_P(SphMdbcWalls, CarryTheFluidsHydrostaticPressure) {
   const double dp = 0.01, depth = 0.2, g = 9.81, rho = 1000;
   RunConfig c = mdbcTank(dp, depth, 1.0);
+  c.sim.precision = GetParam();
   auto created = SphSimulation::create(c, {});
   ASSERT_TRUE(created.isOk()) << created.status().message();
   SphSimulation& sim = *created.value();
@@ -146,13 +192,19 @@ TEST(SphMdbc, WallsCarryTheFluidsHydrostaticPressure) {
   EXPECT_GT(dry, 10);
 }
 
-// 20 x 20 particles of water, 0.2 m deep, at rest for 2 s with the modified boundary: as the dynamic boundary's
+INSTANTIATE_TEST_SUITE_P(Precisions, SphMdbcWalls, ::testing::Values(Precision::kDouble, Precision::kFloat),
+                         [](const auto& info) { return std::string(info.param == Precision::kFloat ? "Float" : "Double"); });
+
+// 20 x 20 particles of water, 0.2 m deep, at rest for 2 s with the modified boundary (each integrator): as the dynamic boundary's
 // test (sph_flow_test), the pressure in layers within 2 % of rho g (H - z) and the fluid still (max speed < 1 % of
 // sqrt(g H)); and no gap: the free surface stays within a tenth of a spacing of the column's initial top, where the
 // dynamic boundary's keeps the fluid about an h off the walls.
-TEST(SphMdbc, TankAtRestKeepsThePressureProfileAndStaysStill) {
+class SphMdbcTank : public ::testing::TestWithParam<Integrator> {};
+
+TEST_P(SphMdbcTank, AtRestKeepsThePressureProfileAndStaysStill) {
   const double dp = 0.01, depth = 0.2, g = 9.81, rho = 1000;
   RunConfig c = mdbcTank(dp, depth, 2.0);
+  c.sph.integrator = GetParam();
   auto created = SphSimulation::create(c, {});
   ASSERT_TRUE(created.isOk()) << created.status().message();
   SphSimulation& sim = *created.value();
@@ -173,6 +225,10 @@ TEST(SphMdbc, TankAtRestKeepsThePressureProfileAndStaysStill) {
   EXPECT_NEAR(surface, depth, 0.1 * dp) << "the settled surface";
 }
 
+INSTANTIATE_TEST_SUITE_P(Integrators, SphMdbcTank, ::testing::Values(Integrator::kSymplectic, Integrator::kVerlet, Integrator::kVelocityVerlet),
+                         [](const auto& info) { return std::string(integratorName(info.param)) == "velocity_verlet" ? std::string("VelocityVerlet")
+                                                       : std::string(integratorName(info.param)) == "verlet" ? std::string("Verlet") : std::string("Symplectic"); });
+
 // The 2D dam break at 40 x 80 with the modified boundary, the example's other parameters unchanged: the surge front
 // follows Martin & Moyce (1952) with the same two checks and tolerances as the dynamic boundary's
 // (SphDamBreak.SurgeFrontFollowsMartinMoyce: the speed within 5 %, the times within 8 % with the gate's 0.175).
@@ -183,4 +239,25 @@ TEST(SphMdbc, DamBreakFrontFollowsMartinMoyce) {
   auto sim = SphSimulation::create(c, {});
   ASSERT_TRUE(sim.isOk()) << sim.status().message();
   test::expectFrontFollowsMartinMoyce(*sim.value(), dp, "mdbc: ");
+}
+
+// The 3D dam break of the GPU comparison (SphCudaVsCpu.ModifiedBoundaryDamBreakAgrees) on the CPU: a box across the
+// tank in the front's path; by 0.1 s the front has hit it and the box's particles facing the flow carry pressure.
+TEST(SphMdbc, BoxInA3DDamBreakTakesTheImpact) {
+  RunConfig c = test::damBreak3D(0.02, 0.1);
+  compute::sph::addObstacle(c.sph, "box", {0.3, 0.0, 0}, {0.44, 0.12, 0.08});
+  c.sph.mdbc = true;
+  c.sph.integrator = Integrator::kVelocityVerlet;
+  auto created = SphSimulation::create(c, {});
+  ASSERT_TRUE(created.isOk()) << created.status().message();
+  ASSERT_TRUE(created.value()->runUntil(0.1).isOk());
+  const ParticleSnapshot s = created.value()->snapshot();
+  const auto* x = s.find("position")->as<Vec3d>();
+  const auto* p = s.find("pressure")->as<double>();
+  const auto* kind = s.find("kind")->as<std::int32_t>();
+  double face = 0;
+  for (std::size_t i = 0; i < s.n; ++i)
+    if (kind[i] != 0 && x[i].x > 0.3 && x[i].x < 0.34 && x[i].z > 0 && x[i].z < 0.08) face = std::max(face, p[i]);
+  EXPECT_GT(face, 100.0) << "the largest pressure on the box's face [Pa]";
+  std::printf("largest pressure on the box's face at 0.1 s: %.0f Pa\n", face);
 }
