@@ -108,8 +108,6 @@ ErrorList SphConfig::validate(const SimulationSettings& sim) const {
                                       std::to_string(obstacles.size()));
   if (mdbc && spacing > 0 && obstacles.size() <= std::size_t(MdbcGeometry::kMaxObstacles)) {
     const MdbcGeometry m = mdbcGeometry(*this);
-    const double support = 2 * smoothingRatio * spacing;  // 2h
-    const char* axis = "xyz";
     for (int k = 0; k < m.obstacles; ++k) {
       const std::string name = obstacles[std::size_t(k)].name;
       for (int j = 0; j < k; ++j) {  // a particle in both would get one box's ghost
@@ -118,12 +116,6 @@ ErrorList SphConfig::validate(const SimulationSettings& sim) const {
           if (!(dimension == 2 && a == 1))
             overlap &= std::min((&m.obHi[k].x)[a], (&m.obHi[j].x)[a]) - std::max((&m.obLo[k].x)[a], (&m.obLo[j].x)[a]) > 0.5 * spacing;
         if (overlap) e.add("obstacles", name + " overlaps " + obstacles[std::size_t(j)].name + ": with sph.boundary_density: mdbc obstacles may touch but not overlap");
-      }
-      for (int a = 0; a < 3; ++a) {  // fluid on both faces, within reach of both
-        const double thick = (&m.obHi[k].x)[a] - (&m.obLo[k].x)[a];
-        if ((m.wetLo[k] >> a & 1) && (m.wetHi[k] >> a & 1) && thick < 2 * support)
-          e.add("obstacles", name + " is " + num(thick) + " m thick along " + axis[a] + ", under twice the kernel's support (" + num(2 * support) +
-                                 " m) with fluid on both sides: sph.boundary_density: mdbc would extrapolate its particles from one side only (use continuity, or a thicker box)");
       }
     }
   }
@@ -222,6 +214,23 @@ MdbcGeometry mdbcGeometry(const SphConfig& c) {
       if (!against(k, a, true)) m.wetHi[k] |= std::uint8_t(1 << a);
     }
   return m;
+}
+
+std::vector<std::string> mdbcThinObstacles(const SphConfig& c) {
+  std::vector<std::string> out;
+  if (!c.mdbc || c.obstacles.size() > std::size_t(MdbcGeometry::kMaxObstacles)) return out;
+  const MdbcGeometry m = mdbcGeometry(c);
+  const double support = 2 * c.smoothingRatio * c.spacing;  // 2h
+  const char* axis = "xyz";
+  for (int k = 0; k < m.obstacles; ++k)
+    for (int a = 0; a < 3; ++a) {  // fluid on both faces, within reach of both
+      const double thick = (&m.obHi[k].x)[a] - (&m.obLo[k].x)[a];
+      if ((m.wetLo[k] >> a & 1) && (m.wetHi[k] >> a & 1) && thick < 2 * support)
+        out.push_back(c.obstacles[std::size_t(k)].name + " is " + num(thick) + " m thick along " + axis[a] +
+                      ", under twice the kernel's support (" + num(2 * support) +
+                      " m): where fluid meets both its sides, sph.boundary_density: mdbc extrapolates its particles from the nearer side only");
+    }
+  return out;
 }
 
 }  // namespace pflow::compute::sph

@@ -105,6 +105,11 @@ struct SphConfig {
 // the tank's wall or against another obstacle). Obstacles past MdbcGeometry::kMaxObstacles are left out (validate()
 // names them).
 MdbcGeometry mdbcGeometry(const SphConfig& c);
+// The obstacles thinner than twice the kernel's support along an axis whose both faces meet the fluid: where fluid
+// reaches both sides, its particles' density comes from the nearer side only, and the fluid on the other sees it. A
+// warning each (SphSimulation::create logs them), not an error: a box whose far side stays dry for most of a run is
+// served well.
+std::vector<std::string> mdbcThinObstacles(const SphConfig& c);
 
 // What follows from the configuration: the quantities the engine runs with and where each came from.
 struct SphDerived {

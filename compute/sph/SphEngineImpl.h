@@ -135,6 +135,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
       if (m_setup.canonicalOrder) f.gid = k.gid;
     }
     k.wet = m_wet.as<std::uint8_t>();
+    k.skipBoundary = m_setup.mdbc.on;  // the boundary's rates are not used (Interact::skipBoundary; kept by the pairs once)
     // The step loop computes rates only while no particle has moved half the skin since the sort (SphSimulation::rates).
     k.margin = R(0.5 * m_setup.skin * 1.001 + 1e-5 * m_setup.grid.cellSize);
     // The hit masks (SphSetup::hitMasks): marked by the first pass after a sort while the positions are still those

@@ -184,6 +184,10 @@ struct Interact {
   // Boundary particles with no fluid listed in the cells within reach (MarkWet: wet[a] == 0) have no rates until
   // the next sort: they are skipped (most of a tank's walls and lid, most of the time).
   const std::uint8_t* wet = nullptr;
+  // sph.boundary_density: mdbc: a boundary particle's rates are not used (its density is extrapolated), so the passes
+  // from both sides skip its row as they skip a dry one. Not the pairs once: there a boundary row carries the pairs it
+  // owns, the fluid's share included.
+  bool skipBoundary = false;
   // How far a particle may be from the cell it is listed in: half the skin (the step loop sorts again before any
   // particle moves more), widened by 0.1 % and 1e-5 of a cell for the roundings of the gaps. Negative: walk all.
   R margin = R(-1);
@@ -220,7 +224,7 @@ struct Interact {
     static_assert(!kOnce || P == RatePass::kWalk || P == RatePass::kTwoPhase, "the pairs once walk (no masks)");
     const RateRow<R> ra = row[a];
     const bool fluidA = !boundaryTag(ra.tag);
-    if (!fluidA && wet && !wet[a]) {  // no fluid within reach: no pair to evaluate, none to receive
+    if (!fluidA && ((wet && !wet[a]) || (skipBoundary && !kOnce))) {  // no pair to evaluate, none to receive (or not used)
       if constexpr (kOnce) {  // FinishRates writes its zero rates
         visc[a] = R(0);
         return;
@@ -523,7 +527,7 @@ struct MirrorImages {
     const int nearA = mirror.near(xa);
     if (!nearA) return;
     const bool fluidA = f.kind[a] == kFluid;
-    if (!fluidA && k.wet && !k.wet[a]) return;
+    if (!fluidA && ((k.wet && !k.wet[a]) || k.skipBoundary)) return;
     const Vec3<R> va = f.vel[a];
     const R rhoA = f.rho[a], pA = f.p[a];
     const double cut2 = double(k.kernel.support()) * double(k.kernel.support());

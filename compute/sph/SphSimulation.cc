@@ -283,6 +283,7 @@ Result<std::unique_ptr<SphSimulation>> SphSimulation::create(const RunConfig& co
   if (!setup) return setup.status();
   std::unique_ptr<SphSimulation> sim(new SphSimulation());
   sim->m_domain = options.domain ? options.domain : std::make_shared<Domain>();
+  for (const std::string& w : mdbcThinObstacles(config.sph)) spdlog::warn("obstacles: {}", w);
   if (config.sph.mdbc && sim->m_domain->ranks() > 1)
     return invalidArgument("sph.boundary_density: mdbc runs in one process only: a ghost node's fluid on another rank is "
                            "not exchanged yet (use continuity, or one rank)");
