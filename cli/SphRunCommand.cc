@@ -150,6 +150,7 @@ int validateSphScene(const std::string& scenePath, const frontend::LoadedScene& 
   if (n > fluid)
     std::printf("  boundary    %s\n", c.sph.mdbc ? "density extrapolated from the fluid at ghost nodes (sph.boundary_density: mdbc)"
                                                    : "density by continuity (dynamic boundary particles)");
+  for (const std::string& w : compute::sph::mdbcThinObstacles(c.sph)) std::printf("  warning     obstacles: %s\n", w.c_str());
   for (const auto& b : c.sph.fluidBlocks) {  // each block as the lattice fills it (whole spacings from its low corner)
     const compute::sph::LatticeFill f = compute::sph::latticeFill(c.sph, b.lo, b.hi);
     const Vec3d asked = b.hi - b.lo;

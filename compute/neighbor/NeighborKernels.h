@@ -76,6 +76,17 @@ struct SplitByFlag {
   }
 };
 
+// The flagged rows only, in order: list[scan[i]] = i where flag[i] (scan: flag's exclusive scan), list sized by their
+// count (SplitByFlag when the rest is wanted after them).
+struct CompactFlagged {
+  const std::uint32_t* flag;
+  const std::uint32_t* scan;
+  Index* list;
+  PFLOW_HOSTDEVICE void operator()(Index i) const {
+    if (flag[i]) list[scan[i]] = i;
+  }
+};
+
 // Runs kernel `f` over the rows in `list` (item k is row list[k]): a pass over part of the particles.
 // Only the force kernels use it, whose work per particle varies.
 template <class F>

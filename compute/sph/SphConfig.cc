@@ -11,6 +11,13 @@ namespace pflow::compute::sph {
 
 using format::num;
 
+namespace {
+// How far obstacles j and k of an mDBC geometry overlap along axis a [m] (negative: apart by that much).
+double overlapAlong(const MdbcGeometry& m, int j, int k, int a) {
+  return std::min((&m.obHi[k].x)[a], (&m.obHi[j].x)[a]) - std::max((&m.obLo[k].x)[a], (&m.obLo[j].x)[a]);
+}
+}  // namespace
+
 std::size_t SphConfig::fluidCount() const {
   return std::size_t(std::count(kind.begin(), kind.end(), ParticleKind::kFluid));
 }
@@ -114,7 +121,7 @@ ErrorList SphConfig::validate(const SimulationSettings& sim) const {
         bool overlap = true;
         for (int a = 0; a < 3; ++a)
           if (!(dimension == 2 && a == 1))
-            overlap &= std::min((&m.obHi[k].x)[a], (&m.obHi[j].x)[a]) - std::max((&m.obLo[k].x)[a], (&m.obLo[j].x)[a]) > 0.5 * spacing;
+            overlap &= overlapAlong(m, j, k, a) > 0.5 * spacing;
         if (overlap) e.add("obstacles", name + " overlaps " + obstacles[std::size_t(j)].name + ": with sph.boundary_density: mdbc obstacles may touch but not overlap");
       }
     }
@@ -203,7 +210,7 @@ MdbcGeometry mdbcGeometry(const SphConfig& c) {
       bool across = true;
       for (int b = 0; b < 3; ++b)
         if (b != a && !(m.planar && b == 1))
-          across &= std::min((&m.obHi[k].x)[b], (&m.obHi[j].x)[b]) - std::max((&m.obLo[k].x)[b], (&m.obLo[j].x)[b]) > half;
+          across &= overlapAlong(m, j, k, b) > half;
       if (across) return true;
     }
     return false;

@@ -106,13 +106,14 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
   void computeRates(RateSet set) override {
     const bool ghosts = m_n > m_owned;
     if (m_wetStale) markWet();
+    // How far a particle may be from the cell it is listed in (both passes' pruning): half the skin, widened.
+    const double margin = 0.5 * m_setup.skin * 1.001 + 1e-5 * m_setup.grid.cellSize;
     // mDBC: the boundary particles' density from the fluid at their ghost nodes, before the pass reads it (one process
     // only: SphSimulation::create), over the wet boundary particles listed by markWet.
     if (m_setup.mdbc.on && set != RateSet::kBoundary && m_mdbcCount > 0)
       m_exec.forEach(m_mdbcCount, kernels::MdbcDensity<R>{m_setup.grid, m_cellStart.as<Index>(), cptr<SphField::Position>(),
                                                           cptr<SphField::Kind>(), cptr<SphField::Mass>(), m_mdbcList.as<Index>(),
-                                                          m_kernel, m_eos, m_setup.mdbc, m_setup.rho0, m_setup.maxDensity,
-                                                          0.5 * m_setup.skin * 1.001 + 1e-5 * m_setup.grid.cellSize,
+                                                          m_kernel, m_eos, m_setup.mdbc, m_setup.rho0, m_setup.maxDensity, margin,
                                                           ptr<SphField::Density>(), ptr<SphField::Pressure>()});
     // The packed rows the pass reads: the owned ones before the interior pass (the ghosts are still travelling),
     // the ghosts before the boundary one.
@@ -137,7 +138,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     k.wet = m_wet.as<std::uint8_t>();
     k.skipBoundary = m_setup.mdbc.on;  // the boundary's rates are not used (Interact::skipBoundary; kept by the pairs once)
     // The step loop computes rates only while no particle has moved half the skin since the sort (SphSimulation::rates).
-    k.margin = R(0.5 * m_setup.skin * 1.001 + 1e-5 * m_setup.grid.cellSize);
+    k.margin = R(margin);
     // The hit masks (SphSetup::hitMasks): marked by the first pass after a sort while the positions are still those
     // of the sort (not after a resume's sort that a step followed: walked until the next sort), read by the passes
     // until the next sort. Not on a rank with ghosts: the masks name a candidate by its place in a row's one range.
@@ -377,14 +378,15 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
     m_exec.forEach(m_owned, w);
     m_wetStale = false;
     if (m_setup.mdbc.on) {  // the mDBC pass's list: the wet boundary particles, in row order
-      const std::size_t n = std::max<std::size_t>(1, m_owned);
-      if (m_mdbcList.bytes() < n * sizeof(Index)) m_mdbcList.resize(n * sizeof(Index) * 5 / 4);
-      if (m_splitFlag.bytes() < 2 * n * sizeof(std::uint32_t)) m_splitFlag.resize(2 * n * sizeof(std::uint32_t) * 5 / 4);
-      std::uint32_t* flag = m_splitFlag.as<std::uint32_t>();
-      std::uint32_t* scan = flag + n;
+      // The flags and their scan in the sort's key and permutation buffers (sized for every local row, unused between
+      // sorts); the list holds those flagged only.
+      std::uint32_t* flag = m_cellKey.as<std::uint32_t>();
+      Index* scan = m_perm.as<Index>();
       m_exec.forEach(m_owned, kernels::MdbcFlag{cptr<SphField::Kind>(), m_wet.as<std::uint8_t>(), flag});
-      m_mdbcCount = Index(m_exec.exclusiveScan(flag, scan, m_owned));
-      m_exec.forEach(m_owned, compute::kernels::SplitByFlag{flag, scan, m_mdbcCount, m_mdbcList.as<Index>()});
+      m_mdbcCount = Index(m_exec.exclusiveScan(flag, scan, m_owned));  // the count: one read back a sort
+      if (m_mdbcList.bytes() < std::size_t(std::max<Index>(m_mdbcCount, 1)) * sizeof(Index))
+        m_mdbcList.resize(std::size_t(std::max<Index>(m_mdbcCount, 1)) * sizeof(Index) * 5 / 4);
+      m_exec.forEach(m_owned, compute::kernels::CompactFlagged{flag, scan, m_mdbcList.as<Index>()});
     }
   }
 
@@ -504,7 +506,7 @@ class SphEngineImpl final : public ForwardDistributedRows<SphEngine, LocalRows<E
   mutable std::vector<double> m_sampleHost;    // the sums as copied back
   Buffer m_split{m_mem, 0}, m_splitFlag{m_mem, 0};  // boundary rows, then interior ones (splitBoundary)
   Buffer m_wet{m_mem, 0};  // MarkWet, per owned particle
-  Buffer m_mdbcList{m_mem, 0};  // mDBC: the wet boundary rows first (m_mdbcCount of them), then the rest (markWet)
+  Buffer m_mdbcList{m_mem, 0};  // mDBC: the wet boundary rows (m_mdbcCount of them; markWet)
   Index m_mdbcCount = 0;
   Buffer m_packRow{m_mem, 0}, m_packState{m_mem, 0}, m_packPm{m_mem, 0};  // PackRates, per local row
   Buffer m_sums{m_mem, 0};  // the pairs once's sums (RateSum), per owned row, zero between passes

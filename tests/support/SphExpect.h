@@ -1,8 +1,9 @@
 // Shared expectations of the SPH validation tests (GoogleTest): the 2D dam break's surge front against Martin &
-// Moyce (1952) with the gate's time shift.
+// Moyce (1952) with the gate's time shift, and a tank at rest.
 #pragma once
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -53,6 +54,38 @@ inline int expectHydrostaticLayers(const compute::ParticleSnapshot& s, double su
     EXPECT_NEAR(sum / count, rho * g * (surface - zsum / count), tolerance) << "layer at z = " << zsum / count;
   }
   return layers;
+}
+
+// A tank of water `depth` deep at rest (the hydrostatic tests): its fluid's settled surface (the highest particle plus
+// half a spacing), lowest and leftmost particle, after expecting the fluid still (max speed under 1 % of sqrt(g H))
+// and its pressure in at least `minLayers` layers within 2 % of rho g H of rho g (surface - z).
+struct TankAtRest {
+  double surface, lowest, leftmost, maxSpeed;
+};
+inline TankAtRest expectTankAtRest(const compute::ParticleSnapshot& s, double dp, double h, double depth, int minLayers) {
+  const auto* x = s.find("position")->as<Vec3d>();
+  const auto* v = s.find("velocity")->as<Vec3d>();
+  const auto* kind = s.find("kind")->as<std::int32_t>();
+  double top = -1e300;
+  TankAtRest r{0, 1e300, 1e300, 0};
+  for (std::size_t i = 0; i < s.n; ++i)
+    if (kind[i] == 0) {
+      top = std::max(top, x[i].z);
+      r.lowest = std::min(r.lowest, x[i].z);
+      r.leftmost = std::min(r.leftmost, x[i].x);
+      r.maxSpeed = std::max(r.maxSpeed, norm(v[i]));
+    }
+  const double g = 9.81, rho = 1000;
+  r.surface = top + 0.5 * dp;
+  EXPECT_LT(r.maxSpeed, 0.01 * std::sqrt(g * depth)) << "max speed " << r.maxSpeed;
+  EXPECT_GE(expectHydrostaticLayers(s, r.surface, dp, h, rho, g, 0.02 * rho * g * depth), minLayers);
+  return r;
+}
+
+// Test names of the integrators (INSTANTIATE_TEST_SUITE_P's last argument).
+inline std::string integratorTestName(const ::testing::TestParamInfo<compute::sph::Integrator>& info) {
+  using compute::sph::Integrator;
+  return info.param == Integrator::kVerlet ? "Verlet" : info.param == Integrator::kVelocityVerlet ? "VelocityVerlet" : "Symplectic";
 }
 
 }  // namespace pflow::test
