@@ -30,7 +30,9 @@ Status attr(hid_t obj, const char* name, T value, const std::string& file) {
 Status writeFile(const std::string& file, const CheckpointData& d) {
   auto fapl = makeFileAccess(file);
   if (!fapl) return fapl.status();
-  Hid f = fileHid(H5Fcreate(file.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl->get()));
+  auto fcpl = makeFileCreate(file);
+  if (!fcpl) return fcpl.status();
+  Hid f = fileHid(H5Fcreate(file.c_str(), H5F_ACC_TRUNC, fcpl->get(), fapl->get()));
   if (!f.valid()) return h5Error(file, "cannot create the checkpoint file");
   const compute::SimulationState& s = d.state;
   hid_t root = f.get();

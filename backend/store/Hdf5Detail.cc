@@ -90,6 +90,12 @@ Result<Hid> makeFileAccess(const std::string& file) {
   return fapl;
 }
 
+Result<Hid> makeFileCreate(const std::string& file) {
+  Hid fcpl = plistHid(H5Pcreate(H5P_FILE_CREATE));
+  if (!fcpl.valid() || H5Pset_obj_track_times(fcpl.get(), false) < 0) return h5Error(file, "cannot set file creation properties");
+  return fcpl;
+}
+
 Result<Hid> makeGroupCreate(const std::string& file, bool trackOrder) {
   Hid gcpl = plistHid(H5Pcreate(H5P_GROUP_CREATE));
   if (!gcpl.valid()) return h5Error(file, "cannot create group properties");

@@ -122,6 +122,9 @@ std::optional<std::int64_t> parseStep(std::string_view s);
 // closed with the file, and no file lock so ParaView or h5py can read a live run between snapshots.
 Result<Hid> makeFileAccess(const std::string& file);
 
+// File creation: no timestamps on the root group either, so that the same content writes the same bytes.
+Result<Hid> makeFileCreate(const std::string& file);
+
 // Group creation: remember link creation order (datasets read back in write order), no timestamps.
 Result<Hid> makeGroupCreate(const std::string& file, bool trackOrder);
 

@@ -190,7 +190,9 @@ Result<std::unique_ptr<SnapshotWriter>> SnapshotWriter::create(const std::string
 
   auto fapl = makeFileAccess(h5Path);
   if (!fapl) return fapl.status();
-  impl->file = fileHid(H5Fcreate(h5Path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl->get()));
+  auto fcpl = makeFileCreate(h5Path);
+  if (!fcpl) return fcpl.status();
+  impl->file = fileHid(H5Fcreate(h5Path.c_str(), H5F_ACC_TRUNC, fcpl->get(), fapl->get()));
   if (!impl->file.valid()) return h5Error(h5Path, "cannot create the snapshot file");
 
   const hid_t root = impl->file.get();
@@ -416,7 +418,9 @@ Result<std::unique_ptr<SnapshotStaging>> SnapshotStaging::create(const std::stri
   auto impl = std::make_unique<Impl>();
   auto fapl = makeFileAccess(scratchPath);
   if (!fapl) return fapl.status();
-  impl->file = fileHid(H5Fcreate(scratchPath.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl->get()));
+  auto fcpl = makeFileCreate(scratchPath);
+  if (!fcpl) return fcpl.status();
+  impl->file = fileHid(H5Fcreate(scratchPath.c_str(), H5F_ACC_TRUNC, fcpl->get(), fapl->get()));
   if (!impl->file.valid()) {
     std::remove(scratchPath.c_str());  // a create that failed part-way (a full disk) may have left the file
     return h5Error(scratchPath, "cannot create the staging file");

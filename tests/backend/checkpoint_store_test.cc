@@ -5,9 +5,11 @@
 
 #include <unistd.h>
 
+#include <chrono>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <thread>
 #include <vector>
 
 #include "backend/BackendClient.h"
@@ -62,6 +64,16 @@ Result<StoredCheckpoint> upload(CheckpointStore& store, const std::string& job, 
   for (std::size_t off = 0; off < bytes.size(); off += chunk)
     PFLOW_TRY(u.value()->append(off, bytes.data() + off, std::min(chunk, bytes.size() - off)));
   return u.value()->commit();
+}
+
+// The same content writes the same bytes, a second and more apart (no timestamp in the file, the root group's
+// included: until 2026-12-03 its four times made KeepsTheLastTwoAndSendsTheLatest, which writes a checkpoint twice, fail
+// when the two writes fell on either side of a second).
+TEST(CheckpointFile, TheSameContentWritesTheSameBytes) {
+  TempDir t;
+  const auto first = bytesOf(checkpointFile(t.path, 300));
+  std::this_thread::sleep_for(std::chrono::milliseconds(1100));
+  EXPECT_EQ(bytesOf(checkpointFile(t.path, 300)), first);
 }
 
 TEST(CheckpointStore, KeepsTheLastTwoAndSendsTheLatest) {
